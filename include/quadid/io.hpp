@@ -1,0 +1,94 @@
+// Files: flight logs (CSV) and JSON for trajectories and parameter sets, in
+// the formats of DESIGN.md. The algorithms know nothing of files; this module
+// converts between files and the library's types.
+#pragma once
+
+#include "quadid/model.hpp"
+#include "quadid/trajectory.hpp"
+
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace quadid {
+
+/// An error in an input file; what() names the file (and line/column where known).
+class InputError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/// A flight log: named columns of equal length, one row per sample.
+/// The standard columns (DESIGN.md) are t x y z phi theta psi p q r Fz tau_phi tau_theta tau_psi.
+struct FlightLog {
+  std::vector<std::string> comments;  // leading '#' lines, without the '#'
+  std::vector<std::string> columns;   // column names, in file order
+  Eigen::MatrixXd data;               // samples x columns
+
+  Eigen::Index rows() const { return data.rows(); }
+  /// Index of a column, or -1.
+  int find(std::string_view name) const;
+  /// A column by name; throws InputError naming the column when it is absent.
+  Eigen::VectorXd column(std::string_view name) const;
+  bool has(std::string_view name) const { return find(name) >= 0; }
+};
+
+/// The required columns of a flight log, in the canonical order.
+const std::vector<std::string>& standard_log_columns();
+
+struct CsvReadOptions {
+  /// Renames applied to the header before checking for the required columns:
+  /// canonical name -> name in the file (from `--map tau_phi=tau_x`).
+  std::map<std::string, std::string> map;
+  /// Columns that must be present (default: the standard ones).
+  std::vector<std::string> required = standard_log_columns();
+  /// Relative tolerance on the uniformity of the sample period.
+  double period_tolerance = 1e-3;
+};
+
+/// Reads a flight log; throws InputError naming file, line and column on any
+/// problem (missing column, NaN or text in a number, non-increasing or
+/// non-uniform time, too few rows).
+FlightLog read_flight_log(const std::filesystem::path& path, const CsvReadOptions& opt = {});
+/// Parses "canonical=name" pairs of --map; throws std::invalid_argument on a malformed item.
+std::map<std::string, std::string> parse_column_map(const std::vector<std::string>& items);
+
+/// Writes a log as CSV (comments, header, rows; numbers in shortest round-trip
+/// form so that the same data gives the same bytes). Atomic: temporary file + rename.
+void write_flight_log(const FlightLog& log, const std::filesystem::path& path);
+
+/// Writes a whole file atomically: a temporary file beside it, then rename.
+void write_file_atomic(const std::filesystem::path& path, std::string_view content);
+/// Reads a whole file; throws InputError naming it when it cannot be read.
+std::string read_file(const std::filesystem::path& path);
+
+// --- JSON -------------------------------------------------------------------
+
+nlohmann::json to_json(const Params& P);
+/// Reads {"m":..,"Ixx":..,...}; missing Ixy/Ixz/Iyz default to 0; validates
+/// (m > 0, I positive definite). `source` names the origin in messages.
+Params params_from_json(const nlohmann::json& j, const std::string& source);
+
+nlohmann::json to_json(const FourierTrajectory& traj);
+/// Reads the trajectory JSON of DESIGN.md; the error names the field that is wrong.
+FourierTrajectory trajectory_from_json(const nlohmann::json& j, const std::string& source);
+
+/// A trajectory from a built-in name (table2, circle1..3) or a JSON file.
+std::unique_ptr<Trajectory> load_trajectory(const std::string& spec);
+/// A parameter set from a preset name (qball2-nominal, qball2-virtual) or a JSON file.
+Params load_params(const std::string& spec);
+/// Named parameter sets from a file or preset: a parameters JSON gives one set
+/// (named after the file), an identification result with "estimates" gives one
+/// per method (LS, GD, FMLS, FMGD), a preset gives itself.
+std::vector<std::pair<std::string, Params>> load_param_sets(const std::string& spec);
+
+/// Parses a JSON file; InputError names the file, line and column of a syntax error.
+nlohmann::json read_json_file(const std::filesystem::path& path);
+
+}  // namespace quadid

@@ -1,0 +1,154 @@
+// Desired trajectories: finite Fourier series (eq. 18), the circular paths of
+// eq. (44), and the exact map from flat outputs (x, y, z, psi) to the full
+// reference (eqs. 26-27 and the kinematic relations below eq. 20).
+#pragma once
+
+#include "quadid/jet.hpp"
+#include "quadid/model.hpp"
+
+#include <memory>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace quadid {
+
+/// Flat outputs and their time derivatives at one instant. Rows: x, y, z, psi
+/// (m, rad); column k holds the k-th time derivative, k = 0..4.
+using FlatOutput = Eigen::Matrix<double, 4, 5>;
+enum Axis : int { kX = 0, kY = 1, kZ = 2, kPsi = 3 };
+inline constexpr std::array<const char*, 4> kAxisNames = {"x", "y", "z", "psi"};
+
+/// A desired trajectory q_d(t) = [x_d, y_d, z_d, psi_d] with derivatives to the 4th.
+class Trajectory {
+ public:
+  virtual ~Trajectory() = default;
+  virtual FlatOutput eval(double t) const = 0;
+  /// A short description ("table2", "fourier N=5 wf=0.628 rad/s", "circle r=0.5 m ...").
+  virtual std::string describe() const = 0;
+  /// The natural duration of one cycle, s.
+  virtual double period() const = 0;
+};
+
+/// Eq. (18): q_i(t) = sum_l a_il/(wf l) sin(wf l t) - b_il/(wf l) cos(wf l t) + c_i.
+/// Derivatives are closed form: q^(n) = sum_l (wf l)^(n-1) [a sin(th + n pi/2) - b cos(th + n pi/2)].
+class FourierTrajectory final : public Trajectory {
+ public:
+  struct AxisCoeffs {
+    Eigen::VectorXd a, b;  // length N
+    double c = 0.0;
+  };
+
+  FourierTrajectory(double wf, std::array<AxisCoeffs, 4> axes);
+  /// Builds from the stacked coefficient vector of `coefficients()`.
+  static FourierTrajectory from_coefficients(double wf, int harmonics, const Eigen::VectorXd& c);
+  /// The Table 2 trajectory: wf = 36 deg/s, N = 5.
+  static FourierTrajectory table2();
+
+  FlatOutput eval(double t) const override;
+  std::string describe() const override;
+  double period() const override;
+
+  double wf() const { return wf_; }
+  int harmonics() const { return static_cast<int>(axes_[0].a.size()); }
+  const AxisCoeffs& axis(int i) const { return axes_[static_cast<size_t>(i)]; }
+  /// Stacked [a_1..a_N, b_1..b_N, c] for x, y, z, psi: 4 (2N + 1) numbers.
+  Eigen::VectorXd coefficients() const;
+  /// Row vector B(t) with q_i^(order)(t) = B(t) . [a; b; c] of one axis (length 2N + 1).
+  static Eigen::RowVectorXd basis(double wf, int harmonics, double t, int order);
+
+ private:
+  double wf_;
+  std::array<AxisCoeffs, 4> axes_;
+};
+
+/// Eq. (44): a circle of radius r in 5 s, z rising from 0.3 m to rho then
+/// oscillating +-0.1 m, psi = 15 deg sin(2 pi t / 5). z_d switches branch at
+/// t = 5 s with a jump in velocity and acceleration (ERRATA.md).
+class CircleTrajectory final : public Trajectory {
+ public:
+  CircleTrajectory(double radius, double rho, double period = 5.0, double psi_amplitude = 15.0 * M_PI / 180.0);
+  /// Experiments 1-3 of section IV-C: (0.5, 1), (0.8, 0.9), (1, 1).
+  static CircleTrajectory experiment(int k);
+
+  FlatOutput eval(double t) const override;
+  std::string describe() const override;
+  double period() const override { return period_; }
+  double radius() const { return radius_; }
+  double rho() const { return rho_; }
+
+ private:
+  double radius_, rho_, period_, psi_amp_;
+};
+
+/// A built-in trajectory by name: "table2", "circle1", "circle2", "circle3".
+/// Returns nullptr for an unknown name.
+std::unique_ptr<Trajectory> builtin_trajectory(std::string_view name);
+std::vector<std::string> builtin_trajectory_names();
+
+/// The full reference implied by the flat outputs (eqs. 26-27, section II-B2).
+template <class S>
+struct ReferenceT {
+  using V3 = Eigen::Matrix<S, 3, 1>;
+  V3 p, p_dot, p_ddot;          // inertial position and derivatives
+  V3 eta, eta_dot, eta_ddot;    // [phi_d, theta_d, psi_d] and derivatives
+  V3 v, v_dot;                  // body velocity v_d = R^T p_dot and its derivative
+  V3 omega, omega_dot;          // body rates omega_d = W^-1 eta_dot and derivative
+};
+using Reference = ReferenceT<double>;
+
+/// Desired roll/pitch of eqs. (26)-(27) and the kinematics below eq. (20),
+/// propagated exactly with second-order jets. `d` holds the flat outputs in
+/// the layout of FlatOutput (row = axis, column = derivative order).
+/// Requires z_ddot + g > 0 (the paper's z_ddot >= -9.81 constraint).
+template <class S>
+ReferenceT<S> reference_from_flat(const Eigen::Matrix<S, 4, 5>& d, double g = kDefaultGravity) {
+  using J = Jet2<S>;
+  ReferenceT<S> ref;
+  // Accelerations as jets (value, jerk, snap) and psi as a jet.
+  const J ax(d(0, 2), d(0, 3), d(0, 4));
+  const J ay(d(1, 2), d(1, 3), d(1, 4));
+  const J az(d(2, 2) + S(g), d(2, 3), d(2, 4));
+  const J psi(d(3, 0), d(3, 1), d(3, 2));
+  const J cpsi = cos(psi), spsi = sin(psi);
+  const J theta = atan((cpsi * ax + spsi * ay) / az);                // eq. (26)
+  const J phi = atan((cos(theta) * (spsi * ax - cpsi * ay)) / az);   // eq. (27)
+
+  const J eta_j[3] = {phi, theta, psi};
+  for (int i = 0; i < 3; ++i) {
+    ref.p(i) = d(i, 0);
+    ref.p_dot(i) = d(i, 1);
+    ref.p_ddot(i) = d(i, 2);
+    ref.eta(i) = eta_j[i].v;
+    ref.eta_dot(i) = eta_j[i].d1;
+    ref.eta_ddot(i) = eta_j[i].d2;
+  }
+  // R(eta)^T and W(eta)^-1 as jets, entry by entry (same formulas as model.hpp).
+  const J cf = cos(phi), sf = sin(phi), ct = cos(theta), st = sin(theta);
+  const J Rt[3][3] = {{ct * cpsi, ct * spsi, -st},
+                      {st * cpsi * sf - spsi * cf, st * spsi * sf + cpsi * cf, ct * sf},
+                      {st * cpsi * cf + spsi * sf, st * spsi * cf - cpsi * sf, ct * cf}};
+  const J Wi[3][3] = {{J::constant(S(1)), J::constant(S(0)), -st},
+                      {J::constant(S(0)), cf, ct * sf},
+                      {J::constant(S(0)), -sf, ct * cf}};
+  const J pdot[3] = {J(d(0, 1), d(0, 2), d(0, 3)), J(d(1, 1), d(1, 2), d(1, 3)),
+                     J(d(2, 1), d(2, 2), d(2, 3))};
+  const J etadot[3] = {phi.derivative(), theta.derivative(), psi.derivative()};
+  for (int i = 0; i < 3; ++i) {
+    J vi = J::constant(S(0)), wi = J::constant(S(0));
+    for (int k = 0; k < 3; ++k) {
+      vi = vi + Rt[i][k] * pdot[k];     // v_d = R^T p_dot          (eq. 3)
+      wi = wi + Wi[i][k] * etadot[k];   // omega_d = W^-1 eta_dot   (eq. 4)
+    }
+    ref.v(i) = vi.v;
+    ref.v_dot(i) = vi.d1;
+    ref.omega(i) = wi.v;
+    ref.omega_dot(i) = wi.d1;
+  }
+  return ref;
+}
+
+/// Convenience: the reference of a trajectory at time t.
+Reference reference_at(const Trajectory& traj, double t, double g = kDefaultGravity);
+
+}  // namespace quadid

@@ -1,0 +1,101 @@
+#!/usr/bin/python3
+"""Golden data for tests/test_signal.cpp, computed with SciPy.
+
+Run with a Python that has numpy and scipy (here /usr/bin/python3: numpy 1.24,
+scipy 1.10):  /usr/bin/python3 tests/data/signal/gen_signal_golden.py
+Writes, next to this script:
+  signal_coeffs.json  filter coefficients, lfilter_zi vectors, the case list
+  signal_golden.csv   the input signal x and every filtered output, one column each
+Deterministic: fixed seed, no time-dependent input. Floats written with repr
+(shortest round-trip), so the C++ side reads the exact doubles.
+"""
+import json
+import os
+
+import numpy as np
+import scipy
+import scipy.signal as ss
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+FS = 500.0
+N = 2000
+
+# Test signal: slow and fast sines, seeded noise, a step at t = 1.5 s, and a
+# nonzero start value (so the filtfilt edge handling matters).
+t = np.arange(N) / FS
+rng = np.random.default_rng(20240611)
+x = (0.7
+     + 1.0 * np.sin(2 * np.pi * 0.3 * t + 0.4)
+     + 0.5 * np.sin(2 * np.pi * 2.0 * t)
+     + 0.2 * np.sin(2 * np.pi * 7.0 * t + 1.0)
+     + 0.1 * np.sin(2 * np.pi * 45.0 * t)
+     + 0.05 * np.sin(2 * np.pi * 120.0 * t + 0.3)
+     + 0.05 * rng.standard_normal(N)
+     + 0.5 * (t >= 1.5))
+
+
+def matlab_filtfilt(b, a, sig):
+    """MATLAB filtfilt == scipy filtfilt with odd padding of 3*(nfilt-1)."""
+    padlen = 3 * (max(len(a), len(b)) - 1)
+    return ss.filtfilt(b, a, sig, padtype='odd', padlen=padlen)
+
+
+cases = []   # name, kind, parameters
+columns = {"x": x}
+coeffs = {}
+
+# Butterworth (order, cutoff Hz, fs Hz)
+for order, fc, fs in [(1, 10.0, 500.0), (2, 5.0, 500.0), (4, 4.0, 500.0),
+                      (6, 20.0, 500.0), (8, 30.0, 500.0), (4, 10.0, 100.0)]:
+    name = f"butter_o{order}_fc{fc:g}_fs{fs:g}"
+    b, a = ss.butter(order, fc, fs=fs)
+    coeffs[name] = {"kind": "butter", "order": order, "cutoff_hz": fc, "fs_hz": fs,
+                    "b": list(b), "a": list(a), "zi": list(ss.lfilter_zi(b, a)),
+                    "padlen": 3 * (max(len(a), len(b)) - 1)}
+    columns["filtfilt_" + name] = matlab_filtfilt(b, a, x)
+    cases.append(name)
+
+# plain lfilter from rest (zi = None) for one Butterworth
+b, a = coeffs["butter_o4_fc4_fs500"]["b"], coeffs["butter_o4_fc4_fs500"]["a"]
+columns["lfilter_butter_o4_fc4_fs500"] = ss.lfilter(b, a, x)
+
+# FIR Blackman-Harris (taps, cutoff Hz, fs Hz); 30 taps: firwin accepts even
+# lengths for a low-pass, and so does fir_lowpass_blackmanharris.
+for taps, fc, fs in [(31, 4.0, 500.0), (31, 11.0, 500.0), (31, 50.0, 500.0),
+                     (51, 20.0, 500.0), (30, 20.0, 500.0), (31, 0.001, 500.0)]:
+    name = f"fir_n{taps}_fc{fc:g}_fs{fs:g}"
+    h = ss.firwin(taps, fc, window='blackmanharris', fs=fs)
+    coeffs[name] = {"kind": "fir", "taps": taps, "cutoff_hz": fc, "fs_hz": fs,
+                    "b": list(h), "a": [1.0], "padlen": 3 * (taps - 1)}
+    columns["filtfilt_" + name] = matlab_filtfilt(h, [1.0], x)
+    cases.append(name)
+
+# First-order filters of the filtered regression model, eqs. (35)-(36), with
+# steady-state initial state lfilter_zi * x[0].
+LAM, T = 30.0, 0.002
+ad = np.exp(-LAM * T)
+one_minus_a = -np.expm1(-LAM * T)
+first_order = {
+    "fD": ([0.0, one_minus_a], [1.0, -ad]),
+    "gD_printed": ([LAM, -LAM], [1.0, -ad]),
+    "gD_consistent": ([one_minus_a / T, -one_minus_a / T], [1.0, -ad]),
+}
+for name, (b, a) in first_order.items():
+    zi = ss.lfilter_zi(b, a)
+    y, _ = ss.lfilter(b, a, x, zi=zi * x[0])
+    coeffs[name] = {"kind": "first_order", "lambda": LAM, "T": T, "b": b, "a": a,
+                    "zi": list(zi)}
+    columns["lfilter_" + name] = y
+
+meta = {"generator": "gen_signal_golden.py", "numpy": np.__version__,
+        "scipy": scipy.__version__, "fs_hz": FS, "samples": N,
+        "filtfilt_cases": cases, "filters": coeffs}
+with open(os.path.join(HERE, "signal_coeffs.json"), "w") as f:
+    json.dump(meta, f, indent=1)
+
+names = list(columns)
+with open(os.path.join(HERE, "signal_golden.csv"), "w") as f:
+    f.write(",".join(names) + "\n")
+    for i in range(N):
+        f.write(",".join(repr(float(columns[c][i])) for c in names) + "\n")
+print(f"wrote {len(names)} columns x {N} rows, {len(coeffs)} filters")
