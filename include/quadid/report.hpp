@@ -1,0 +1,75 @@
+// Reports for people: text and Markdown tables for the terminal, and a
+// self-contained HTML page with SVG figures (no scripts, no external files).
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace quadid::report {
+
+/// A table of already formatted cells. The first column is left-aligned, the
+/// others right-aligned (numbers).
+struct Table {
+  std::string title;
+  std::vector<std::string> header;
+  std::vector<std::vector<std::string>> rows;
+  std::string note;  // printed under the table
+
+  std::string to_text() const;      // aligned columns for a terminal
+  std::string to_markdown() const;
+  std::string to_html() const;
+};
+
+/// One curve of a figure.
+struct Series {
+  std::string label;
+  std::vector<double> x, y;
+  std::string color;       // CSS colour; empty = from the palette
+  bool dashed = false;
+  double width = 1.5;      // stroke width, px
+};
+
+/// A 2-D line plot. Axis labels must carry units, e.g. "time (s)".
+struct Plot {
+  std::string title;
+  std::string xlabel, ylabel;
+  std::vector<Series> series;
+  int width = 760, height = 300;  // px
+  bool equal_aspect = false;      // same scale on x and y (paths in a plane)
+  int max_points = 1500;          // per series; longer series are decimated (min/max kept)
+};
+
+/// Renders a plot as a standalone <svg> element with axes, ticks, grid, labels and a legend.
+std::string render_svg(const Plot& plot);
+
+/// Colours of the paper's figures: Exp black, nominal red, LS blue, GD purple,
+/// FMLS green, FMGD orange; other names get distinct palette colours.
+std::string color_for(const std::string& set_name, size_t index);
+
+/// Escapes &, <, >, " for HTML.
+std::string html_escape(const std::string& s);
+
+/// A self-contained HTML document built section by section.
+class HtmlDocument {
+ public:
+  explicit HtmlDocument(std::string title);
+  void heading(const std::string& text, int level = 2);
+  void paragraph(const std::string& text);      // escaped text
+  void raw(const std::string& html);            // trusted HTML
+  void table(const Table& t);
+  void figure(const Plot& p, const std::string& caption = {});
+  void figure_row(const std::vector<Plot>& plots, const std::string& caption = {});
+  std::string str() const;
+
+ private:
+  std::string title_;
+  std::string body_;
+  int figure_count_ = 0;
+};
+
+/// Formats a number for a table: fixed with `digits` decimals; "n/a" when not finite.
+std::string fixed(double v, int digits);
+/// Significant-digit formatting for parameters of any size (e.g. 0.01537, 1.82246).
+std::string sig(double v, int digits = 5);
+
+}  // namespace quadid::report

@@ -1,0 +1,63 @@
+#include "quadid/report.hpp"
+
+#include <fmt/format.h>
+
+namespace quadid::report {
+
+HtmlDocument::HtmlDocument(std::string title) : title_(std::move(title)) {}
+
+void HtmlDocument::heading(const std::string& text, int level) {
+  body_ += fmt::format("<h{0}>{1}</h{0}>\n", level, html_escape(text));
+}
+void HtmlDocument::paragraph(const std::string& text) { body_ += "<p>" + html_escape(text) + "</p>\n"; }
+void HtmlDocument::raw(const std::string& html) { body_ += html; }
+void HtmlDocument::table(const Table& t) { body_ += "<div class=\"tbl\">" + t.to_html() + "</div>\n"; }
+
+void HtmlDocument::figure(const Plot& p, const std::string& caption) { figure_row({p}, caption); }
+
+void HtmlDocument::figure_row(const std::vector<Plot>& plots, const std::string& caption) {
+  ++figure_count_;
+  body_ += "<figure>\n<div class=\"row\">\n";
+  for (const auto& p : plots) body_ += render_svg(p);
+  body_ += "</div>\n";
+  if (!caption.empty())
+    body_ += fmt::format("<figcaption>Figure {}. {}</figcaption>\n", figure_count_, html_escape(caption));
+  body_ += "</figure>\n";
+}
+
+std::string HtmlDocument::str() const {
+  return fmt::format(R"(<!DOCTYPE html>
+<html lang="en">
+<head>
+<meta charset="utf-8">
+<meta name="viewport" content="width=device-width, initial-scale=1">
+<title>{0}</title>
+<style>
+body {{ font-family: Helvetica, Arial, sans-serif; max-width: 1600px; margin: 2em auto; padding: 0 1.5em; color: #222; line-height: 1.45; }}
+h1 {{ font-size: 1.7em; border-bottom: 2px solid #333; padding-bottom: .2em; }}
+h2 {{ font-size: 1.35em; margin-top: 2em; border-bottom: 1px solid #bbb; }}
+h3 {{ font-size: 1.1em; margin-top: 1.5em; }}
+table {{ border-collapse: collapse; margin: .8em 0; font-size: .92em; }}
+caption {{ text-align: left; font-weight: bold; padding-bottom: .4em; }}
+th, td {{ border: 1px solid #ccc; padding: .25em .6em; }}
+td {{ text-align: right; font-variant-numeric: tabular-nums; }}
+thead th {{ background: #f0f0f0; }}
+tbody th {{ text-align: left; font-weight: normal; background: #fafafa; }}
+td.neg {{ color: #c0392b; }} td.pos {{ color: #1f4fd6; }}
+.tbl {{ overflow-x: auto; }}
+figure {{ margin: 1.2em 0; }}
+figure .row {{ display: flex; flex-wrap: wrap; gap: 8px; }}
+figcaption {{ font-size: .92em; color: #444; margin-top: .3em; }}
+p.note {{ font-size: .88em; color: #555; margin-top: -.3em; }}
+code, pre {{ background: #f5f5f5; padding: 0 .2em; }}
+</style>
+</head>
+<body>
+<h1>{0}</h1>
+{1}</body>
+</html>
+)",
+                     html_escape(title_), body_);
+}
+
+}  // namespace quadid::report

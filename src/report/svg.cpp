@@ -1,0 +1,184 @@
+// SVG line plots: axes with "nice" ticks, grid, labels with units, and a legend
+// below the plot area so that six curves stay readable.
+#include "quadid/report.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace quadid::report {
+
+namespace {
+
+struct Range {
+  double lo = std::numeric_limits<double>::infinity();
+  double hi = -std::numeric_limits<double>::infinity();
+  void add(double v) {
+    if (std::isfinite(v)) { lo = std::min(lo, v); hi = std::max(hi, v); }
+  }
+  bool valid() const { return lo <= hi; }
+};
+
+// Tick step from {1, 2, 5} x 10^k giving about `target` intervals.
+double nice_step(double span, int target) {
+  const double raw = span / std::max(1, target);
+  const double mag = std::pow(10.0, std::floor(std::log10(raw)));
+  const double f = raw / mag;
+  const double nf = f < 1.5 ? 1.0 : f < 3.5 ? 2.0 : f < 7.5 ? 5.0 : 10.0;
+  return nf * mag;
+}
+
+void widen(Range& r) {
+  if (!r.valid()) { r.lo = 0; r.hi = 1; return; }
+  if (r.hi - r.lo < 1e-12 * std::max(1.0, std::abs(r.hi))) {
+    const double d = std::max(1e-3, std::abs(r.hi) * 0.05);
+    r.lo -= d;
+    r.hi += d;
+  }
+}
+
+std::string tick_label(double v, double step) {
+  if (std::abs(v) < step * 1e-9) v = 0.0;
+  const int dec = std::max(0, -static_cast<int>(std::floor(std::log10(step) + 1e-9)));
+  if (std::abs(v) >= 1e5 || (std::abs(v) > 0 && std::abs(v) < 1e-4)) return fmt::format("{:.2g}", v);
+  return fmt::format("{:.{}f}", v, dec);
+}
+
+// Keeps the first, last, min and max of each bucket, so peaks survive decimation.
+std::vector<std::pair<double, double>> decimate(const Series& s, int max_points) {
+  const size_t n = std::min(s.x.size(), s.y.size());
+  std::vector<std::pair<double, double>> out;
+  if (n <= static_cast<size_t>(max_points)) {
+    for (size_t i = 0; i < n; ++i) out.emplace_back(s.x[i], s.y[i]);
+    return out;
+  }
+  const size_t buckets = static_cast<size_t>(std::max(1, max_points / 2));
+  for (size_t b = 0; b < buckets; ++b) {
+    const size_t i0 = b * n / buckets, i1 = (b + 1) * n / buckets;
+    size_t imin = i0, imax = i0;
+    for (size_t i = i0; i < i1; ++i) {
+      if (s.y[i] < s.y[imin]) imin = i;
+      if (s.y[i] > s.y[imax]) imax = i;
+    }
+    const size_t a = std::min(imin, imax), c = std::max(imin, imax);
+    out.emplace_back(s.x[a], s.y[a]);
+    if (c != a) out.emplace_back(s.x[c], s.y[c]);
+  }
+  return out;
+}
+
+}  // namespace
+
+std::string color_for(const std::string& name, size_t index) {
+  if (name == "Exp" || name == "experiment" || name == "true" || name == "log") return "#000000";
+  if (name == "nominal" || name == "nom") return "#d62728";
+  if (name == "LS") return "#1f4fd6";
+  if (name == "GD") return "#8e44ad";
+  if (name == "FMLS") return "#2ca02c";
+  if (name == "FMGD") return "#ff7f0e";
+  static const char* palette[] = {"#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd",
+                                  "#8c564b", "#e377c2", "#7f7f7f", "#bcbd22", "#17becf"};
+  return palette[index % 10];
+}
+
+std::string render_svg(const Plot& plot) {
+  const double W = plot.width, H = plot.height;
+  const double ml = 70, mr = 20, mt = plot.title.empty() ? 14 : 30;
+  // Legend rows below the x label: as many entries per row as fit.
+  const size_t nser = plot.series.size();
+  const double entry_w = 150;
+  const size_t per_row = std::max<size_t>(1, static_cast<size_t>((W - ml - mr) / entry_w));
+  const size_t legend_rows = nser > 1 ? (nser + per_row - 1) / per_row : 0;
+  const double mb = 48 + 18.0 * static_cast<double>(legend_rows);
+  const double pw = W - ml - mr, ph = H - mt - mb;
+
+  Range xr, yr;
+  for (const auto& s : plot.series) {
+    for (double v : s.x) xr.add(v);
+    for (double v : s.y) yr.add(v);
+  }
+  widen(xr);
+  widen(yr);
+  if (plot.equal_aspect) {
+    // Same metres per pixel on both axes, centred.
+    const double sx = (xr.hi - xr.lo) / pw, sy = (yr.hi - yr.lo) / ph, s = std::max(sx, sy) * 1.05;
+    const double cx = 0.5 * (xr.lo + xr.hi), cy = 0.5 * (yr.lo + yr.hi);
+    xr = {cx - 0.5 * s * pw, cx + 0.5 * s * pw};
+    yr = {cy - 0.5 * s * ph, cy + 0.5 * s * ph};
+  } else {
+    const double pad = 0.05 * (yr.hi - yr.lo);
+    yr.lo -= pad;
+    yr.hi += pad;
+  }
+  const double xs = nice_step(xr.hi - xr.lo, 8), ys = nice_step(yr.hi - yr.lo, 5);
+  auto X = [&](double x) { return ml + (x - xr.lo) / (xr.hi - xr.lo) * pw; };
+  auto Y = [&](double y) { return mt + (yr.hi - y) / (yr.hi - yr.lo) * ph; };
+
+  std::string o = fmt::format(
+      "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{0}\" height=\"{1}\" viewBox=\"0 0 {0} {1}\" "
+      "font-family=\"Helvetica, Arial, sans-serif\" font-size=\"12\" role=\"img\" aria-label=\"{2}\">\n",
+      W, H, html_escape(plot.title.empty() ? plot.ylabel : plot.title));
+  o += fmt::format("<rect x=\"0\" y=\"0\" width=\"{}\" height=\"{}\" fill=\"white\"/>\n", W, H);
+  if (!plot.title.empty())
+    o += fmt::format("<text x=\"{}\" y=\"19\" text-anchor=\"middle\" font-size=\"14\" font-weight=\"bold\">{}</text>\n",
+                     ml + pw / 2, html_escape(plot.title));
+  // Grid and ticks.
+  o += "<g stroke=\"#e3e3e3\" stroke-width=\"1\">\n";
+  for (double t = std::ceil(xr.lo / xs) * xs; t <= xr.hi + 1e-9 * xs; t += xs)
+    o += fmt::format("<line x1=\"{0:.1f}\" y1=\"{1:.1f}\" x2=\"{0:.1f}\" y2=\"{2:.1f}\"/>\n", X(t), mt, mt + ph);
+  for (double t = std::ceil(yr.lo / ys) * ys; t <= yr.hi + 1e-9 * ys; t += ys)
+    o += fmt::format("<line x1=\"{0:.1f}\" y1=\"{1:.1f}\" x2=\"{2:.1f}\" y2=\"{1:.1f}\"/>\n", ml, Y(t), ml + pw);
+  o += "</g>\n<g fill=\"#333\">\n";
+  for (double t = std::ceil(xr.lo / xs) * xs; t <= xr.hi + 1e-9 * xs; t += xs)
+    o += fmt::format("<text x=\"{:.1f}\" y=\"{:.1f}\" text-anchor=\"middle\">{}</text>\n", X(t), mt + ph + 15,
+                     tick_label(t, xs));
+  for (double t = std::ceil(yr.lo / ys) * ys; t <= yr.hi + 1e-9 * ys; t += ys)
+    o += fmt::format("<text x=\"{:.1f}\" y=\"{:.1f}\" text-anchor=\"end\">{}</text>\n", ml - 6, Y(t) + 4,
+                     tick_label(t, ys));
+  o += "</g>\n";
+  o += fmt::format("<rect x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\" fill=\"none\" stroke=\"#555\"/>\n", ml, mt, pw, ph);
+  o += fmt::format("<text x=\"{:.1f}\" y=\"{:.1f}\" text-anchor=\"middle\">{}</text>\n", ml + pw / 2, mt + ph + 33,
+                   html_escape(plot.xlabel));
+  o += fmt::format("<text transform=\"translate(16,{:.1f}) rotate(-90)\" text-anchor=\"middle\">{}</text>\n",
+                   mt + ph / 2, html_escape(plot.ylabel));
+  // Curves, clipped to the plot area.
+  static int clip_counter = 0;
+  const int clip_id = ++clip_counter;
+  o += fmt::format("<clipPath id=\"c{}\"><rect x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\"/></clipPath>\n", clip_id,
+                   ml, mt, pw, ph);
+  o += fmt::format("<g clip-path=\"url(#c{})\" fill=\"none\" stroke-linejoin=\"round\">\n", clip_id);
+  for (size_t k = 0; k < nser; ++k) {
+    const auto& s = plot.series[k];
+    const std::string col = s.color.empty() ? color_for(s.label, k) : s.color;
+    std::string d;
+    bool pen_up = true;
+    for (const auto& [x, y] : decimate(s, plot.max_points)) {
+      if (!std::isfinite(x) || !std::isfinite(y)) { pen_up = true; continue; }
+      d += fmt::format("{}{:.1f},{:.1f}", pen_up ? "M" : "L", X(x), Y(y));
+      pen_up = false;
+    }
+    o += fmt::format("<path d=\"{}\" stroke=\"{}\" stroke-width=\"{}\"{}/>\n", d, col, s.width,
+                     s.dashed ? " stroke-dasharray=\"6,3\"" : "");
+  }
+  o += "</g>\n";
+  // Legend.
+  if (nser > 1) {
+    o += "<g>\n";
+    for (size_t k = 0; k < nser; ++k) {
+      const auto& s = plot.series[k];
+      const double lx = ml + static_cast<double>(k % per_row) * entry_w;
+      const double ly = mt + ph + 50 + 18.0 * static_cast<double>(k / per_row);
+      const std::string col = s.color.empty() ? color_for(s.label, k) : s.color;
+      o += fmt::format("<line x1=\"{:.1f}\" y1=\"{:.1f}\" x2=\"{:.1f}\" y2=\"{:.1f}\" stroke=\"{}\" stroke-width=\"{}\"{}/>",
+                       lx, ly - 4, lx + 24, ly - 4, col, std::max(2.0, s.width), s.dashed ? " stroke-dasharray=\"6,3\"" : "");
+      o += fmt::format("<text x=\"{:.1f}\" y=\"{:.1f}\">{}</text>\n", lx + 30, ly, html_escape(s.label));
+    }
+    o += "</g>\n";
+  }
+  o += "</svg>\n";
+  return o;
+}
+
+}  // namespace quadid::report

@@ -1,0 +1,89 @@
+// Report rendering: tables align, SVG is well-formed and carries labels and legend.
+#include "quadid/report.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+using namespace quadid::report;
+
+TEST(Report, TextTableAlignsColumns) {
+  Table t;
+  t.title = "T";
+  t.header = {"name", "value (kg)"};
+  t.rows = {{"m", "1.82"}, {"Ixx", "0.012"}};
+  const std::string s = t.to_text();
+  // Names padded to the widest name ("name", 4), values right-aligned to the
+  // widest value ("value (kg)", 10), two spaces between columns.
+  EXPECT_NE(s.find("\nm           1.82\n"), std::string::npos) << s;
+  EXPECT_NE(s.find("\nIxx        0.012\n"), std::string::npos) << s;
+  EXPECT_NE(t.to_markdown().find("| m | 1.82 |"), std::string::npos);
+}
+
+TEST(Report, HtmlTableMarksNegativeImprovementRed) {
+  Table t;
+  t.header = {"e", "P_imp%"};
+  t.rows = {{"x", "-4.03"}, {"y", "5.38"}};
+  const std::string h = t.to_html();
+  EXPECT_NE(h.find("<td class=\"neg\">-4.03</td>"), std::string::npos);
+  EXPECT_NE(h.find("<td class=\"pos\">5.38</td>"), std::string::npos);
+}
+
+TEST(Report, SvgHasAxesLabelsLegendAndEscapes) {
+  Plot p;
+  p.title = "z <test> & more";
+  p.xlabel = "time (s)";
+  p.ylabel = "z (m)";
+  for (int k = 0; k < 6; ++k) {
+    Series s;
+    s.label = k == 0 ? "Exp" : "set" + std::to_string(k);
+    for (int i = 0; i < 5000; ++i) {
+      s.x.push_back(i * 0.01);
+      s.y.push_back(std::sin(i * 0.01 + k));
+    }
+    p.series.push_back(s);
+  }
+  const std::string svg = render_svg(p);
+  EXPECT_EQ(svg.rfind("<svg", 0), 0u);
+  EXPECT_NE(svg.find("</svg>"), std::string::npos);
+  EXPECT_NE(svg.find("time (s)"), std::string::npos);
+  EXPECT_NE(svg.find("z (m)"), std::string::npos);
+  EXPECT_NE(svg.find("z &lt;test&gt; &amp; more"), std::string::npos);
+  EXPECT_EQ(svg.find("<test>"), std::string::npos);
+  for (int k = 1; k < 6; ++k) EXPECT_NE(svg.find(">set" + std::to_string(k) + "<"), std::string::npos);
+  EXPECT_NE(svg.find("stroke=\"#000000\""), std::string::npos);  // Exp is black, as in the paper
+  // Decimation keeps the file small: 5000 points per curve -> at most max_points vertices.
+  size_t vertices = 0;
+  for (char c : svg) vertices += (c == 'L');
+  EXPECT_LE(vertices, 6u * 1500u);
+  EXPECT_GT(vertices, 6u * 500u);
+}
+
+TEST(Report, NonFiniteValuesBreakTheLineInsteadOfPrintingNaN) {
+  Plot p;
+  p.xlabel = "t (s)";
+  p.ylabel = "y (m)";
+  p.series.push_back({"a", {0, 1, 2, 3}, {0, 1, NAN, 3}, "", false, 1.5});
+  const std::string svg = render_svg(p);
+  EXPECT_EQ(svg.find("nan"), std::string::npos);
+  EXPECT_EQ(fixed(NAN, 3), "n/a");
+  EXPECT_EQ(sig(0.015371, 4), "0.01537");
+  EXPECT_EQ(sig(1.822461, 6), "1.82246");
+}
+
+TEST(Report, HtmlDocumentIsSelfContained) {
+  HtmlDocument d("Report");
+  d.heading("Section");
+  d.paragraph("a < b");
+  Plot p;
+  p.xlabel = "x (m)";
+  p.ylabel = "y (m)";
+  p.series.push_back({"path", {0, 1}, {0, 1}, "", false, 1.5});
+  d.figure(p, "caption");
+  const std::string h = d.str();
+  EXPECT_NE(h.find("<!DOCTYPE html>"), std::string::npos);
+  EXPECT_NE(h.find("a &lt; b"), std::string::npos);
+  EXPECT_NE(h.find("Figure 1. caption"), std::string::npos);
+  EXPECT_EQ(h.find("<script"), std::string::npos);
+  EXPECT_EQ(h.find("src=\"http"), std::string::npos);
+}
