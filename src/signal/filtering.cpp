@@ -1,9 +1,10 @@
 // lfilter / lfilter_zi (as SciPy) and MATLAB-style filtfilt.
 //
-// Speed: the recursion runs in place on a contiguous buffer, forward and then
-// backward (negative stride), with the order a compile-time constant for orders
-// 0..8 so the state lives in registers; FIR filters (a = [1]) use vectorized
-// convolution instead of the recursion. One work buffer per call, none per sample.
+// Speed: the recursion runs in place in the output, forward and then backward
+// (negative stride), with the order a compile-time constant for orders 0..8 so
+// the state lives in registers; only the two short edge pads need extra space.
+// FIR filters (a = [1]) use vectorized convolution instead of the recursion.
+// Work buffers are allocated once per call and shared by all columns.
 #include "quadid/signal.hpp"
 
 #include <fmt/format.h>
@@ -60,8 +61,10 @@ void df2t_fixed(const double* b, const double* a, double* z, double* p, std::ptr
     for (int k = 0; k < N; ++k) zz[k] = z[k];
     for (std::ptrdiff_t i = 0; i < count; ++i, p += step) {
       const double x = *p;
-      const double y = bb[0] * x + zz[0];
-      for (int k = 0; k < N - 1; ++k) zz[k] = bb[k + 1] * x - aa[k + 1] * y + zz[k + 1];
+      const double y = zz[0] + bb[0] * x;
+      // Same operation order as scipy's lfilter, (z[k+1] + b x) - a y, which is
+      // also the shorter dependency chain through y.
+      for (int k = 0; k < N - 1; ++k) zz[k] = (zz[k + 1] + bb[k + 1] * x) - aa[k + 1] * y;
       zz[N - 1] = bb[N] * x - aa[N] * y;
       *p = y;
     }
@@ -73,8 +76,8 @@ void df2t_generic(int N, const double* b, const double* a, double* z, double* p,
                   std::ptrdiff_t count, std::ptrdiff_t step) {
   for (std::ptrdiff_t i = 0; i < count; ++i, p += step) {
     const double x = *p;
-    const double y = b[0] * x + z[0];
-    for (int k = 0; k < N - 1; ++k) z[k] = b[k + 1] * x - a[k + 1] * y + z[k + 1];
+    const double y = z[0] + b[0] * x;
+    for (int k = 0; k < N - 1; ++k) z[k] = (z[k + 1] + b[k + 1] * x) - a[k + 1] * y;
     z[N - 1] = b[N] * x - a[N] * y;
     *p = y;
   }
@@ -134,8 +137,9 @@ int padlen_of(const TransferFunction& tf) {
 
 // Reusable buffers for one filtfilt call (shared by all columns).
 struct Work {
-  Eigen::VectorXd ext, tmp;
-  std::vector<double> z;
+  Eigen::VectorXd ext, tmp;       // FIR: padded signal and shifted copy
+  std::vector<double> pre, post;  // IIR: the two pads
+  std::vector<double> z;          // IIR: filter state
 };
 
 // Odd reflection at both ends, as MATLAB's filtfilt and scipy's odd_ext.
@@ -148,16 +152,15 @@ void odd_extend(const double* x, Eigen::Index n, Eigen::Index pad, double* ext) 
 
 void filtfilt_column(const Normalized& f, const std::vector<double>& zi, const double* x,
                      Eigen::Index n, Eigen::Index pad, double* out, Work& w) {
-  const Eigen::Index L = n + 2 * pad;
-  if (w.ext.size() != L) w.ext.resize(L);
-  double* e = w.ext.data();
-  odd_extend(x, n, pad, e);
-
   if (f.fir()) {
     // y[i] = sum_k b_k u[i-k] with u[i] = u[0] for i < 0 (the state zi*u[0]);
     // then backwards with u[i] = u[L-1] for i >= L. Axpy form so it vectorizes.
+    const Eigen::Index L = n + 2 * pad;
     const Eigen::Index M = static_cast<Eigen::Index>(f.b.size());
+    if (w.ext.size() != L) w.ext.resize(L);
     if (w.tmp.size() != L + M - 1) w.tmp.resize(L + M - 1);
+    double* e = w.ext.data();
+    odd_extend(x, n, pad, e);
     Eigen::VectorXd& u = w.tmp;
     u.head(M - 1).setConstant(e[0]);
     u.tail(L) = w.ext;
@@ -173,14 +176,33 @@ void filtfilt_column(const Normalized& f, const std::vector<double>& zi, const d
     return;
   }
 
+  // IIR: the padded signal is [pre | x | post]; only the two short pads need
+  // work space, the middle is filtered in place in `out`, and the state carries
+  // across the pieces.
   const int N = f.order();
+  w.pre.resize(static_cast<std::size_t>(pad));
+  w.post.resize(static_cast<std::size_t>(pad));
   w.z.resize(static_cast<std::size_t>(N));
-  for (int k = 0; k < N; ++k) w.z[static_cast<std::size_t>(k)] = zi[static_cast<std::size_t>(k)] * e[0];
-  df2t(f, w.z.data(), e, L, 1);
-  for (int k = 0; k < N; ++k)
-    w.z[static_cast<std::size_t>(k)] = zi[static_cast<std::size_t>(k)] * e[L - 1];
-  df2t(f, w.z.data(), e + (L - 1), L, -1);
-  std::copy(e + pad, e + pad + n, out);
+  double* pre = w.pre.data();
+  double* post = w.post.data();
+  const double x0 = x[0], xn = x[n - 1];
+  for (Eigen::Index j = 1; j <= pad; ++j) pre[pad - j] = 2.0 * x0 - x[j];
+  for (Eigen::Index j = 1; j <= pad; ++j) post[j - 1] = 2.0 * xn - x[n - 1 - j];
+  std::copy(x, x + n, out);
+
+  const auto set_state = [&](double v) {
+    for (int k = 0; k < N; ++k) w.z[static_cast<std::size_t>(k)] = zi[static_cast<std::size_t>(k)] * v;
+  };
+  // forward pass
+  set_state(pad > 0 ? pre[0] : x0);
+  df2t(f, w.z.data(), pre, pad, 1);
+  df2t(f, w.z.data(), out, n, 1);
+  df2t(f, w.z.data(), post, pad, 1);
+  // backward pass, from the end of the forward output; the leading pad's
+  // backward output is not needed.
+  set_state(pad > 0 ? post[pad - 1] : out[n - 1]);
+  if (pad > 0) df2t(f, w.z.data(), post + (pad - 1), pad, -1);
+  df2t(f, w.z.data(), out + (n - 1), n, -1);
 }
 
 void check_length(Eigen::Index n, int pad) {

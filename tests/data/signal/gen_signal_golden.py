@@ -11,6 +11,7 @@ Deterministic: fixed seed, no time-dependent input. Floats written with repr
 """
 import json
 import os
+from fractions import Fraction
 
 import numpy as np
 import scipy
@@ -34,6 +35,23 @@ x = (0.7
      + 0.5 * (t >= 1.5))
 
 
+def exact_zi(b, a):
+    """lfilter_zi of the given double coefficients in exact rational arithmetic,
+    rounded once to double: the reference for how accurate a zi can be. (For a
+    narrow low-pass, scipy's LAPACK solve is off by ~1e-10 here: sum(a) ~ 1e-6.)"""
+    b = [Fraction(v) / Fraction(a[0]) for v in b]
+    a = [Fraction(v) / Fraction(a[0]) for v in a]
+    n = max(len(a), len(b))
+    b += [Fraction(0)] * (n - len(b))
+    a += [Fraction(0)] * (n - len(a))
+    G = sum(b) / sum(a)           # DC gain: steady output for a unit step
+    zi, acc = [0.0] * (n - 1), Fraction(0)
+    for k in range(n - 2, -1, -1):  # z_k = b_{k+1} - a_{k+1} G + z_{k+1}, z_{n-1} = 0
+        acc += b[k + 1] - a[k + 1] * G
+        zi[k] = float(acc)
+    return zi
+
+
 def matlab_filtfilt(b, a, sig):
     """MATLAB filtfilt == scipy filtfilt with odd padding of 3*(nfilt-1)."""
     padlen = 3 * (max(len(a), len(b)) - 1)
@@ -51,6 +69,7 @@ for order, fc, fs in [(1, 10.0, 500.0), (2, 5.0, 500.0), (4, 4.0, 500.0),
     b, a = ss.butter(order, fc, fs=fs)
     coeffs[name] = {"kind": "butter", "order": order, "cutoff_hz": fc, "fs_hz": fs,
                     "b": list(b), "a": list(a), "zi": list(ss.lfilter_zi(b, a)),
+                    "zi_exact": exact_zi(list(b), list(a)),
                     "padlen": 3 * (max(len(a), len(b)) - 1)}
     columns["filtfilt_" + name] = matlab_filtfilt(b, a, x)
     cases.append(name)
@@ -84,7 +103,7 @@ for name, (b, a) in first_order.items():
     zi = ss.lfilter_zi(b, a)
     y, _ = ss.lfilter(b, a, x, zi=zi * x[0])
     coeffs[name] = {"kind": "first_order", "lambda": LAM, "T": T, "b": b, "a": a,
-                    "zi": list(zi)}
+                    "zi": list(zi), "zi_exact": exact_zi(b, a)}
     columns["lfilter_" + name] = y
 
 meta = {"generator": "gen_signal_golden.py", "numpy": np.__version__,
