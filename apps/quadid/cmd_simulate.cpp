@@ -1,12 +1,179 @@
+// quadid simulate: fly a trajectory in closed loop (docs/simulate.md).
 #include "commands.hpp"
+#include "quadid/io.hpp"
+#include "quadid/simulation.hpp"
 
+#include <fmt/format.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <optional>
 #include <stdexcept>
+#include <string>
 
 namespace quadid::cli {
 
+namespace {
+
+struct SimulateArgs {
+  std::string trajectory;
+  std::optional<double> radius, altitude;
+  std::string out, truth;
+  std::string plant = "qball2-virtual";
+  std::string controller_params = "qball2-nominal";
+  std::string torque_map = "WT";
+  std::string derivative = "tustin";
+  std::string noise = "default";
+  std::optional<double> sigma_position, sigma_yaw, sigma_attitude, sigma_gyro, sigma_velocity, sigma_yaw_rate;
+  std::string velocity_source = "mocap-difference";
+  SimulationOptions opt;
+  bool json = false;
+};
+
+std::unique_ptr<Trajectory> make_trajectory(const SimulateArgs& a) {
+  if (a.trajectory == "circle") {
+    // Defaults: circular path experiment 1 (section IV-C).
+    return std::make_unique<CircleTrajectory>(a.radius.value_or(0.5), a.altitude.value_or(1.0));
+  }
+  if (a.radius || a.altitude)
+    throw std::invalid_argument("--radius and --altitude only apply to --trajectory circle");
+  return trajectory_from_spec(a.trajectory);
+}
+
+void run(SimulateArgs& a) {
+  SimulationOptions& o = a.opt;
+  o.plant = load_params(a.plant);
+  o.controller.params = load_params(a.controller_params);
+  o.controller.torque_map = torque_map_from_string(a.torque_map);
+  o.controller.derivative_discretization = derivative_discretization_from_string(a.derivative);
+  o.controller.g = o.g;
+  NoiseSigmas& n = o.sensors.noise;
+  n = NoiseSigmas::preset(a.noise);
+  if (a.sigma_position) n.position = *a.sigma_position;
+  if (a.sigma_yaw) n.yaw = *a.sigma_yaw;
+  if (a.sigma_attitude) n.attitude = *a.sigma_attitude;
+  if (a.sigma_gyro) n.gyro = *a.sigma_gyro;
+  if (a.sigma_velocity) n.velocity = *a.sigma_velocity;
+  if (a.sigma_yaw_rate) n.yaw_rate = *a.sigma_yaw_rate;
+  o.sensors.velocity_source = velocity_source_from_string(a.velocity_source);
+  o.record_truth = !a.truth.empty();
+
+  const auto traj = make_trajectory(a);
+  const SimulationResult res = simulate(*traj, o);  // SimulationDiverged propagates: exit 1, nothing written
+
+  // Truth first, then the log: a failure leaves neither file half-done.
+  namespace fs = std::filesystem;
+  if (!a.truth.empty()) write_flight_log(res.truth, a.truth);
+  if (!a.out.empty()) {
+    try {
+      write_flight_log(res.log, a.out);
+    } catch (...) {
+      std::error_code ec;
+      if (!a.truth.empty()) fs::remove(a.truth, ec);
+      throw;
+    }
+  }
+
+  const SimulationSummary& s = res.summary;
+  if (a.json) {
+    nlohmann::json j = {{"trajectory", trajectory_spec(*traj)},
+                        {"plant", to_json(o.plant)},
+                        {"controller_params", to_json(o.controller.params)},
+                        {"noise", a.noise},
+                        {"seed", o.sensors.seed},
+                        {"log", a.out.empty() ? nlohmann::json() : nlohmann::json(a.out)},
+                        {"truth", a.truth.empty() ? nlohmann::json() : nlohmann::json(a.truth)},
+                        {"summary", to_json(s)}};
+    fmt::print("{}\n", j.dump(2));
+    return;
+  }
+  constexpr double deg = 180.0 / M_PI;
+  fmt::print("simulated {:g} s of {} ({} samples at {:g} Hz); plant {}, controller params {}, noise {}, seed {}\n",
+             s.duration, traj->describe(), s.samples, o.controller.rate, a.plant, a.controller_params, a.noise,
+             o.sensors.seed);
+  fmt::print("RMS position error (t >= {:g} s): x {:.2f} mm, y {:.2f} mm, z {:.2f} mm, |p| {:.2f} mm (max {:.2f} mm)\n",
+             s.summary_from, 1e3 * s.rms_position_error(0), 1e3 * s.rms_position_error(1),
+             1e3 * s.rms_position_error(2), 1e3 * s.rms_position_error_norm, 1e3 * s.max_position_error_norm);
+  fmt::print("RMS attitude error vs eqs. (26)-(27): phi {:.3f} deg, theta {:.3f} deg, psi {:.3f} deg\n",
+             deg * s.rms_attitude_error(0), deg * s.rms_attitude_error(1), deg * s.rms_attitude_error(2));
+  fmt::print("applied Fz {:.2f}..{:.2f} N, max |tau| [{:.3f} {:.3f} {:.3f}] N m; saturated ticks: Fz low {}, "
+             "Fz high {}, tau [{} {} {}]\n",
+             s.Fz_min, s.Fz_max, s.tau_abs_max(0), s.tau_abs_max(1), s.tau_abs_max(2), s.Fz_saturated_low,
+             s.Fz_saturated_high, s.tau_saturated[0], s.tau_saturated[1], s.tau_saturated[2]);
+  if (!a.out.empty()) fmt::print("wrote {} ({} rows)\n", a.out, s.samples);
+  if (!a.truth.empty()) fmt::print("wrote {} (true state)\n", a.truth);
+  if (a.out.empty() && a.truth.empty()) fmt::print(stderr, "note: no -o/--out given, no log written\n");
+}
+
+}  // namespace
+
 void register_simulate(CLI::App& app) {
-  auto* sub = app.add_subcommand("simulate", "fly a trajectory in closed loop with the paper's PID controller -> flight log CSV");
-  sub->callback([] { throw std::runtime_error("not implemented yet"); });
+  auto args = std::make_shared<SimulateArgs>();
+  SimulationOptions& o = args->opt;
+  auto* sub = app.add_subcommand(
+      "simulate",
+      "fly a trajectory in closed loop with the paper's PID controller -> flight log CSV");
+  sub->footer(
+      "The plant is eqs. (1)-(4) (RK4, fixed step), the controller eqs. (28)-(32) with the gains of\n"
+      "section III-C, sensors as in section IV-A: position and yaw from motion capture at 30 Hz (held),\n"
+      "roll, pitch and body rates from the IMU at 500 Hz. The log (DESIGN.md format, at the controller\n"
+      "rate) holds what the controller saw and the saturated commands it applied, plus x_d y_d z_d psi_d.\n"
+      "Divergence (NaN, leaving the safety box, hitting the floor z < 0) stops the run with exit 1 and\n"
+      "writes nothing.\n\n"
+      "Examples:\n"
+      "  quadid simulate --trajectory table2 --duration 50 -o log.csv\n"
+      "  quadid simulate --trajectory circle --radius 0.8 --altitude 0.9 -o c.csv --truth c_truth.csv\n"
+      "  quadid simulate --trajectory traj.json --noise none --plant qball2-nominal --json\n");
+  sub->add_option("--trajectory", args->trajectory,
+                  "reference: a trajectory JSON file (from `quadid design`), table2, circle1, circle2, circle3, "
+                  "or circle (eq. 44 with --radius/--altitude)")
+      ->required();
+  sub->add_option("--radius", args->radius, "circle radius, m (with --trajectory circle; default 0.5)");
+  sub->add_option("--altitude", args->altitude, "circle altitude rho of eq. (44), m (with --trajectory circle; default 1)");
+  sub->add_option("--duration", o.duration, "flight length, s")->capture_default_str();
+  sub->add_option("-o,--out", args->out, "flight log CSV to write (atomically)");
+  sub->add_option("--truth", args->truth, "also write the true state (CSV, same instants) to this file");
+  sub->add_option("--plant", args->plant, "the simulated vehicle: qball2-virtual (Table 3 LS), qball2-nominal or a parameters JSON")
+      ->capture_default_str();
+  sub->add_option("--controller-params", args->controller_params,
+                  "the controller's model (its mass enters eq. 32): qball2-nominal (m = 1.79 kg), qball2-virtual or a JSON")
+      ->capture_default_str();
+  sub->add_option("--torque-map", args->torque_map,
+                  "eq. (31) map from Euler-angle PID output to body torque: WT (W(eta)^T, power-consistent) or "
+                  "WinvT (W(eta)^-T, as printed)")
+      ->capture_default_str();
+  sub->add_option("--derivative", args->derivative,
+                  "discretization of D(s) = 20 s/(s + 20) at the controller rate: tustin or backward-euler")
+      ->capture_default_str();
+  sub->add_option("--fz-max", o.controller.Fz_max, "thrust saturation, N (0 <= Fz <= this)")->capture_default_str();
+  sub->add_option("--tau-max", o.controller.tau_max, "torque saturation |tau_i|, N m")->capture_default_str();
+  sub->add_option("--noise", args->noise,
+                  "sensor noise profile: default (motion capture 0.3 mm / 0.1 deg yaw; IMU 0.05 deg roll/pitch, "
+                  "0.0014 rad/s gyro) or none")
+      ->capture_default_str();
+  sub->add_option("--sigma-position", args->sigma_position, "override: mocap position noise std, m");
+  sub->add_option("--sigma-yaw", args->sigma_yaw, "override: mocap yaw noise std, rad");
+  sub->add_option("--sigma-attitude", args->sigma_attitude, "override: IMU roll/pitch noise std, rad");
+  sub->add_option("--sigma-gyro", args->sigma_gyro, "override: gyro noise std per sample, rad/s");
+  sub->add_option("--sigma-velocity", args->sigma_velocity, "override: velocity noise std, m/s (--velocity-source truth)");
+  sub->add_option("--sigma-yaw-rate", args->sigma_yaw_rate, "override: yaw-rate noise std, rad/s (--velocity-source truth)");
+  sub->add_option("--velocity-source", args->velocity_source,
+                  "controller's velocity and yaw rate: mocap-difference (difference of successive 30 Hz samples) "
+                  "or truth (true value sampled at the mocap rate + noise)")
+      ->capture_default_str();
+  sub->add_option("--seed", o.sensors.seed, "noise seed; same seed and options -> byte-identical log")->capture_default_str();
+  sub->add_option("--dt", o.dt, "plant RK4 step, s (the controller period must be a multiple)")->capture_default_str();
+  sub->add_option("--rate", o.controller.rate, "controller (and log) rate, Hz")->capture_default_str();
+  sub->add_option("--mocap-rate", o.sensors.mocap_rate, "motion-capture rate for x y z psi, Hz")->capture_default_str();
+  sub->add_option("--imu-rate", o.sensors.imu_rate, "IMU rate for phi theta p q r, Hz")->capture_default_str();
+  sub->add_option("--actuator-tau", o.actuator_tau, "first-order actuator lag time constant, s (0 = ideal)")
+      ->capture_default_str();
+  sub->add_option("--g", o.g, "gravity, m/s^2 (plant and controller)")->capture_default_str();
+  sub->add_option("--summary-from", o.summary_from, "start of the window for the RMS tracking errors, s")
+      ->capture_default_str();
+  sub->add_flag("--json", args->json, "print the summary as JSON on stdout (nothing else there)");
+  sub->callback([args] { run(*args); });
 }
 
 }  // namespace quadid::cli

@@ -1,0 +1,193 @@
+// Closed-loop flight simulator (paper section IV-A): the rigid-body plant of
+// eqs. (1)-(4) integrated with fixed-step RK4, the PID controller of
+// eqs. (28)-(32) at its own rate with zero-order hold of its outputs, and
+// motion-capture / IMU sensors with their own rates and optional white noise.
+// See docs/simulate.md.
+#pragma once
+
+#include "quadid/control.hpp"
+#include "quadid/io.hpp"
+#include "quadid/model.hpp"
+#include "quadid/trajectory.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+
+namespace quadid {
+
+// --- Plant -------------------------------------------------------------------
+
+/// Eqs. (1)-(4) with the inverse inertia precomputed, RK4 with the command held
+/// over the step, and an optional first-order actuator lag
+/// (u_applied_dot = (u_cmd - u_applied) / tau_a), integrated exactly at the RK4
+/// stage times because the command is constant within a step.
+class Plant {
+ public:
+  explicit Plant(const Params& P, double g = kDefaultGravity, double actuator_tau = 0.0);
+
+  /// The state derivative of eqs. (1)-(4); equals quadid::dynamics().
+  State::Vector derivative(const State& x, const Input& u) const;
+  /// Advances x by dt with `command` held (zero-order hold).
+  void step(State& x, const Input& command, double dt);
+
+  /// Force and torques the actuators deliver now (== the last command when tau_a = 0).
+  const Input& applied() const { return applied_; }
+  void set_applied(const Input& u) { applied_ = u; }
+  const Params& params() const { return P_; }
+
+ private:
+  Params P_;
+  Mat3 I_inv_;
+  double g_, tau_a_;
+  Input applied_;
+};
+
+// --- Sensors -----------------------------------------------------------------
+
+/// Standard deviations of the white noise added to each sensor sample.
+struct NoiseSigmas {
+  double position = 0.0;  // m, mocap, per axis
+  double yaw = 0.0;       // rad, mocap psi
+  double attitude = 0.0;  // rad, IMU phi and theta
+  double gyro = 0.0;      // rad/s, IMU p q r
+  double velocity = 0.0;  // m/s, only with VelocitySource::kTruth
+  double yaw_rate = 0.0;  // rad/s, only with VelocitySource::kTruth
+
+  static NoiseSigmas none() { return {}; }
+  /// Representative of an OptiTrack Flex 3 system and a MEMS IMU; sources in docs/simulate.md:
+  /// position 0.3 mm, yaw 0.1 deg, roll/pitch 0.05 deg, gyro 0.0014 rad/s (0.08 deg/s).
+  static NoiseSigmas typical();
+  /// "none" or "default" (typical()); throws std::invalid_argument otherwise.
+  static NoiseSigmas preset(std::string_view name);
+  bool any() const;
+};
+
+/// Where the controller's inertial velocity and yaw rate come from.
+enum class VelocitySource {
+  /// Backward difference of successive (noisy) mocap samples, held until the next
+  /// sample: what a real motion-capture loop has. Default.
+  kMocapDifference,
+  /// The true p_dot and psi_dot sampled with the mocap, plus NoiseSigmas::velocity/yaw_rate.
+  kTruth,
+};
+std::string to_string(VelocitySource s);
+VelocitySource velocity_source_from_string(std::string_view s);  // "mocap-difference" | "truth"
+
+/// Section IV-A: p, psi (and psi_dot) at 30 Hz; phi, theta and the body rates at 500 Hz.
+/// Each sensor is sampled at the first controller tick at or after its own sample
+/// instant and held (zero-order hold) until its next sample.
+struct SensorOptions {
+  double mocap_rate = 30.0;  // Hz, <= controller rate
+  double imu_rate = 500.0;   // Hz, <= controller rate
+  NoiseSigmas noise = NoiseSigmas::typical();
+  VelocitySource velocity_source = VelocitySource::kMocapDifference;
+  std::uint64_t seed = 1;    // same seed, same options -> same noise, bit for bit
+
+  void validate(double control_rate) const;
+};
+
+// --- Simulation ----------------------------------------------------------------
+
+/// The run stops (SimulationDiverged) when the true state leaves this region.
+struct SafetyLimits {
+  Vec3 box_min{-5.0, -5.0, 0.0};  // m; z_min is the floor
+  Vec3 box_max{5.0, 5.0, 5.0};    // m
+  double max_tilt = 80.0 * M_PI / 180.0;  // rad, |phi| and |theta| (W(eta) is singular at 90 deg)
+  double max_rate = 50.0;                 // rad/s, |p|, |q|, |r|
+  double max_speed = 20.0;                // m/s, |v|
+};
+
+struct SimulationOptions {
+  Params plant = Params::qball2_virtual();  // the "true" vehicle (Table 3, LS)
+  ControllerOptions controller;             // nominal params, section III-C gains; controller.rate = log rate
+  SensorOptions sensors;
+  double dt = 1e-3;            // s, RK4 step; 1/controller.rate must be a whole multiple of it
+  double duration = 50.0;      // s; the log holds t = 0, T, ..., duration
+  double actuator_tau = 0.0;   // s, first-order actuator lag; 0 = ideal actuators
+  double g = kDefaultGravity;  // m/s^2, plant gravity (the controller has its own)
+  SafetyLimits safety;
+  /// Initial true state; default: at rest, level, at the trajectory's start position and yaw.
+  std::optional<State> initial_state;
+  bool record_truth = true;    // fill SimulationResult::truth (costs memory; validation re-flies can skip it)
+  double summary_from = 0.0;   // s, summary statistics use t >= summary_from
+
+  /// Throws std::invalid_argument naming the bad option.
+  void validate() const;
+};
+
+struct SimulationSummary {
+  double duration = 0.0;           // s
+  Eigen::Index samples = 0;        // rows of the log
+  double summary_from = 0.0;       // s, start of the statistics window
+  Vec3 rms_position_error = Vec3::Zero();  // m, true p - p_d per axis
+  double rms_position_error_norm = 0.0;    // m, RMS of |p - p_d|
+  double max_position_error_norm = 0.0;    // m
+  Vec3 rms_attitude_error = Vec3::Zero();  // rad, true eta - eta_d (eqs. 26-27 and psi_d)
+  Vec3 max_attitude_error = Vec3::Zero();  // rad
+  int Fz_saturated_low = 0, Fz_saturated_high = 0;  // ticks, whole flight
+  std::array<int, 3> tau_saturated{};               // ticks, whole flight
+  double Fz_min = 0.0, Fz_max = 0.0;                // N, applied, whole flight
+  Vec3 tau_abs_max = Vec3::Zero();                  // N m, applied, whole flight
+};
+
+struct SimulationResult {
+  /// DESIGN.md flight log at the controller rate, t from 0: the measurements as the
+  /// controller saw them (mocap held at 30 Hz, IMU at 500 Hz, noise included) and
+  /// the applied (saturated) commands, then x_d y_d z_d psi_d. Metadata in comments.
+  FlightLog log;
+  /// True state at the same instants (empty unless record_truth): the standard
+  /// columns with true values (Fz, tau = actuator output), then
+  /// u v w (body velocity), vx vy vz (inertial), u_dot v_dot w_dot p_dot q_dot r_dot.
+  FlightLog truth;
+  SimulationSummary summary;
+};
+
+/// The vehicle left the safe region, tumbled or produced a non-finite state.
+class SimulationDiverged : public std::runtime_error {
+ public:
+  SimulationDiverged(double time, std::string reason);
+  double time() const { return time_; }               // s
+  const std::string& reason() const { return reason_; }
+
+ private:
+  double time_;
+  std::string reason_;
+};
+
+/// Flies `traj` in closed loop. Throws std::invalid_argument on bad options and
+/// SimulationDiverged on divergence (nothing is returned then).
+SimulationResult simulate(const Trajectory& traj, const SimulationOptions& opt);
+
+/// The default initial state: at rest, level, at the start position and yaw of `traj`.
+State initial_state_at_rest(const Trajectory& traj);
+
+// --- Log metadata ----------------------------------------------------------------
+
+/// A one-line spec that rebuilds the trajectory: "table2", "circle1".."circle3",
+/// "circle radius=R altitude=A [period=P psi_amplitude=RAD]", or the one-line JSON
+/// of a Fourier trajectory.
+std::string trajectory_spec(const Trajectory& traj);
+/// Inverse of trajectory_spec; also accepts a trajectory JSON file name. Throws InputError.
+std::unique_ptr<Trajectory> trajectory_from_spec(std::string_view spec);
+
+/// The header comment lines a simulated log carries (without the leading '#').
+std::vector<std::string> simulation_log_comments(const Trajectory& traj, const SimulationOptions& opt);
+/// The reference a simulated log was flown with (its "trajectory:" comment).
+/// Throws InputError if the log has no such metadata (e.g. a real flight log).
+std::unique_ptr<Trajectory> trajectory_from_log(const FlightLog& log);
+/// The options a simulated log was flown with (plant, controller, sensors, seed,
+/// dt, duration, ...). Throws InputError if the metadata is missing or malformed.
+SimulationOptions simulation_options_from_log(const FlightLog& log);
+
+nlohmann::json to_json(const SimulationOptions& opt);
+/// Fields absent from `j` keep their defaults. Throws InputError naming the bad field.
+SimulationOptions simulation_options_from_json(const nlohmann::json& j, const std::string& source);
+nlohmann::json to_json(const SimulationSummary& s);
+
+}  // namespace quadid

@@ -1,0 +1,393 @@
+// Metadata of simulated logs: trajectory specs and the options as JSON, so a
+// log can be re-flown (quadid validate) from its own header.
+#include "quadid/simulation.hpp"
+
+#include <fmt/format.h>
+
+#include <charconv>
+#include <cmath>
+#include <filesystem>
+
+namespace quadid {
+
+using nlohmann::json;
+
+namespace {
+
+constexpr double kDefaultCirclePeriod = 5.0;
+constexpr double kDefaultPsiAmplitude = 15.0 * M_PI / 180.0;
+
+bool same_trajectory(const FourierTrajectory& a, const FourierTrajectory& b) {
+  return a.wf() == b.wf() && a.harmonics() == b.harmonics() && a.coefficients() == b.coefficients();
+}
+
+// psi_d = A sin(2 pi t / P) (eq. 44), so A is psi_d at a quarter period.
+double circle_psi_amplitude(const CircleTrajectory& c) { return c.eval(c.period() / 4.0)(kPsi, 0); }
+
+}  // namespace
+
+std::string trajectory_spec(const Trajectory& traj) {
+  if (const auto* f = dynamic_cast<const FourierTrajectory*>(&traj)) {
+    if (same_trajectory(*f, FourierTrajectory::table2())) return "table2";
+    return to_json(*f).dump();
+  }
+  if (const auto* c = dynamic_cast<const CircleTrajectory*>(&traj)) {
+    const double amp = circle_psi_amplitude(*c);
+    const bool default_shape = c->period() == kDefaultCirclePeriod && std::abs(amp - kDefaultPsiAmplitude) < 1e-15;
+    for (int k = 1; k <= 3; ++k) {
+      const auto e = CircleTrajectory::experiment(k);
+      if (default_shape && c->radius() == e.radius() && c->rho() == e.rho()) return fmt::format("circle{}", k);
+    }
+    std::string s = fmt::format("circle radius={} altitude={}", c->radius(), c->rho());
+    if (!default_shape) s += fmt::format(" period={} psi_amplitude={}", c->period(), amp);
+    return s;
+  }
+  throw std::invalid_argument(fmt::format("trajectory '{}' has no spec (only Fourier and circle trajectories do)",
+                                          traj.describe()));
+}
+
+namespace {
+
+std::unique_ptr<Trajectory> circle_from_spec(std::string_view spec) {
+  // "circle radius=R altitude=A [period=P] [psi_amplitude=RAD]"
+  double radius = NAN, altitude = NAN, period = kDefaultCirclePeriod, amp = kDefaultPsiAmplitude;
+  std::string_view rest = spec.substr(6);
+  while (!rest.empty()) {
+    const size_t b = rest.find_first_not_of(' ');
+    if (b == std::string_view::npos) break;
+    rest.remove_prefix(b);
+    const size_t e = std::min(rest.find(' '), rest.size());
+    const std::string_view item = rest.substr(0, e);
+    rest.remove_prefix(e);
+    const size_t eq = item.find('=');
+    double val = 0.0;
+    const char* vb = item.data() + (eq == std::string_view::npos ? item.size() : eq + 1);
+    const char* ve = item.data() + item.size();
+    const auto [ptr, ec] = std::from_chars(vb, ve, val);
+    if (eq == std::string_view::npos || ec != std::errc() || ptr != ve || !std::isfinite(val))
+      throw InputError(fmt::format("trajectory spec '{}': '{}' is not KEY=NUMBER", spec, item));
+    const std::string_view key = item.substr(0, eq);
+    if (key == "radius") radius = val;
+    else if (key == "altitude") altitude = val;
+    else if (key == "period") period = val;
+    else if (key == "psi_amplitude") amp = val;
+    else
+      throw InputError(fmt::format("trajectory spec '{}': unknown key '{}' (radius, altitude, period, psi_amplitude)",
+                                   spec, key));
+  }
+  if (std::isnan(radius) || std::isnan(altitude))
+    throw InputError(fmt::format("trajectory spec '{}': needs radius=R and altitude=A (metres)", spec));
+  try {
+    return std::make_unique<CircleTrajectory>(radius, altitude, period, amp);
+  } catch (const std::invalid_argument& e) {
+    throw InputError(fmt::format("trajectory spec '{}': {}", spec, e.what()));
+  }
+}
+
+}  // namespace
+
+std::unique_ptr<Trajectory> trajectory_from_spec(std::string_view spec) {
+  if (auto t = builtin_trajectory(spec)) return t;
+  if (spec.rfind("circle ", 0) == 0) return circle_from_spec(spec);
+  if (!spec.empty() && spec.front() == '{') {
+    json j;
+    try {
+      j = json::parse(spec);
+    } catch (const json::parse_error& e) {
+      throw InputError(fmt::format("trajectory spec: invalid JSON ({})", e.what()));
+    }
+    return std::make_unique<FourierTrajectory>(trajectory_from_json(j, "trajectory spec"));
+  }
+  return load_trajectory(std::string(spec));
+}
+
+// --- options <-> JSON ---------------------------------------------------------
+
+namespace {
+
+json vec(const Vec3& v) { return json::array({v(0), v(1), v(2)}); }
+
+json controller_json(const ControllerOptions& c) {
+  const PidGains& k = c.gains;
+  return {{"params", to_json(c.params)},
+          {"gains",
+           {{"Kpp", vec(k.Kpp)}, {"Kip", vec(k.Kip)}, {"Kdp", vec(k.Kdp)},
+            {"Kpo", vec(k.Kpo)}, {"Kio", vec(k.Kio)}, {"Kdo", vec(k.Kdo)}}},
+          {"g", c.g},
+          {"rate", c.rate},
+          {"Fz_min", c.Fz_min},
+          {"Fz_max", c.Fz_max},
+          {"tau_max", c.tau_max},
+          {"torque_map", to_string(c.torque_map)},
+          {"derivative_pole", c.derivative_pole},
+          {"derivative_discretization", to_string(c.derivative_discretization)}};
+}
+
+json noise_json(const NoiseSigmas& n) {
+  return {{"position", n.position}, {"yaw", n.yaw},           {"attitude", n.attitude},
+          {"gyro", n.gyro},         {"velocity", n.velocity}, {"yaw_rate", n.yaw_rate}};
+}
+
+json sensors_json(const SensorOptions& s) {
+  return {{"mocap_rate", s.mocap_rate},
+          {"imu_rate", s.imu_rate},
+          {"noise", noise_json(s.noise)},
+          {"velocity_source", to_string(s.velocity_source)},
+          {"seed", s.seed}};
+}
+
+json simulation_json(const SimulationOptions& o) {
+  json j = {{"duration", o.duration},
+            {"actuator_tau", o.actuator_tau},
+            {"g", o.g},
+            {"safety",
+             {{"box_min", vec(o.safety.box_min)},
+              {"box_max", vec(o.safety.box_max)},
+              {"max_tilt", o.safety.max_tilt},
+              {"max_rate", o.safety.max_rate},
+              {"max_speed", o.safety.max_speed}}},
+            {"summary_from", o.summary_from}};
+  if (o.initial_state) {
+    const State& x = *o.initial_state;
+    j["initial_state"] = {{"p", vec(x.p)}, {"v", vec(x.v)}, {"eta", vec(x.eta)}, {"omega", vec(x.omega)}};
+  }
+  return j;
+}
+
+// Readers: a field absent keeps its default; a present one must have the right type.
+struct Reader {
+  const json& j;
+  std::string where;
+
+  bool has(const char* key) const { return j.contains(key); }
+  Reader sub(const char* key) const {
+    const json& s = j.at(key);
+    if (!s.is_object()) throw InputError(fmt::format("{}.{}: must be an object", where, key));
+    return Reader{s, where + "." + key};
+  }
+  void num(const char* key, double& out) const {
+    if (!has(key)) return;
+    const json& v = j.at(key);
+    if (!v.is_number() || !std::isfinite(v.get<double>()))
+      throw InputError(fmt::format("{}.{}: must be a finite number", where, key));
+    out = v.get<double>();
+  }
+  void vec3(const char* key, Vec3& out) const {
+    if (!has(key)) return;
+    const json& v = j.at(key);
+    if (!v.is_array() || v.size() != 3 || !v[0].is_number() || !v[1].is_number() || !v[2].is_number())
+      throw InputError(fmt::format("{}.{}: must be an array of 3 numbers", where, key));
+    out = Vec3(v[0].get<double>(), v[1].get<double>(), v[2].get<double>());
+  }
+  template <class F>
+  void str(const char* key, F&& parse) const {
+    if (!has(key)) return;
+    const json& v = j.at(key);
+    if (!v.is_string()) throw InputError(fmt::format("{}.{}: must be a string", where, key));
+    try {
+      parse(v.get<std::string>());
+    } catch (const std::invalid_argument& e) {
+      throw InputError(fmt::format("{}.{}: {}", where, key, e.what()));
+    }
+  }
+};
+
+}  // namespace
+
+json to_json(const SimulationOptions& o) {
+  json j = simulation_json(o);
+  j["plant"] = to_json(o.plant);
+  j["controller"] = controller_json(o.controller);
+  j["sensors"] = sensors_json(o.sensors);
+  j["dt"] = o.dt;
+  j["record_truth"] = o.record_truth;
+  return j;
+}
+
+SimulationOptions simulation_options_from_json(const json& j, const std::string& source) {
+  if (!j.is_object()) throw InputError(fmt::format("{}: simulation options must be a JSON object", source));
+  SimulationOptions o;
+  const Reader r{j, source};
+  if (r.has("plant")) o.plant = params_from_json(j.at("plant"), source + ".plant");
+  if (r.has("controller")) {
+    const Reader c = r.sub("controller");
+    ControllerOptions& co = o.controller;
+    if (c.has("params")) co.params = params_from_json(c.j.at("params"), c.where + ".params");
+    if (c.has("gains")) {
+      const Reader k = c.sub("gains");
+      k.vec3("Kpp", co.gains.Kpp);
+      k.vec3("Kip", co.gains.Kip);
+      k.vec3("Kdp", co.gains.Kdp);
+      k.vec3("Kpo", co.gains.Kpo);
+      k.vec3("Kio", co.gains.Kio);
+      k.vec3("Kdo", co.gains.Kdo);
+    }
+    c.num("g", co.g);
+    c.num("rate", co.rate);
+    c.num("Fz_min", co.Fz_min);
+    c.num("Fz_max", co.Fz_max);
+    c.num("tau_max", co.tau_max);
+    c.str("torque_map", [&](const std::string& s) { co.torque_map = torque_map_from_string(s); });
+    c.num("derivative_pole", co.derivative_pole);
+    c.str("derivative_discretization",
+          [&](const std::string& s) { co.derivative_discretization = derivative_discretization_from_string(s); });
+  }
+  if (r.has("sensors")) {
+    const Reader s = r.sub("sensors");
+    s.num("mocap_rate", o.sensors.mocap_rate);
+    s.num("imu_rate", o.sensors.imu_rate);
+    if (s.has("noise")) {
+      const Reader n = s.sub("noise");
+      NoiseSigmas& ns = o.sensors.noise;
+      ns = NoiseSigmas::none();
+      n.num("position", ns.position);
+      n.num("yaw", ns.yaw);
+      n.num("attitude", ns.attitude);
+      n.num("gyro", ns.gyro);
+      n.num("velocity", ns.velocity);
+      n.num("yaw_rate", ns.yaw_rate);
+    }
+    s.str("velocity_source", [&](const std::string& v) { o.sensors.velocity_source = velocity_source_from_string(v); });
+    if (s.has("seed")) {
+      if (!s.j.at("seed").is_number_unsigned())
+        throw InputError(fmt::format("{}.seed: must be a non-negative integer", s.where));
+      o.sensors.seed = s.j.at("seed").get<std::uint64_t>();
+    }
+  }
+  r.num("dt", o.dt);
+  r.num("duration", o.duration);
+  r.num("actuator_tau", o.actuator_tau);
+  r.num("g", o.g);
+  if (r.has("safety")) {
+    const Reader s = r.sub("safety");
+    s.vec3("box_min", o.safety.box_min);
+    s.vec3("box_max", o.safety.box_max);
+    s.num("max_tilt", o.safety.max_tilt);
+    s.num("max_rate", o.safety.max_rate);
+    s.num("max_speed", o.safety.max_speed);
+  }
+  r.num("summary_from", o.summary_from);
+  if (r.has("record_truth")) {
+    if (!j.at("record_truth").is_boolean()) throw InputError(fmt::format("{}.record_truth: must be true or false", source));
+    o.record_truth = j.at("record_truth").get<bool>();
+  }
+  if (r.has("initial_state")) {
+    const Reader s = r.sub("initial_state");
+    State x;
+    s.vec3("p", x.p);
+    s.vec3("v", x.v);
+    s.vec3("eta", x.eta);
+    s.vec3("omega", x.omega);
+    o.initial_state = x;
+  }
+  try {
+    o.validate();
+  } catch (const std::invalid_argument& e) {
+    throw InputError(fmt::format("{}: {}", source, e.what()));
+  }
+  return o;
+}
+
+json to_json(const SimulationSummary& s) {
+  return {{"duration_s", s.duration},
+          {"samples", s.samples},
+          {"summary_from_s", s.summary_from},
+          {"rms_position_error_m", vec(s.rms_position_error)},
+          {"rms_position_error_norm_m", s.rms_position_error_norm},
+          {"max_position_error_norm_m", s.max_position_error_norm},
+          {"rms_attitude_error_rad", vec(s.rms_attitude_error)},
+          {"max_attitude_error_rad", vec(s.max_attitude_error)},
+          {"Fz_saturated_low_ticks", s.Fz_saturated_low},
+          {"Fz_saturated_high_ticks", s.Fz_saturated_high},
+          {"tau_saturated_ticks", s.tau_saturated},
+          {"Fz_min_N", s.Fz_min},
+          {"Fz_max_N", s.Fz_max},
+          {"tau_abs_max_Nm", vec(s.tau_abs_max)}};
+}
+
+// --- log comments --------------------------------------------------------------
+
+namespace {
+
+constexpr const char* kMagic = "quadid-simulate v1";
+
+std::string noise_label(const NoiseSigmas& n) {
+  const auto eq = [](const NoiseSigmas& a, const NoiseSigmas& b) { return noise_json(a) == noise_json(b); };
+  if (eq(n, NoiseSigmas::none())) return "none";
+  if (eq(n, NoiseSigmas::typical())) return "default";
+  return "custom";
+}
+
+// The value after "key: " of the first comment line with that key, or nullptr.
+const std::string* find_comment(const FlightLog& log, std::string_view key, std::string& value) {
+  for (const auto& c : log.comments)
+    if (c.size() > key.size() + 1 && c.compare(0, key.size(), key) == 0 && c[key.size()] == ':') {
+      value = c.substr(key.size() + 1);
+      const size_t b = value.find_first_not_of(' ');
+      value = b == std::string::npos ? std::string() : value.substr(b);
+      return &c;
+    }
+  return nullptr;
+}
+
+void require_magic(const FlightLog& log) {
+  for (const auto& c : log.comments)
+    if (c == kMagic) return;
+  throw InputError(fmt::format(
+      "flight log has no '# {}' header: it was not written by quadid simulate, so its reference trajectory and "
+      "options are unknown",
+      kMagic));
+}
+
+json comment_json(const FlightLog& log, const char* key) {
+  std::string v;
+  if (!find_comment(log, key, v)) throw InputError(fmt::format("flight log metadata: no '# {}:' line", key));
+  try {
+    return json::parse(v);
+  } catch (const json::parse_error& e) {
+    throw InputError(fmt::format("flight log metadata '# {}:': invalid JSON ({})", key, e.what()));
+  }
+}
+
+}  // namespace
+
+std::vector<std::string> simulation_log_comments(const Trajectory& traj, const SimulationOptions& o) {
+  return {kMagic,
+          "trajectory: " + trajectory_spec(traj),
+          "plant: " + to_json(o.plant).dump(),
+          "controller: " + controller_json(o.controller).dump(),
+          "sensors: " + sensors_json(o.sensors).dump(),
+          "noise: " + noise_label(o.sensors.noise),
+          fmt::format("seed: {}", o.sensors.seed),
+          fmt::format("dt: {}", o.dt),
+          "simulation: " + simulation_json(o).dump(),
+          "columns: x y z psi = motion capture (held between samples); phi theta p q r = IMU; "
+          "Fz tau_* = applied (saturated) commands; x_d y_d z_d psi_d = reference. SI units, radians"};
+}
+
+std::unique_ptr<Trajectory> trajectory_from_log(const FlightLog& log) {
+  require_magic(log);
+  std::string spec;
+  if (!find_comment(log, "trajectory", spec))
+    throw InputError("flight log metadata: no '# trajectory:' line naming the reference");
+  return trajectory_from_spec(spec);
+}
+
+SimulationOptions simulation_options_from_log(const FlightLog& log) {
+  require_magic(log);
+  json j = comment_json(log, "simulation");
+  if (!j.is_object()) throw InputError("flight log metadata '# simulation:': must be a JSON object");
+  j["plant"] = comment_json(log, "plant");
+  j["controller"] = comment_json(log, "controller");
+  j["sensors"] = comment_json(log, "sensors");
+  std::string dt;
+  if (!find_comment(log, "dt", dt)) throw InputError("flight log metadata: no '# dt:' line");
+  double v = 0.0;
+  const auto [ptr, ec] = std::from_chars(dt.data(), dt.data() + dt.size(), v);
+  if (ec != std::errc() || ptr != dt.data() + dt.size())
+    throw InputError(fmt::format("flight log metadata '# dt: {}': not a number", dt));
+  j["dt"] = v;
+  return simulation_options_from_json(j, "flight log metadata");
+}
+
+}  // namespace quadid

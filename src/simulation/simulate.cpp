@@ -1,0 +1,215 @@
+#include "quadid/simulation.hpp"
+
+#include "sensors.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+namespace quadid {
+
+SimulationDiverged::SimulationDiverged(double time, std::string reason)
+    : std::runtime_error(fmt::format("simulation diverged at t = {:.3f} s: {}", time, reason)),
+      time_(time),
+      reason_(std::move(reason)) {}
+
+namespace {
+
+// Ticks of the controller in one flight and plant steps per tick.
+struct Timing {
+  long long ticks;            // last tick index; the log has ticks + 1 rows
+  long long steps_per_tick;
+};
+
+Timing timing(const SimulationOptions& o) {
+  Timing tm;
+  const double spt = 1.0 / (o.controller.rate * o.dt);
+  tm.steps_per_tick = std::llround(spt);
+  tm.ticks = static_cast<long long>(std::floor(o.duration * o.controller.rate + 1e-9));
+  return tm;
+}
+
+}  // namespace
+
+void SimulationOptions::validate() const {
+  plant.validate("plant params");
+  controller.validate();
+  sensors.validate(controller.rate);
+  if (!std::isfinite(dt) || dt <= 0.0) throw std::invalid_argument(fmt::format("dt = {} s must be > 0", dt));
+  const double spt = 1.0 / (controller.rate * dt);
+  if (std::llround(spt) < 1 || std::abs(spt - static_cast<double>(std::llround(spt))) > 1e-6 * spt)
+    throw std::invalid_argument(fmt::format(
+        "dt = {} s: the controller period 1/{} Hz must be a whole multiple of the plant step", dt, controller.rate));
+  if (!std::isfinite(duration) || duration * controller.rate < 1.0)
+    throw std::invalid_argument(
+        fmt::format("duration = {} s must cover at least one controller period (1/{} Hz)", duration, controller.rate));
+  if (duration * controller.rate > 1e8)
+    throw std::invalid_argument(fmt::format("duration = {} s is too long for one log at {} Hz", duration, controller.rate));
+  if (!std::isfinite(actuator_tau) || actuator_tau < 0.0)
+    throw std::invalid_argument(fmt::format("actuator_tau = {} s must be >= 0", actuator_tau));
+  if (!std::isfinite(g) || g <= 0.0) throw std::invalid_argument(fmt::format("g = {} m/s^2 must be > 0", g));
+  for (int i = 0; i < 3; ++i)
+    if (!(safety.box_min(i) < safety.box_max(i)))
+      throw std::invalid_argument(fmt::format("safety box: min {} must be below max {} on axis {}",
+                                              safety.box_min(i), safety.box_max(i), "xyz"[i]));
+  if (!(safety.max_tilt > 0.0 && safety.max_tilt < M_PI / 2))
+    throw std::invalid_argument(fmt::format("safety.max_tilt = {} rad must be in (0, pi/2)", safety.max_tilt));
+  if (!(safety.max_rate > 0.0)) throw std::invalid_argument("safety.max_rate must be > 0");
+  if (!(safety.max_speed > 0.0)) throw std::invalid_argument("safety.max_speed must be > 0");
+  if (!std::isfinite(summary_from) || summary_from < 0.0 || summary_from >= duration)
+    throw std::invalid_argument(
+        fmt::format("summary_from = {} s must be in [0, duration = {} s)", summary_from, duration));
+  if (initial_state && !initial_state->to_vector().allFinite())
+    throw std::invalid_argument("initial_state has a non-finite entry");
+}
+
+State initial_state_at_rest(const Trajectory& traj) {
+  const FlatOutput d = traj.eval(0.0);
+  State x;
+  x.p = d.col(0).head<3>();
+  x.eta = Vec3(0.0, 0.0, d(kPsi, 0));
+  return x;
+}
+
+namespace {
+
+// Empty string when x is inside the limits, else why it is not.
+std::string check_state(const State& x, const SafetyLimits& s) {
+  if (!x.p.allFinite() || !x.v.allFinite() || !x.eta.allFinite() || !x.omega.allFinite())
+    return "the state is not finite (NaN or infinity)";
+  if (x.p(2) < s.box_min(2))
+    return fmt::format("hit the floor: z = {:.4f} m is below {} m", x.p(2), s.box_min(2));
+  for (int i = 0; i < 3; ++i)
+    if (x.p(i) < s.box_min(i) || x.p(i) > s.box_max(i))
+      return fmt::format("left the safety box: {} = {:.4f} m is outside [{}, {}] m", "xyz"[i], x.p(i),
+                         s.box_min(i), s.box_max(i));
+  for (int i = 0; i < 2; ++i)
+    if (std::abs(x.eta(i)) > s.max_tilt)
+      return fmt::format("tilted too far: {} = {:.2f} deg exceeds {:.2f} deg", i == 0 ? "phi" : "theta",
+                         x.eta(i) * 180.0 / M_PI, s.max_tilt * 180.0 / M_PI);
+  if (x.omega.cwiseAbs().maxCoeff() > s.max_rate)
+    return fmt::format("body rate {:.2f} rad/s exceeds {} rad/s", x.omega.cwiseAbs().maxCoeff(), s.max_rate);
+  if (x.v.norm() > s.max_speed) return fmt::format("speed {:.2f} m/s exceeds {} m/s", x.v.norm(), s.max_speed);
+  return {};
+}
+
+const std::vector<std::string>& log_columns() {
+  static const std::vector<std::string> c = {"t",  "x",   "y",   "z",   "phi",     "theta",     "psi",
+                                             "p",  "q",   "r",   "Fz",  "tau_phi", "tau_theta", "tau_psi",
+                                             "x_d", "y_d", "z_d", "psi_d"};
+  return c;
+}
+
+const std::vector<std::string>& truth_columns() {
+  static const std::vector<std::string> c = {
+      "t",  "x",  "y",  "z",     "phi",   "theta", "psi",   "p",     "q",     "r",     "Fz",    "tau_phi", "tau_theta",
+      "tau_psi", "u", "v", "w", "vx", "vy", "vz", "u_dot", "v_dot", "w_dot", "p_dot", "q_dot", "r_dot"};
+  return c;
+}
+
+// Running sums for the summary.
+struct Stats {
+  Vec3 sq_p = Vec3::Zero(), sq_eta = Vec3::Zero(), max_eta = Vec3::Zero();
+  double sq_norm = 0.0, max_norm = 0.0;
+  long long n = 0;
+};
+
+}  // namespace
+
+SimulationResult simulate(const Trajectory& traj, const SimulationOptions& opt) {
+  opt.validate();
+  const Timing tm = timing(opt);
+  const double rate = opt.controller.rate;
+  const double dt = opt.dt;
+
+  Plant plant(opt.plant, opt.g, opt.actuator_tau);
+  PidController ctrl(opt.controller);
+  detail::SensorModel sensors(opt.sensors, rate);
+  State x = opt.initial_state ? *opt.initial_state : initial_state_at_rest(traj);
+  if (const std::string why = check_state(x, opt.safety); !why.empty()) throw SimulationDiverged(0.0, why);
+
+  SimulationResult res;
+  const Eigen::Index rows = static_cast<Eigen::Index>(tm.ticks + 1);
+  res.log.comments = simulation_log_comments(traj, opt);
+  res.log.columns = log_columns();
+  res.log.data.resize(rows, static_cast<Eigen::Index>(log_columns().size()));
+  if (opt.record_truth) {
+    res.truth.comments = res.log.comments;
+    res.truth.comments.push_back("true state (not what the sensors saw); Fz and tau = actuator output");
+    res.truth.columns = truth_columns();
+    res.truth.data.resize(rows, static_cast<Eigen::Index>(truth_columns().size()));
+  }
+
+  SimulationSummary& sum = res.summary;
+  sum.samples = rows;
+  sum.duration = static_cast<double>(tm.ticks) / rate;
+  sum.summary_from = opt.summary_from;
+  sum.Fz_min = std::numeric_limits<double>::infinity();
+  sum.Fz_max = -sum.Fz_min;
+  Stats st;
+
+  detail::SensorReadings rd;
+  Measurement meas;
+  for (long long k = 0; k <= tm.ticks; ++k) {
+    const double t = static_cast<double>(k) / rate;
+    const Eigen::Index row = static_cast<Eigen::Index>(k);
+    const FlatOutput d = traj.eval(t);
+    sensors.sample(k, t, x, rd, meas);
+    const ControllerOutput out = ctrl.update(d, meas);
+    if (k == 0) plant.set_applied(out.command);  // actuators start at the first command, not at zero thrust
+    const Input applied = opt.actuator_tau > 0.0 ? plant.applied() : out.command;
+
+    auto L = res.log.data.row(row);
+    L << t, rd.p(0), rd.p(1), rd.p(2), rd.phi, rd.theta, rd.psi, rd.gyro(0), rd.gyro(1), rd.gyro(2),
+        out.command.Fz, out.command.tau(0), out.command.tau(1), out.command.tau(2), d(kX, 0), d(kY, 0), d(kZ, 0),
+        d(kPsi, 0);
+    if (opt.record_truth) {
+      const State::Vector xd = plant.derivative(x, applied);
+      const Vec3 vi = rotation(x.eta) * x.v;
+      auto T = res.truth.data.row(row);
+      T << t, x.p(0), x.p(1), x.p(2), x.eta(0), x.eta(1), x.eta(2), x.omega(0), x.omega(1), x.omega(2), applied.Fz,
+          applied.tau(0), applied.tau(1), applied.tau(2), x.v(0), x.v(1), x.v(2), vi(0), vi(1), vi(2), xd(3), xd(4),
+          xd(5), xd(9), xd(10), xd(11);
+    }
+
+    // Summary: saturation over the whole flight, tracking errors in the window.
+    sum.Fz_saturated_low += out.Fz_low;
+    sum.Fz_saturated_high += out.Fz_high;
+    for (size_t i = 0; i < 3; ++i) sum.tau_saturated[i] += out.tau_saturated[i];
+    sum.Fz_min = std::min(sum.Fz_min, out.command.Fz);
+    sum.Fz_max = std::max(sum.Fz_max, out.command.Fz);
+    sum.tau_abs_max = sum.tau_abs_max.cwiseMax(out.command.tau.cwiseAbs());
+    if (t >= opt.summary_from - 1e-12) {
+      const Vec3 e_p = x.p - d.col(0).head<3>();
+      // eta_d of eqs. (26)-(27): the consistent command law at zero error with m = 1.
+      const Eigen::Vector2d pt_d = attitude_command(Vec3(d(kX, 2), d(kY, 2), d(kZ, 2) + opt.g), d(kPsi, 0));
+      Vec3 e_eta = x.eta - Vec3(pt_d(0), pt_d(1), d(kPsi, 0));
+      e_eta(2) = std::remainder(e_eta(2), 2.0 * M_PI);
+      st.sq_p += e_p.cwiseAbs2();
+      st.sq_norm += e_p.squaredNorm();
+      st.max_norm = std::max(st.max_norm, e_p.norm());
+      st.sq_eta += e_eta.cwiseAbs2();
+      st.max_eta = st.max_eta.cwiseMax(e_eta.cwiseAbs());
+      ++st.n;
+    }
+
+    if (k == tm.ticks) break;
+    for (long long s = 0; s < tm.steps_per_tick; ++s) {
+      plant.step(x, out.command, dt);
+      if (const std::string why = check_state(x, opt.safety); !why.empty())
+        throw SimulationDiverged(t + static_cast<double>(s + 1) * dt, why);
+    }
+  }
+
+  const double n = static_cast<double>(std::max<long long>(st.n, 1));
+  sum.rms_position_error = (st.sq_p / n).cwiseSqrt();
+  sum.rms_position_error_norm = std::sqrt(st.sq_norm / n);
+  sum.max_position_error_norm = st.max_norm;
+  sum.rms_attitude_error = (st.sq_eta / n).cwiseSqrt();
+  sum.max_attitude_error = st.max_eta;
+  return res;
+}
+
+}  // namespace quadid

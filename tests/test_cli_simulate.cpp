@@ -1,0 +1,130 @@
+// End-to-end tests of `quadid simulate` (the built program, QUADID_EXE).
+#include "quadid/io.hpp"
+#include "quadid/simulation.hpp"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <cstdlib>
+#include <filesystem>
+#include <string>
+#include <sys/wait.h>
+#include <unistd.h>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct CliRun {
+  int rc = -1;
+  std::string out, err;
+};
+
+// A scratch directory per test, removed at the end.
+class CliSimulate : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    dir_ = fs::temp_directory_path() / ("quadid_cli_sim_" + std::to_string(::getpid()) + "_" + info->name());
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  std::string path(const std::string& name) const { return (dir_ / name).string(); }
+
+  CliRun run(const std::string& args) const {
+    const std::string o = path("stdout.txt"), e = path("stderr.txt");
+    const std::string cmd = std::string("\"") + QUADID_EXE + "\" simulate " + args + " >\"" + o + "\" 2>\"" + e + "\"";
+    const int status = std::system(cmd.c_str());
+    CliRun r;
+    r.rc = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    r.out = quadid::read_file(o);
+    r.err = quadid::read_file(e);
+    return r;
+  }
+
+  fs::path dir_;
+};
+
+}  // namespace
+
+TEST_F(CliSimulate, WritesAStandardLogWithMetadata) {
+  const CliRun r = run("--trajectory table2 --duration 2 -o " + path("log.csv") + " --truth " + path("truth.csv"));
+  ASSERT_EQ(r.rc, 0) << r.err;
+  const quadid::FlightLog log = quadid::read_flight_log(path("log.csv"));  // standard columns, uniform t
+  EXPECT_EQ(log.rows(), 1001);
+  EXPECT_TRUE(log.has("x_d") && log.has("psi_d"));
+  ASSERT_FALSE(log.comments.empty());
+  EXPECT_EQ(log.comments.front(), "quadid-simulate v1");
+  EXPECT_EQ(quadid::trajectory_from_log(log)->eval(1.0), quadid::FourierTrajectory::table2().eval(1.0));
+  const quadid::SimulationOptions o = quadid::simulation_options_from_log(log);
+  EXPECT_EQ(o.duration, 2.0);
+  EXPECT_EQ(o.plant.m, quadid::Params::qball2_virtual().m);
+  const quadid::FlightLog truth = quadid::read_flight_log(path("truth.csv"));
+  EXPECT_EQ(truth.rows(), 1001);
+  EXPECT_TRUE(truth.has("u_dot"));
+  EXPECT_NE(r.out.find("RMS position error"), std::string::npos);
+}
+
+TEST_F(CliSimulate, SameSeedSameBytes) {
+  const std::string common = "--trajectory circle1 --duration 3 --noise default ";
+  ASSERT_EQ(run(common + "--seed 7 -o " + path("a.csv")).rc, 0);
+  ASSERT_EQ(run(common + "--seed 7 -o " + path("b.csv")).rc, 0);
+  ASSERT_EQ(run(common + "--seed 8 -o " + path("c.csv")).rc, 0);
+  const std::string a = quadid::read_file(path("a.csv"));
+  EXPECT_EQ(a, quadid::read_file(path("b.csv")));
+  EXPECT_NE(a, quadid::read_file(path("c.csv")));
+}
+
+TEST_F(CliSimulate, JsonGoesToStdoutAlone) {
+  const CliRun r = run("--trajectory circle --radius 0.7 --altitude 1.2 --duration 2 --noise none --json -o " +
+                       path("c.csv"));
+  ASSERT_EQ(r.rc, 0) << r.err;
+  const nlohmann::json j = nlohmann::json::parse(r.out);  // throws if anything else is on stdout
+  EXPECT_EQ(j.at("trajectory"), "circle radius=0.7 altitude=1.2");
+  EXPECT_EQ(j.at("summary").at("samples"), 1001);
+  EXPECT_TRUE(j.at("summary").at("rms_position_error_m").is_array());
+  EXPECT_EQ(j.at("log"), path("c.csv"));
+}
+
+TEST_F(CliSimulate, DivergenceExitsNonZeroAndWritesNothing) {
+  const CliRun r = run("--trajectory table2 --fz-max 5 -o " + path("log.csv") + " --truth " + path("truth.csv"));
+  EXPECT_NE(r.rc, 0);
+  EXPECT_NE(r.err.find("diverged"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("floor"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(path("log.csv")));
+  EXPECT_FALSE(fs::exists(path("truth.csv")));
+  EXPECT_TRUE(r.out.empty());
+}
+
+TEST_F(CliSimulate, BadInputIsNamed) {
+  CliRun r = run("--trajectory " + path("missing.json") + " -o " + path("log.csv"));
+  EXPECT_NE(r.rc, 0);
+  EXPECT_NE(r.err.find("missing.json"), std::string::npos) << r.err;
+
+  quadid::write_file_atomic(path("bad.json"), "{\"type\": \"fourier\",\n \"wf\": 0.6,\n \"axes\": {\"x\": }}");
+  r = run("--trajectory " + path("bad.json") + " -o " + path("log.csv"));
+  EXPECT_NE(r.rc, 0);
+  EXPECT_NE(r.err.find("bad.json:3"), std::string::npos) << r.err;  // file:line of the syntax error
+
+  r = run("--trajectory table2 --radius 0.5");
+  EXPECT_NE(r.rc, 0);
+  EXPECT_NE(r.err.find("--radius"), std::string::npos) << r.err;
+
+  r = run("--trajectory table2 --noise loud");
+  EXPECT_NE(r.rc, 0);
+  EXPECT_NE(r.err.find("loud"), std::string::npos) << r.err;
+
+  r = run("--trajectory table2 --dt 0.0003");
+  EXPECT_NE(r.rc, 0);
+  EXPECT_NE(r.err.find("dt"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(path("log.csv")));
+}
+
+TEST_F(CliSimulate, HelpTeachesUnitsAndDefaults) {
+  const CliRun r = run("--help");
+  EXPECT_EQ(r.rc, 0);
+  for (const char* s : {"Hz", "m/s^2", "34.4", "1.72", "qball2-virtual", "qball2-nominal", "--seed", "--truth",
+                        "circle1", "WinvT", "tustin"})
+    EXPECT_NE(r.out.find(s), std::string::npos) << "help lacks '" << s << "'";
+}
