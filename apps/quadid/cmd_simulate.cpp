@@ -80,8 +80,8 @@ void run(SimulateArgs& a) {
     nlohmann::json j = {{"trajectory", trajectory_spec(*traj)},
                         {"plant", to_json(o.plant)},
                         {"controller_params", to_json(o.controller.params)},
-                        {"noise", a.noise},
                         {"seed", o.sensors.seed},
+                        {"options", to_json(o)},
                         {"log", a.out.empty() ? nlohmann::json() : nlohmann::json(a.out)},
                         {"truth", a.truth.empty() ? nlohmann::json() : nlohmann::json(a.truth)},
                         {"summary", to_json(s)}};
@@ -89,9 +89,11 @@ void run(SimulateArgs& a) {
     return;
   }
   constexpr double deg = 180.0 / M_PI;
+  const bool overridden = a.sigma_position || a.sigma_yaw || a.sigma_attitude || a.sigma_gyro || a.sigma_velocity ||
+                          a.sigma_yaw_rate;
   fmt::print("simulated {:g} s of {} ({} samples at {:g} Hz); plant {}, controller params {}, noise {}, seed {}\n",
-             s.duration, traj->describe(), s.samples, o.controller.rate, a.plant, a.controller_params, a.noise,
-             o.sensors.seed);
+             s.duration, traj->describe(), s.samples, o.controller.rate, a.plant, a.controller_params,
+             overridden ? a.noise + " with overrides" : a.noise, o.sensors.seed);
   fmt::print("RMS position error (t >= {:g} s): x {:.2f} mm, y {:.2f} mm, z {:.2f} mm, |p| {:.2f} mm (max {:.2f} mm)\n",
              s.summary_from, 1e3 * s.rms_position_error(0), 1e3 * s.rms_position_error(1),
              1e3 * s.rms_position_error(2), 1e3 * s.rms_position_error_norm, 1e3 * s.max_position_error_norm);
