@@ -1,12 +1,159 @@
+// quadid identify LOG: Table 3 and Tables 5-6 from a flight log (docs/identify.md).
 #include "commands.hpp"
+#include "quadid/identification.hpp"
+#include "quadid/io.hpp"
 
+#include <fmt/format.h>
+
+#include <cstdio>
+#include <map>
+#include <memory>
 #include <stdexcept>
+#include <string>
+#include <vector>
 
 namespace quadid::cli {
+namespace {
+
+struct IdentifyArgs {
+  std::string log;
+  std::string window = "10:50";
+  std::string error_window;
+  std::string filter = "butter";
+  double cutoff = 4.0;
+  int order = 4;
+  int taps = 31;
+  double lambda = 30.0;
+  std::string derivative_filter = "consistent";
+  double sigma = 30.0;
+  std::string gd_discretization = "exact";
+  std::string gd_init = "nominal";
+  std::string nominal = "qball2-nominal";
+  std::vector<std::string> map;
+  double g = kDefaultGravity;
+  double period_tolerance = 1e-3;
+  bool allow_rank_deficient = false;
+  std::string evolution;
+  double evolution_interval = 0.01;
+  std::string out;
+  bool json = false;
+};
+
+void run(const IdentifyArgs& a) {
+  IdentificationOptions opt;
+  opt.window = TimeWindow::parse(a.window);
+  if (!a.error_window.empty()) opt.error_window = TimeWindow::parse(a.error_window);
+  auto& lp = opt.processing.lowpass;
+  if (a.filter == "butter") lp.kind = signal::LowpassOptions::Kind::Butterworth;
+  else if (a.filter == "fir") lp.kind = signal::LowpassOptions::Kind::FirBlackmanHarris;
+  else throw std::invalid_argument(fmt::format("--filter {}: expected butter or fir", a.filter));
+  lp.cutoff_hz = a.cutoff;
+  lp.order = a.order;
+  lp.taps = a.taps;
+  opt.processing.g = a.g;
+  opt.processing.period_tolerance = a.period_tolerance;
+  opt.lambda = a.lambda;
+  if (a.derivative_filter == "consistent") opt.gd_variant = signal::GdVariant::Consistent;
+  else if (a.derivative_filter == "printed") opt.gd_variant = signal::GdVariant::Printed;
+  else throw std::invalid_argument(fmt::format("--derivative-filter {}: expected consistent or printed", a.derivative_filter));
+  opt.gd.sigma = a.sigma;
+  if (a.gd_discretization == "exact") opt.gd.discretization = GdDiscretization::Exact;
+  else if (a.gd_discretization == "literal") opt.gd.discretization = GdDiscretization::ForwardEuler;
+  else throw std::invalid_argument(fmt::format("--gd-discretization {}: expected exact or literal", a.gd_discretization));
+  opt.reference = NamedParams{"nom", load_params(a.nominal)};
+  if (a.gd_init != "nominal") opt.gd_initial = load_params(a.gd_init);
+  opt.allow_rank_deficient = a.allow_rank_deficient;
+  opt.evolution_interval = a.evolution_interval;
+  opt.validate();
+
+  CsvReadOptions csv;
+  csv.map = parse_column_map(a.map);
+  csv.period_tolerance = a.period_tolerance;
+  csv.keep_extra_columns = false;  // only the 14 standard columns are used
+  const FlightLog log = read_flight_log(a.log, csv);
+
+  IdentificationResult res;
+  try {
+    res = identify(log, opt);
+  } catch (const std::exception& e) {
+    throw std::runtime_error(fmt::format("{}: {}", a.log, e.what()));
+  }
+  for (const auto& w : res.warnings) fmt::print(stderr, "quadid identify: warning: {}\n", w);
+
+  nlohmann::json j = to_json(res);
+  j["log"] = a.log;
+  // Files first (atomically), so that a failed write leaves no partial report.
+  if (!a.evolution.empty()) write_file_atomic(a.evolution, format_evolution_csv(res.evolution));
+  if (!a.out.empty()) write_file_atomic(a.out, j.dump(2) + "\n");
+  if (a.json) {
+    fmt::print("{}\n", j.dump(2));
+    return;
+  }
+  fmt::print("{}: {} samples at {:g} Hz ({:g} s); pre-filter {} (-3 dB at {:.3g} Hz, zero-phase)\n\n", a.log,
+             res.processing.samples, res.processing.fs, res.processing.duration, res.processing.filter,
+             res.processing.filter_f3db);
+  fmt::print("{}\n", format_estimates_table(res));
+  fmt::print("Least squares: column-scaled condition number {:.4g} (standard), {:.4g} (filtered)\n",
+             res.ls_standard.condition, res.ls_filtered.condition);
+  fmt::print("Gradient descent: sigma = {:g}, {} discretization, max sigma*T*lambda_max = {:.3g}\n\n", opt.gd.sigma,
+             a.gd_discretization, std::max(res.gd_step_gain_standard, res.gd_step_gain_filtered));
+  fmt::print("{}\n", format_prediction_table(res.errors_standard, "Table 5"));
+  fmt::print("{}", format_prediction_table(res.errors_filtered, "Table 6"));
+}
+
+}  // namespace
 
 void register_identify(CLI::App& app) {
-  auto* sub = app.add_subcommand("identify", "estimate m and the inertia tensor from a flight log (LS, GD, FMLS, FMGD)");
-  sub->callback([] { throw std::runtime_error("not implemented yet"); });
+  auto a = std::make_shared<IdentifyArgs>();
+  auto* sub = app.add_subcommand(
+      "identify",
+      "estimate m and the inertia tensor from a flight log (LS, GD, FMLS, FMGD)\n"
+      "Processing (paper II-C): zero-phase low-pass of p, eta, omega, F; central differences (eq. 33);\n"
+      "v = R^T p_dot. Regressions: standard (eq. 34) and filtered (eqs. 35-39). Estimators: least squares\n"
+      "(eq. 40) and gradient descent (eq. 41). Prints Table 3 (estimates) and Tables 5-6 (RMS output\n"
+      "prediction error, eq. 43, with P_imp% against the nominal set). Units: SI, radians.");
+  sub->add_option("log", a->log, "flight log CSV (DESIGN.md columns: t x y z phi theta psi p q r Fz tau_phi tau_theta tau_psi)")
+      ->required();
+  sub->add_option("--window", a->window, "estimation window T0:T1, seconds from the log's start ('T0:' = to the end)")
+      ->capture_default_str();
+  sub->add_option("--error-window", a->error_window,
+                  "window of the prediction-error tables (default: the whole log, as the paper's 0-50 s)");
+  sub->add_option("--filter", a->filter, "zero-phase pre-filter: butter (Butterworth IIR) or fir (31-tap Blackman-Harris)")
+      ->capture_default_str();
+  sub->add_option("--cutoff", a->cutoff,
+                  "pre-filter cutoff, Hz; 4 Hz passes the excitation (<= 0.5 Hz) and removes 30 Hz motion-capture steps")
+      ->capture_default_str();
+  sub->add_option("--order", a->order, "Butterworth order (1-8)")->capture_default_str();
+  sub->add_option("--taps", a->taps, "FIR length (odd)")->capture_default_str();
+  sub->add_option("--lambda", a->lambda, "bandwidth of f_D, g_D of the filtered model (eqs. 35-36), rad/s")
+      ->capture_default_str();
+  sub->add_option("--derivative-filter", a->derivative_filter,
+                  "g_D: consistent ((1-a)/T (z-1)/(z-a), the derivative of f_D's output) or printed (eq. 36)")
+      ->capture_default_str();
+  sub->add_option("--sigma", a->sigma, "gradient-descent gain of eq. (41)")->capture_default_str();
+  sub->add_option("--gd-discretization", a->gd_discretization,
+                  "exact (exact solution over each sample, always stable) or literal (eq. 42, forward Euler: "
+                  "diverges at the paper's values, and says so)")
+      ->capture_default_str();
+  sub->add_option("--gd-init", a->gd_init, "GD initial guess: nominal (the --nominal set), a preset or a params JSON")
+      ->capture_default_str();
+  sub->add_option("--nominal", a->nominal,
+                  "reference set of Tables 5-6 (preset qball2-nominal|qball2-virtual or a params JSON); also the "
+                  "value kept for unidentifiable parameters")
+      ->capture_default_str();
+  sub->add_option("--map", a->map, "column name mapping CANONICAL=NAME, e.g. --map tau_phi=tau_x (repeatable)");
+  sub->add_option("--g", a->g, "gravity, m/s^2")->capture_default_str();
+  sub->add_option("--period-tolerance", a->period_tolerance, "relative tolerance on a uniform sample period")
+      ->capture_default_str();
+  sub->add_flag("--allow-rank-deficient", a->allow_rank_deficient,
+                "warn instead of failing when the data do not determine some parameters (they keep the nominal values)");
+  sub->add_option("--evolution", a->evolution,
+                  "write the estimates over time (Figs. 4-5) as CSV: t then LS_m..LS_Izz, GD_*, FMLS_*, FMGD_*");
+  sub->add_option("--evolution-interval", a->evolution_interval, "seconds between evolution rows (0 = every sample)")
+      ->capture_default_str();
+  sub->add_option("-o,--out", a->out, "write the result JSON (estimates.{LS,GD,FMLS,FMGD}, prediction errors)");
+  sub->add_flag("--json", a->json, "print the result JSON on stdout (nothing else there)");
+  sub->callback([a] { run(*a); });
 }
 
 }  // namespace quadid::cli

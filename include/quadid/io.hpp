@@ -50,6 +50,9 @@ struct CsvReadOptions {
   std::vector<std::string> required = standard_log_columns();
   /// Relative tolerance on the uniformity of the sample period.
   double period_tolerance = 1e-3;
+  /// false: keep only the `required` columns (the others are skipped unparsed,
+  /// which saves time and memory on wide logs; the field count is still checked).
+  bool keep_extra_columns = true;
 };
 
 /// Reads a flight log; throws InputError naming file, line and column on any

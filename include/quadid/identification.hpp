@@ -1,0 +1,276 @@
+// quadid identification: flight log -> processed signals (section II-C) ->
+// standard (eq. 34) and filtered (eqs. 35-39) regressions -> LS (eq. 40) and
+// GD (eqs. 41-42) estimates, and the output prediction error (eq. 43, Tables 5-6).
+// See docs/identify.md.
+#pragma once
+
+#include "quadid/estimation.hpp"
+#include "quadid/io.hpp"
+#include "quadid/signal.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <array>
+#include <limits>
+#include <memory>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace quadid {
+
+/// A time interval in seconds from the log's first sample (not its t value).
+struct TimeWindow {
+  double t0 = 0.0;
+  double t1 = std::numeric_limits<double>::infinity();  // infinity: to the end of the log
+  /// "T0:T1", "T0:" (to the end) or ":T1"; throws std::invalid_argument naming the text.
+  static TimeWindow parse(std::string_view spec);
+  std::string to_string() const;
+};
+
+/// A named parameter set (LS, GD, FMLS, FMGD, nom, or a file's name).
+struct NamedParams {
+  std::string name;
+  Params params;
+};
+
+// --- Processing (section II-C) -----------------------------------------------
+
+struct ProcessingOptions {
+  /// Zero-phase pre-filter of p, eta, omega and F (step 1). Default Butterworth,
+  /// order 4, 4 Hz: passes the excitation (<= 0.5 Hz for Table 2) untouched and
+  /// attenuates the 30 Hz motion-capture steps by ~70 dB before p is
+  /// differentiated twice. Being in Hz it keeps its meaning at any sample rate.
+  signal::LowpassOptions lowpass{};
+  double g = kDefaultGravity;  // m/s^2
+  /// Unwrap psi (remove 2 pi jumps) before filtering; harmless on an unwrapped log.
+  bool unwrap_yaw = true;
+  /// Relative tolerance on the uniformity of the log's sample period.
+  double period_tolerance = 1e-3;
+  void validate() const;
+};
+
+/// What processing found and used, for the report.
+struct ProcessingSummary {
+  Eigen::Index samples = 0;
+  double T = 0.0, fs = 0.0, duration = 0.0;  // s, Hz, s
+  std::string filter;                       // e.g. "Butterworth order 4, 4 Hz"
+  int padlen = 0;                           // filtfilt's padding (samples)
+  double filter_f3db = 0.0;                 // Hz, -3 dB of the zero-phase pre-filter
+};
+
+/// The processed signals both regressions are built from, one row per log
+/// sample, 15 columns:
+///   0-3   [w p q r]          body z velocity and body rates (the Phi_a signals)
+///   4-10  [c pq pr qr p^2 q^2 r^2], c = p v - q u + g_bz  (the Phi_b signals)
+///   11-14 [Fz tau_phi tau_theta tau_psi]                    (the outputs)
+/// Every row of Phi_a(v, w) and Phi_b(v, w, eta) is linear in these, so
+/// Phi = Phi_a(d/dt a) + Phi_b(b) and Phi_dF = Phi_a(g_D a) + Phi_b(f_D b).
+/// Storing 15 numbers per sample instead of two 4x7 matrices keeps a
+/// 1.2-million-sample log in ~150 MB.
+struct RegressionSignals {
+  static constexpr int kCols = 15;
+  double t_start = 0.0;  // the log's t at the first sample
+  double T = 0.0;        // sample period, s
+  Eigen::Matrix<double, Eigen::Dynamic, kCols> x;
+  Eigen::Index size() const { return x.rows(); }
+};
+
+/// Section II-C: filter, differentiate (eq. 33), rotate (v = R^T p_dot).
+/// Throws InputError on a missing column, a non-uniform or too short log.
+std::shared_ptr<const RegressionSignals> process_log(const FlightLog& log, const ProcessingOptions& opt = {},
+                                                     ProcessingSummary* summary = nullptr);
+
+// --- Regressions (eqs. 34 and 38) ---------------------------------------------
+
+enum class RegressionModel { Standard, Filtered };
+const char* to_string(RegressionModel m);
+
+/// Gamma = Phi_a(a) + Phi_b(b): the 4x7 regressor from the 4 "a" and 7 "b" signals.
+Regressor4x7 assemble_regressor(const Vec4& a, const Eigen::Matrix<double, 7, 1>& b);
+
+/// One regression over a window: Gamma(k) Theta = Upsilon(k) for the samples
+/// with t in [t0, t1]. Standard: Gamma = Phi(v_f, w_f, eta_f, v_f', w_f')
+/// (eq. 34, derivatives by eq. 33), Upsilon = F_f. Filtered: Gamma = Phi_dF,
+/// Upsilon = f_D F_f (eqs. 38-39); f_D and g_D start at the log's first sample
+/// (steady-state initial condition), so the window sees no start-up transient.
+class Regression {
+ public:
+  /// Throws std::invalid_argument when the window is outside the log or holds
+  /// fewer than 8 samples.
+  Regression(std::shared_ptr<const RegressionSignals> signals, RegressionModel model, TimeWindow window,
+             double lambda = 30.0, signal::GdVariant gd_variant = signal::GdVariant::Consistent);
+
+  RegressionModel model() const { return model_; }
+  double lambda() const { return lambda_; }
+  signal::GdVariant gd_variant() const { return variant_; }
+  Eigen::Index begin() const { return begin_; }  // first sample index (inclusive)
+  Eigen::Index end() const { return end_; }      // last sample index + 1
+  Eigen::Index size() const { return end_ - begin_; }
+  double T() const { return sig_->T; }
+  /// The log's t of sample k.
+  double time(Eigen::Index k) const { return sig_->t_start + static_cast<double>(k) * sig_->T; }
+  /// Window actually used, in seconds from the log's start.
+  TimeWindow window() const;
+  const RegressionSignals& signals() const { return *sig_; }
+  /// The same regression over another window.
+  Regression with_window(TimeWindow w) const { return Regression(sig_, model_, w, lambda_, variant_); }
+
+  /// Calls f(k, G, Y) for every sample k of the window, in time order.
+  template <class F>
+  void for_each(F&& f) const;
+
+ private:
+  std::shared_ptr<const RegressionSignals> sig_;
+  RegressionModel model_;
+  double lambda_;
+  signal::GdVariant variant_;
+  Eigen::Index begin_ = 0, end_ = 0;
+};
+
+// --- Output prediction error (eq. 43, Tables 5-6) -------------------------------
+
+struct PredictionErrorRow {
+  std::string name;
+  Vec4 rms = Vec4::Zero();              // RMS of each component of eq. (43): N, N m, N m, N m
+  Vec4 improvement_pct = Vec4::Zero();  // P_imp% against the reference row (0 for the reference)
+};
+
+struct PredictionErrorTable {
+  RegressionModel model = RegressionModel::Standard;
+  TimeWindow window;          // seconds from the log's start
+  Eigen::Index samples = 0;
+  PredictionErrorRow reference;
+  std::vector<PredictionErrorRow> rows;
+};
+
+/// RMS of e = Gamma Theta_i - Upsilon per component over the regression's
+/// window, for every set and for the reference, with
+/// P_imp% = (RMS_ref - RMS_i) / RMS_ref * 100. Works on any log and any sets.
+PredictionErrorTable prediction_error(const Regression& reg, const std::vector<NamedParams>& sets,
+                                      const NamedParams& reference);
+
+// --- The whole identification ---------------------------------------------------
+
+struct IdentificationOptions {
+  ProcessingOptions processing{};
+  /// Estimation window (the paper's 10-50 s skips the take-off transient).
+  TimeWindow window{10.0, 50.0};
+  /// Window of the prediction-error tables; default the whole log (the paper's 0-50 s).
+  std::optional<TimeWindow> error_window{};
+  double lambda = 30.0;  // rad/s, f_D / g_D of eqs. (35)-(36)
+  signal::GdVariant gd_variant = signal::GdVariant::Consistent;
+  GradientDescentOptions gd{};  // sigma = 30, exact discretization
+  /// GD's initial guess; default the reference set.
+  std::optional<Params> gd_initial{};
+  /// Reference ("nominal") set of Tables 5-6, also the prior kept in
+  /// unidentifiable directions. Default: Table 1 (QBall 2 nominal).
+  NamedParams reference{"nom", Params::qball2_nominal()};
+  LeastSquaresOptions ls{};
+  /// false: rank-deficient data (unidentifiable parameters) is an error.
+  /// true: a warning, and those directions keep the reference values.
+  bool allow_rank_deficient = false;
+  /// Spacing of the recorded evolution (s); 0 records every sample.
+  double evolution_interval = 0.01;
+  void validate() const;
+};
+
+/// One estimated set: LS, GD, FMLS or FMGD.
+struct SetEstimate {
+  std::string name;
+  RegressionModel model = RegressionModel::Standard;
+  bool least_squares = true;
+  Theta theta = Theta::Zero();
+  bool valid = true;   // false when GD diverged (literal eq. 42)
+  std::string note;    // why not valid
+  Params params() const { return Params::from_theta(theta); }
+};
+
+/// Estimates over time (Figs. 4-5): one row per recorded sample, columns
+/// t (the log's time) then 7 parameters for each of LS, GD, FMLS, FMGD (NaN
+/// where LS is not yet determined).
+struct Evolution {
+  std::vector<std::string> columns;
+  Eigen::MatrixXd data;
+};
+
+struct IdentificationResult {
+  std::array<SetEstimate, 4> estimates;  // LS, GD, FMLS, FMGD (DESIGN.md names)
+  LeastSquaresSolution ls_standard, ls_filtered;
+  double gd_step_gain_standard = 0.0, gd_step_gain_filtered = 0.0;  // max sigma T lambda_max
+  Evolution evolution;
+  PredictionErrorTable errors_standard, errors_filtered;  // Tables 5 and 6
+  ProcessingSummary processing;
+  TimeWindow window;            // estimation window used
+  Eigen::Index window_samples = 0;
+  NamedParams reference;
+  Theta gd_initial = Theta::Zero();
+  IdentificationOptions options;  // as used
+  std::vector<std::string> warnings;
+  const SetEstimate& estimate(std::string_view name) const;  // throws on an unknown name
+};
+
+/// The paper's whole procedure on one log. Throws InputError on bad data
+/// (missing columns, short log, window outside the log, rank-deficient data
+/// unless allowed) and std::invalid_argument on bad options.
+IdentificationResult identify(const FlightLog& log, const IdentificationOptions& opt = {});
+
+// --- Reports ---------------------------------------------------------------------
+
+/// Table 3 (estimates with units, plus the reference set).
+std::string format_estimates_table(const IdentificationResult& r);
+/// Tables 5 and 6 layout.
+std::string format_prediction_table(const PredictionErrorTable& t, std::string_view title);
+/// CSV of the evolution (header, then rows; "nan" where undetermined).
+std::string format_evolution_csv(const Evolution& e);
+nlohmann::json to_json(const PredictionErrorTable& t);
+/// {"estimates": {"LS": {m, Ixx, ...}, ...}, "prediction_error": {...}, ...}
+nlohmann::json to_json(const IdentificationResult& r);
+
+// --- Implementation of the template ----------------------------------------------
+
+template <class F>
+void Regression::for_each(F&& f) const {
+  const auto& X = sig_->x;
+  const double T = sig_->T;
+  const Eigen::Index n = X.rows();
+  Vec4 a;
+  Eigen::Matrix<double, 7, 1> b;
+  Vec4 y;
+  if (model_ == RegressionModel::Standard) {
+    // eq. (33) on [w p q r]; second-order one-sided at the log's two ends.
+    const double h = 0.5 / T;
+    for (Eigen::Index k = begin_; k < end_; ++k) {
+      if (k == 0)
+        a = (-3.0 * X.row(0).head<4>() + 4.0 * X.row(1).head<4>() - X.row(2).head<4>()).transpose() * h;
+      else if (k == n - 1)
+        a = (3.0 * X.row(n - 1).head<4>() - 4.0 * X.row(n - 2).head<4>() + X.row(n - 3).head<4>()).transpose() * h;
+      else
+        a = (X.row(k + 1).head<4>() - X.row(k - 1).head<4>()).transpose() * h;
+      b = X.row(k).segment<7>(4).transpose();
+      y = X.row(k).tail<4>().transpose();
+      f(k, assemble_regressor(a, b), y);
+    }
+    return;
+  }
+  // Filtered: s = f_D x by y[k+1] = alpha y[k] + (1 - alpha) x[k] (eq. 35), with
+  // the steady-state start y[0] = x[0]; g_D x = c (x - f_D x) because
+  // g_D = c (z - 1)/(z - alpha) = c (1 - f_D) (eq. 36), c = lambda (printed) or
+  // (1 - alpha)/T (consistent: the difference quotient of f_D's output).
+  const double alpha = std::exp(-lambda_ * T);
+  const double one_minus = -std::expm1(-lambda_ * T);
+  const double c = (variant_ == signal::GdVariant::Printed) ? lambda_ : one_minus / T;
+  Eigen::Matrix<double, 1, RegressionSignals::kCols> s = X.row(0);
+  for (Eigen::Index k = 0; k < end_; ++k) {
+    if (k >= begin_) {
+      a = c * (X.row(k).head<4>() - s.head<4>()).transpose();
+      b = s.segment<7>(4).transpose();
+      y = s.tail<4>().transpose();
+      f(k, assemble_regressor(a, b), y);
+    }
+    s = alpha * s + one_minus * X.row(k);
+  }
+}
+
+}  // namespace quadid

@@ -1,0 +1,194 @@
+// The whole identification: process the log, build both regressions, run LS
+// and GD on each (four sets), diagnose identifiability, and compute the output
+// prediction errors (Tables 5-6).
+#include "quadid/identification.hpp"
+
+#include <fmt/format.h>
+
+#include <Eigen/Eigenvalues>
+#include <cmath>
+#include <numbers>
+#include <stdexcept>
+
+namespace quadid {
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+// Which samples of the window are recorded in the evolution.
+struct Recorder {
+  Eigen::Index begin, end, stride;
+  Eigen::Index rows() const { return (end - 1 - begin) / stride + 1 + (((end - 1 - begin) % stride) ? 1 : 0); }
+  // Row of sample k, or -1.
+  Eigen::Index row(Eigen::Index k) const {
+    const Eigen::Index j = k - begin;
+    if (j % stride == 0) return j / stride;
+    if (k == end - 1) return rows() - 1;
+    return -1;
+  }
+};
+
+struct RunOutput {
+  LeastSquaresAccumulator acc;
+  std::unique_ptr<GradientDescent> gd;
+};
+
+RunOutput run(const Regression& reg, const Theta& init, const GradientDescentOptions& gdo, const Recorder& rec,
+              Eigen::MatrixXd& evo, Eigen::Index ls_col, Eigen::Index gd_col) {
+  RunOutput out;
+  out.gd = std::make_unique<GradientDescent>(init, reg.T(), gdo);
+  reg.for_each([&](Eigen::Index k, const Regressor4x7& G, const Vec4& Y) {
+    out.acc.add(G, Y);
+    out.gd->step(G, Y);
+    const Eigen::Index r = rec.row(k);
+    if (r >= 0) {
+      evo(r, 0) = reg.time(k);
+      evo.row(r).segment<7>(ls_col) = out.acc.solve_quick().transpose();
+      const Theta gd_now = out.gd->diverged() ? Theta::Constant(kNaN) : out.gd->theta();
+      evo.row(r).segment<7>(gd_col) = gd_now.transpose();
+    }
+  });
+  return out;
+}
+
+// Frequency (Hz) below which the residuals of a regression carry their
+// information: the pre-filter's -3 dB point, and for the filtered model also
+// f_D's bandwidth lambda / (2 pi). Residuals decorrelate over ~fs / (2 f) samples.
+double correlation_length(double fs, double f3db, double lambda, bool filtered) {
+  double f = f3db;
+  if (filtered) f = std::min(f, lambda / (2.0 * std::numbers::pi));
+  return std::max(1.0, fs / (2.0 * f));
+}
+
+bool positive_definite(const Mat3& I) {
+  const Eigen::SelfAdjointEigenSolver<Mat3> es(I, Eigen::EigenvaluesOnly);
+  return es.eigenvalues().minCoeff() > 0.0;
+}
+
+}  // namespace
+
+void IdentificationOptions::validate() const {
+  processing.validate();
+  if (!(window.t0 >= 0.0) || !(window.t1 > window.t0))
+    throw std::invalid_argument(fmt::format("window {}: need 0 <= T0 < T1", window.to_string()));
+  if (error_window && (!(error_window->t0 >= 0.0) || !(error_window->t1 > error_window->t0)))
+    throw std::invalid_argument(fmt::format("error_window {}: need 0 <= T0 < T1", error_window->to_string()));
+  if (!(lambda > 0.0) || !std::isfinite(lambda))
+    throw std::invalid_argument(fmt::format("lambda={} must be a positive bandwidth in rad/s", lambda));
+  gd.validate();
+  ls.validate();
+  reference.params.validate("reference parameter set '" + reference.name + "'");
+  if (gd_initial && !gd_initial->theta().allFinite())
+    throw std::invalid_argument("gd_initial: the initial guess is not finite");
+  if (!(evolution_interval >= 0.0) || !std::isfinite(evolution_interval))
+    throw std::invalid_argument(fmt::format("evolution_interval={} must be >= 0 s", evolution_interval));
+}
+
+const SetEstimate& IdentificationResult::estimate(std::string_view name) const {
+  for (const auto& e : estimates)
+    if (e.name == name) return e;
+  throw std::invalid_argument(fmt::format("no estimate named '{}' (LS, GD, FMLS, FMGD)", name));
+}
+
+IdentificationResult identify(const FlightLog& log, const IdentificationOptions& opt) {
+  opt.validate();
+  IdentificationResult res;
+  const auto sig = process_log(log, opt.processing, &res.processing);
+  const Regression std_reg(sig, RegressionModel::Standard, opt.window);
+  const Regression filt_reg(sig, RegressionModel::Filtered, opt.window, opt.lambda, opt.gd_variant);
+  res.window = std_reg.window();
+  res.window_samples = std_reg.size();
+  res.reference = opt.reference;
+  res.options = opt;
+  const Theta prior = opt.reference.params.theta();
+  res.gd_initial = opt.gd_initial ? opt.gd_initial->theta() : prior;
+
+  // Evolution: t, then LS, GD, FMLS, FMGD (7 each).
+  const double T = sig->T;
+  const Eigen::Index stride =
+      opt.evolution_interval <= 0.0 ? 1 : std::max<Eigen::Index>(1, std::llround(opt.evolution_interval / T));
+  const Recorder rec{std_reg.begin(), std_reg.end(), stride};
+  res.evolution.columns.push_back("t");
+  for (const char* set : {"LS", "GD", "FMLS", "FMGD"})
+    for (const char* p : kThetaNames) res.evolution.columns.push_back(fmt::format("{}_{}", set, p));
+  res.evolution.data.setConstant(rec.rows(), 29, kNaN);
+
+  RunOutput s = run(std_reg, res.gd_initial, opt.gd, rec, res.evolution.data, 1, 8);
+  RunOutput f = run(filt_reg, res.gd_initial, opt.gd, rec, res.evolution.data, 15, 22);
+
+  const double fs = res.processing.fs, f3 = res.processing.filter_f3db;
+  res.ls_standard = solve_least_squares(s.acc, prior, opt.ls, correlation_length(fs, f3, opt.lambda, false));
+  res.ls_filtered = solve_least_squares(f.acc, prior, opt.ls, correlation_length(fs, f3, opt.lambda, true));
+  res.gd_step_gain_standard = s.gd->max_step_gain();
+  res.gd_step_gain_filtered = f.gd->max_step_gain();
+
+  auto gd_estimate = [&](const char* name, RegressionModel m, const GradientDescent& gd) {
+    SetEstimate e{name, m, false, gd.theta(), !gd.diverged(), ""};
+    if (gd.diverged()) {
+      e.note = fmt::format("{} diverged: {}", name, gd.divergence_reason());
+      res.warnings.push_back(e.note);
+    }
+    return e;
+  };
+  res.estimates[0] = SetEstimate{"LS", RegressionModel::Standard, true, res.ls_standard.theta, true, ""};
+  res.estimates[1] = gd_estimate("GD", RegressionModel::Standard, *s.gd);
+  res.estimates[2] = SetEstimate{"FMLS", RegressionModel::Filtered, true, res.ls_filtered.theta, true, ""};
+  res.estimates[3] = gd_estimate("FMGD", RegressionModel::Filtered, *f.gd);
+
+  // Identifiability: rank deficiency is an error unless allowed; a large
+  // standard error is a warning.
+  std::vector<std::string> deficient;
+  for (const auto* sol : {&res.ls_standard, &res.ls_filtered})
+    for (const auto& n : sol->unidentifiable)
+      if (std::find(deficient.begin(), deficient.end(), n) == deficient.end()) deficient.push_back(n);
+  if (!deficient.empty()) {
+    const std::string msg = fmt::format(
+        "the data do not determine {} (column-scaled condition number: standard {:.3g}, filtered {:.3g}): the "
+        "flight does not excite these parameters (hover, or too little rotation)",
+        fmt::join(deficient, ", "), res.ls_standard.condition, res.ls_filtered.condition);
+    if (!opt.allow_rank_deficient)
+      throw InputError(msg + "; fly an exciting trajectory (quadid design), or allow rank-deficient data to keep "
+                             "them at the reference values");
+    res.warnings.push_back(msg + fmt::format("; LS keeps them at the reference set '{}' and GD at its initial guess",
+                                             opt.reference.name));
+  }
+  for (const auto& [name, sol] : {std::pair{"LS", &res.ls_standard}, std::pair{"FMLS", &res.ls_filtered}}) {
+    std::vector<std::string> poor;
+    for (const auto& n : sol->poorly_determined)
+      if (std::find(deficient.begin(), deficient.end(), n) == deficient.end()) poor.push_back(n);
+    if (!poor.empty()) {
+      std::vector<std::string> detail;
+      for (const auto& n : poor) {
+        int j = 0;
+        while (kThetaNames[static_cast<size_t>(j)] != n) ++j;
+        detail.push_back(fmt::format("{} = {:.4g} +- {:.2g}", n, sol->theta(j), sol->std_error(j)));
+      }
+      res.warnings.push_back(fmt::format("{}: poorly determined by these data (standard error above {:g}% of the "
+                                         "parameter's scale): {}",
+                                         name, 100.0 * opt.ls.poor_fraction, fmt::join(detail, ", ")));
+    }
+  }
+  for (const auto& e : res.estimates) {
+    if (!e.valid) continue;
+    if (!(e.theta(0) > 0.0))
+      res.warnings.push_back(fmt::format("{}: the estimated mass {:.4g} kg is not positive", e.name, e.theta(0)));
+    else if (!positive_definite(e.params().I))
+      res.warnings.push_back(
+          fmt::format("{}: the estimated inertia tensor is not positive definite (not a physical body)", e.name));
+  }
+
+  // Tables 5-6: each model with its own sets and the reference.
+  const TimeWindow ew = opt.error_window.value_or(TimeWindow{});
+  auto sets_of = [&](int a, int b) {
+    std::vector<NamedParams> v;
+    for (int i : {a, b})
+      if (res.estimates[static_cast<size_t>(i)].valid)
+        v.push_back({res.estimates[static_cast<size_t>(i)].name, res.estimates[static_cast<size_t>(i)].params()});
+    return v;
+  };
+  res.errors_standard = prediction_error(std_reg.with_window(ew), sets_of(0, 1), opt.reference);
+  res.errors_filtered = prediction_error(filt_reg.with_window(ew), sets_of(2, 3), opt.reference);
+  return res;
+}
+
+}  // namespace quadid

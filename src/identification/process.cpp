@@ -1,0 +1,148 @@
+// Data processing, paper section II-C: (1) zero-phase low-pass of p, eta,
+// omega and F; (2) central differences, eq. (33); (3) v = R(eta)^T p_dot, eq. (3).
+//
+// Memory: the log is read column by column and the result is the 15-column
+// RegressionSignals; the only other full-length arrays alive at once are the
+// filtered attitude and p_dot (6 columns) and filtfilt's work buffer.
+#include "quadid/identification.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <numbers>
+#include <stdexcept>
+
+namespace quadid {
+namespace {
+
+std::string filter_name(const signal::LowpassOptions& lp) {
+  if (lp.kind == signal::LowpassOptions::Kind::Butterworth)
+    return fmt::format("Butterworth order {}, {:g} Hz", lp.order, lp.cutoff_hz);
+  return fmt::format("FIR {} taps Blackman-Harris, {:g} Hz", lp.taps, lp.cutoff_hz);
+}
+
+// Removes 2 pi jumps (as numpy.unwrap), for a yaw logged in (-pi, pi].
+Eigen::VectorXd unwrap(Eigen::VectorXd a) {
+  const double two_pi = 2.0 * std::numbers::pi;
+  double offset = 0.0;
+  double prev = a(0);
+  for (Eigen::Index k = 1; k < a.size(); ++k) {
+    const double raw = a(k);
+    const double d = raw - prev;
+    if (d > std::numbers::pi) offset -= two_pi * std::round(d / two_pi);
+    else if (d < -std::numbers::pi) offset += two_pi * std::round(-d / two_pi);
+    prev = raw;
+    a(k) = raw + offset;
+  }
+  return a;
+}
+
+// Frequency where the zero-phase (squared-magnitude) response falls to -3 dB,
+// |H|^2 = 1/sqrt(2), by bisection: both filters are monotone in their pass band.
+double zero_phase_f3db(const signal::TransferFunction& tf, double fs) {
+  double lo = 0.0, hi = 0.5 * fs;
+  const double target = std::pow(0.5, 0.25);
+  for (int i = 0; i < 60; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (std::abs(signal::frequency_response(tf, mid, fs)) > target ? lo : hi) = mid;
+  }
+  return 0.5 * (lo + hi);
+}
+
+}  // namespace
+
+void ProcessingOptions::validate() const {
+  if (!(g > 0.0) || !std::isfinite(g))
+    throw std::invalid_argument(fmt::format("ProcessingOptions: g={} must be positive", g));
+  if (!(period_tolerance >= 0.0 && period_tolerance < 0.5))
+    throw std::invalid_argument(fmt::format("ProcessingOptions: period_tolerance={} must be in [0, 0.5)", period_tolerance));
+  // lowpass is validated against the log's sample rate in process_log.
+}
+
+std::shared_ptr<const RegressionSignals> process_log(const FlightLog& log, const ProcessingOptions& opt,
+                                                     ProcessingSummary* summary) {
+  opt.validate();
+  const auto& names = standard_log_columns();  // t x y z phi theta psi p q r Fz tau_phi tau_theta tau_psi
+  std::vector<int> col(names.size());
+  std::vector<std::string> missing;
+  for (size_t i = 0; i < names.size(); ++i)
+    if ((col[i] = log.find(names[i])) < 0) missing.push_back(names[i]);
+  if (!missing.empty())
+    throw InputError(fmt::format("flight log: missing column(s) {} (has: {})", fmt::join(missing, ", "),
+                                 fmt::join(log.columns, ",")));
+  const Eigen::Index n = log.rows();
+  if (n < 3) throw InputError(fmt::format("flight log: {} sample(s); identification needs a long log", n));
+  const auto t = log.data.col(col[0]);
+  for (size_t i = 0; i < names.size(); ++i)
+    if (!log.data.col(col[i]).allFinite())
+      throw InputError(fmt::format("flight log: column '{}' contains NaN or infinite values", names[i]));
+  const double T = (t(n - 1) - t(0)) / static_cast<double>(n - 1);
+  if (!(T > 0.0)) throw InputError("flight log: column 't' does not increase");
+  for (Eigen::Index k = 1; k < n; ++k) {
+    const double dt = t(k) - t(k - 1);
+    if (!(dt > 0.0) || std::abs(dt - T) > opt.period_tolerance * T + 1e-12)
+      throw InputError(fmt::format(
+          "flight log: sample {} (t = {}): period {} s differs from the mean {} s; the log must be uniformly sampled",
+          k + 1, t(k), dt, T));
+  }
+  const double fs = 1.0 / T;
+  try {
+    opt.lowpass.validate(fs);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(fmt::format("pre-filter for a log sampled at {:g} Hz: {}", fs, e.what()));
+  }
+  const signal::TransferFunction tf =
+      opt.lowpass.kind == signal::LowpassOptions::Kind::Butterworth
+          ? signal::butter_lowpass(opt.lowpass.order, opt.lowpass.cutoff_hz, fs)
+          : signal::TransferFunction{signal::fir_lowpass_blackmanharris(opt.lowpass.taps, opt.lowpass.cutoff_hz, fs),
+                                     {1.0}};
+  const int padlen = 3 * (static_cast<int>(std::max(tf.a.size(), tf.b.size())) - 1);
+  if (n <= padlen)
+    throw InputError(fmt::format(
+        "flight log: {} samples ({:g} s at {:g} Hz) is shorter than the {} pre-filter needs (more than {} samples "
+        "of filtfilt edge padding)",
+        n, static_cast<double>(n - 1) * T, fs, filter_name(opt.lowpass), padlen));
+  if (summary) {
+    summary->samples = n;
+    summary->T = T;
+    summary->fs = fs;
+    summary->duration = static_cast<double>(n - 1) * T;
+    summary->filter = filter_name(opt.lowpass);
+    summary->padlen = padlen;
+    summary->filter_f3db = zero_phase_f3db(tf, fs);
+  }
+
+  // Step 1: zero-phase low-pass (filtfilt with MATLAB's odd padding).
+  auto lp = [&](int c) -> Eigen::VectorXd { return signal::filtfilt(tf, Eigen::VectorXd(log.data.col(c))); };
+  auto out = std::make_shared<RegressionSignals>();
+  out->t_start = t(0);
+  out->T = T;
+  auto& X = out->x;
+  X.resize(n, RegressionSignals::kCols);
+  const Eigen::VectorXd phi = lp(col[4]), theta = lp(col[5]);
+  const Eigen::VectorXd psi =
+      opt.unwrap_yaw ? signal::filtfilt(tf, unwrap(log.data.col(col[6]))) : lp(col[6]);
+  // Step 2: p_dot by eq. (33) from the filtered position.
+  Eigen::Matrix<double, Eigen::Dynamic, 3> pdot(n, 3);
+  for (int i = 0; i < 3; ++i) pdot.col(i) = signal::central_difference(lp(col[1 + i]), T);
+  for (int i = 0; i < 3; ++i) X.col(1 + i) = lp(col[7 + i]);   // p q r
+  for (int i = 0; i < 4; ++i) X.col(11 + i) = lp(col[10 + i]);  // Fz tau
+  // Step 3: v = R(eta)^T p_dot (eq. 3), then the Phi_b signals.
+  const double g = opt.g;
+  for (Eigen::Index k = 0; k < n; ++k) {
+    const Vec3 eta(phi(k), theta(k), psi(k));
+    const Vec3 v = rotation<double>(eta).transpose() * pdot.row(k).transpose();
+    const double p = X(k, 1), q = X(k, 2), r = X(k, 3);
+    X(k, 0) = v(2);
+    X(k, 4) = p * v(1) - q * v(0) + g * std::cos(theta(k)) * std::cos(phi(k));  // eq. (7): p v - q u + g_bz
+    X(k, 5) = p * q;
+    X(k, 6) = p * r;
+    X(k, 7) = q * r;
+    X(k, 8) = p * p;
+    X(k, 9) = q * q;
+    X(k, 10) = r * r;
+  }
+  return out;
+}
+
+}  // namespace quadid

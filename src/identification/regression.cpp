@@ -1,0 +1,122 @@
+// Regressions over a window (eqs. 34, 38) and the output prediction error (eq. 43).
+#include "quadid/identification.hpp"
+
+#include <fmt/format.h>
+
+#include <charconv>
+#include <cmath>
+#include <stdexcept>
+
+namespace quadid {
+namespace {
+
+bool parse_double(std::string_view s, double& v) {
+  while (!s.empty() && s.front() == ' ') s.remove_prefix(1);
+  while (!s.empty() && s.back() == ' ') s.remove_suffix(1);
+  if (!s.empty() && s.front() == '+') s.remove_prefix(1);
+  const auto [p, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
+  return ec == std::errc() && p == s.data() + s.size() && std::isfinite(v);
+}
+
+}  // namespace
+
+TimeWindow TimeWindow::parse(std::string_view spec) {
+  const auto colon = spec.find(':');
+  auto bad = [&](std::string_view why) {
+    return std::invalid_argument(fmt::format("window '{}': {} (expected T0:T1 in seconds from the log's start, "
+                                             "e.g. 10:50, or 10: for the rest of the log)",
+                                             spec, why));
+  };
+  if (colon == std::string_view::npos) throw bad("no ':'");
+  TimeWindow w;
+  const std::string_view a = spec.substr(0, colon), b = spec.substr(colon + 1);
+  if (a.find_first_not_of(' ') != std::string_view::npos && !parse_double(a, w.t0)) throw bad("T0 is not a number");
+  if (b.find_first_not_of(' ') != std::string_view::npos && !parse_double(b, w.t1)) throw bad("T1 is not a number");
+  if (w.t0 < 0.0) throw bad("T0 is negative");
+  if (!(w.t1 > w.t0)) throw bad("T1 must be greater than T0");
+  return w;
+}
+
+std::string TimeWindow::to_string() const {
+  return std::isfinite(t1) ? fmt::format("{:g}-{:g} s", t0, t1) : fmt::format("{:g} s-end", t0);
+}
+
+const char* to_string(RegressionModel m) { return m == RegressionModel::Standard ? "standard" : "filtered"; }
+
+Regressor4x7 assemble_regressor(const Vec4& a, const Eigen::Matrix<double, 7, 1>& b) {
+  // Phi_a(a) + Phi_b(b), rows from eqs. (7)-(10) (see regressor.hpp);
+  // a = [w p q r] (or their derivatives / g_D images), b = [c pq pr qr p2 q2 r2].
+  const double w = a(0), p = a(1), q = a(2), r = a(3);
+  const double c = b(0), pq = b(1), pr = b(2), qr = b(3), pp = b(4), qq = b(5), rr = b(6);
+  Regressor4x7 G;
+  G << w + c, 0.0, 0.0,     0.0,      0.0, 0.0,     0.0,
+       0.0,   p,   q - pr,  r + pq,   -qr, qq - rr, qr,
+       0.0,   pr,  p + qr,  rr - pp,  q,   r - pq,  -pr,
+       0.0,   -pq, pp - qq, p - qr,   pq,  q + pr,  r;
+  return G;
+}
+
+Regression::Regression(std::shared_ptr<const RegressionSignals> signals, RegressionModel model, TimeWindow window,
+                       double lambda, signal::GdVariant gd_variant)
+    : sig_(std::move(signals)), model_(model), lambda_(lambda), variant_(gd_variant) {
+  if (!sig_) throw std::invalid_argument("Regression: no signals");
+  const double T = sig_->T;
+  const Eigen::Index n = sig_->size();
+  if (!(T > 0.0) || n < 3) throw std::invalid_argument("Regression: the signals hold fewer than 3 samples");
+  if (model == RegressionModel::Filtered) {
+    if (!(lambda > 0.0) || !std::isfinite(lambda))
+      throw std::invalid_argument(fmt::format("lambda={} must be a positive filter bandwidth in rad/s", lambda));
+    if (lambda * T > 20.0)
+      throw std::invalid_argument(fmt::format(
+          "lambda={} rad/s is far above the log's sample rate ({:g} Hz): f_D would pass nothing", lambda, 1.0 / T));
+  }
+  const double duration = static_cast<double>(n - 1) * T;
+  if (!(window.t0 >= 0.0) || !(window.t1 > window.t0))
+    throw std::invalid_argument(fmt::format("window {}: need 0 <= T0 < T1", window.to_string()));
+  if (window.t0 > duration)
+    throw InputError(fmt::format("window {} starts after the log ends ({:g} s of data)", window.to_string(), duration));
+  // Up to 1.5 periods past the last sample are accepted (a "50 s" log may end at 49.998 s).
+  if (std::isfinite(window.t1) && window.t1 > duration + 1.5 * T)
+    throw InputError(fmt::format("window {} ends after the log ends ({:g} s of data); use e.g. --window {:g}:{:g}",
+                                 window.to_string(), duration, window.t0, duration));
+  begin_ = static_cast<Eigen::Index>(std::ceil(window.t0 / T - 1e-9));
+  end_ = std::isfinite(window.t1) ? std::min<Eigen::Index>(n, static_cast<Eigen::Index>(std::floor(window.t1 / T + 1e-9)) + 1)
+                                  : n;
+  if (end_ - begin_ < 8)
+    throw InputError(fmt::format("window {} holds only {} sample(s); at least 8 are needed", window.to_string(),
+                                 std::max<Eigen::Index>(0, end_ - begin_)));
+}
+
+TimeWindow Regression::window() const {
+  return {static_cast<double>(begin_) * sig_->T, static_cast<double>(end_ - 1) * sig_->T};
+}
+
+PredictionErrorTable prediction_error(const Regression& reg, const std::vector<NamedParams>& sets,
+                                      const NamedParams& reference) {
+  const size_t S = sets.size() + 1;  // reference first
+  Eigen::Matrix<double, 7, Eigen::Dynamic> th(7, static_cast<Eigen::Index>(S));
+  th.col(0) = reference.params.theta();
+  for (size_t i = 0; i < sets.size(); ++i) th.col(static_cast<Eigen::Index>(i + 1)) = sets[i].params.theta();
+  Eigen::Matrix<double, 4, Eigen::Dynamic> sse = Eigen::Matrix<double, 4, Eigen::Dynamic>::Zero(4, th.cols());
+  reg.for_each([&](Eigen::Index, const Regressor4x7& G, const Vec4& Y) {
+    sse.noalias() += ((G * th).colwise() - Y).cwiseAbs2();  // eq. (43), squared
+  });
+  const double n = static_cast<double>(reg.size());
+  PredictionErrorTable t;
+  t.model = reg.model();
+  t.window = reg.window();
+  t.samples = reg.size();
+  t.reference.name = reference.name;
+  t.reference.rms = (sse.col(0) / n).cwiseSqrt();
+  for (size_t i = 0; i < sets.size(); ++i) {
+    PredictionErrorRow row;
+    row.name = sets[i].name;
+    row.rms = (sse.col(static_cast<Eigen::Index>(i + 1)) / n).cwiseSqrt();
+    // P_imp% as in section IV-B: (RMS_nom - RMS_set) / RMS_nom * 100.
+    row.improvement_pct = 100.0 * (t.reference.rms - row.rms).cwiseQuotient(t.reference.rms);
+    t.rows.push_back(row);
+  }
+  return t;
+}
+
+}  // namespace quadid

@@ -1,0 +1,154 @@
+// Text tables (Table 3, Tables 5-6), JSON and evolution CSV of an identification.
+#include "quadid/identification.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+
+namespace quadid {
+namespace {
+
+using nlohmann::json;
+
+constexpr std::array<const char*, 4> kComponents = {"Fz", "tau_phi", "tau_theta", "tau_psi"};
+constexpr std::array<const char*, 4> kComponentUnits = {"N", "N m", "N m", "N m"};
+
+const char* theta_unit(int j) { return j == 0 ? "kg" : "kg m^2"; }
+
+// Significant digits rather than fixed decimals: a 30 g quad has inertias ~1e-5.
+std::string num(double v) {
+  if (!std::isfinite(v)) return "-";
+  return fmt::format("{:.6g}", v);
+}
+
+json finite_or_null(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
+
+json vec_json(const Eigen::VectorXd& v) {
+  json a = json::array();
+  for (Eigen::Index i = 0; i < v.size(); ++i) a.push_back(finite_or_null(v(i)));
+  return a;
+}
+
+json theta_json(const Theta& th) {
+  json j = json::object();
+  for (int i = 0; i < 7; ++i) j[kThetaNames[static_cast<size_t>(i)]] = finite_or_null(th(i));
+  return j;
+}
+
+json window_json(const TimeWindow& w) {
+  return {{"t0", w.t0}, {"t1", finite_or_null(w.t1)}};
+}
+
+json ls_json(const LeastSquaresSolution& s) {
+  return {{"condition", finite_or_null(s.condition)},
+          {"singular_values", vec_json(s.singular_values)},
+          {"std_error", theta_json(s.std_error)},
+          {"residual_rms", s.residual_rms},
+          {"unidentifiable", s.unidentifiable},
+          {"poorly_determined", s.poorly_determined}};
+}
+
+}  // namespace
+
+std::string format_estimates_table(const IdentificationResult& r) {
+  fmt::memory_buffer out;
+  auto it = std::back_inserter(out);
+  fmt::format_to(it, "Estimated parameters (Table 3): window {} ({} samples at {:g} Hz)\n", r.window.to_string(),
+                 r.window_samples, r.processing.fs);
+  fmt::format_to(it, "{:<10}{:<8}", "Parameter", "Units");
+  for (const auto& e : r.estimates) fmt::format_to(it, "{:>13}", e.name);
+  fmt::format_to(it, "{:>13}\n", r.reference.name);
+  const Theta ref = r.reference.params.theta();
+  for (int j = 0; j < 7; ++j) {
+    fmt::format_to(it, "{:<10}{:<8}", kThetaNames[static_cast<size_t>(j)], theta_unit(j));
+    for (const auto& e : r.estimates) fmt::format_to(it, "{:>13}", e.valid ? num(e.theta(j)) : "diverged");
+    fmt::format_to(it, "{:>13}\n", num(ref(j)));
+  }
+  return fmt::to_string(out);
+}
+
+std::string format_prediction_table(const PredictionErrorTable& t, std::string_view title) {
+  fmt::memory_buffer out;
+  auto it = std::back_inserter(out);
+  fmt::format_to(it, "{}: RMS output prediction error of the {} regression model ({}), window {} ({} samples)\n",
+                 title, to_string(t.model), t.model == RegressionModel::Standard ? "eq. 34" : "eq. 38",
+                 t.window.to_string(), t.samples);
+  fmt::format_to(it, "{:<22}{:>12}", "Component", "e_" + t.reference.name);
+  for (const auto& r : t.rows) fmt::format_to(it, "{:>12}{:>9}", "e_" + r.name, "P_imp%");
+  fmt::format_to(it, "\n");
+  for (int i = 0; i < 4; ++i) {
+    fmt::format_to(it, "{:<22}{:>12.5g}",
+                   fmt::format("{} {} [{}]", i + 1, kComponents[static_cast<size_t>(i)],
+                               kComponentUnits[static_cast<size_t>(i)]),
+                   t.reference.rms(i));
+    for (const auto& r : t.rows) fmt::format_to(it, "{:>12.5g}{:>9.2f}", r.rms(i), r.improvement_pct(i));
+    fmt::format_to(it, "\n");
+  }
+  return fmt::to_string(out);
+}
+
+std::string format_evolution_csv(const Evolution& e) {
+  fmt::memory_buffer out;
+  auto it = std::back_inserter(out);
+  fmt::format_to(it, "{}\n", fmt::join(e.columns, ","));
+  for (Eigen::Index r = 0; r < e.data.rows(); ++r) {
+    for (Eigen::Index c = 0; c < e.data.cols(); ++c) {
+      const double v = e.data(r, c);
+      if (std::isfinite(v)) fmt::format_to(it, "{}", v);
+      else fmt::format_to(it, "nan");
+      out.push_back(c + 1 < e.data.cols() ? ',' : '\n');
+    }
+  }
+  return fmt::to_string(out);
+}
+
+json to_json(const PredictionErrorTable& t) {
+  json sets = json::array();
+  for (const auto& r : t.rows)
+    sets.push_back({{"name", r.name}, {"rms", vec_json(r.rms)}, {"improvement_pct", vec_json(r.improvement_pct)}});
+  return {{"model", to_string(t.model)},
+          {"equation", t.model == RegressionModel::Standard ? 34 : 38},
+          {"window", window_json(t.window)},
+          {"samples", t.samples},
+          {"components", kComponents},
+          {"units", kComponentUnits},
+          {"reference", {{"name", t.reference.name}, {"rms", vec_json(t.reference.rms)}}},
+          {"sets", sets}};
+}
+
+json to_json(const IdentificationResult& r) {
+  json est = json::object();
+  json gd = {{"sigma", r.options.gd.sigma},
+             {"discretization",
+              r.options.gd.discretization == GdDiscretization::Exact ? "exact" : "forward-euler (eq. 42)"},
+             {"initial", theta_json(r.gd_initial)}};
+  for (const auto& e : r.estimates) {
+    if (e.valid) est[e.name] = to_json(e.params());
+    if (!e.least_squares) {
+      const double gain = e.model == RegressionModel::Standard ? r.gd_step_gain_standard : r.gd_step_gain_filtered;
+      gd[e.name] = {{"diverged", !e.valid}, {"max_step_gain", gain}};
+      if (!e.valid) gd[e.name]["message"] = e.note;
+    }
+  }
+  const auto& p = r.processing;
+  return {{"estimates", est},
+          {"reference", {{"name", r.reference.name}, {"params", to_json(r.reference.params)}}},
+          {"window", {{"t0", r.window.t0}, {"t1", r.window.t1}, {"samples", r.window_samples}}},
+          {"processing",
+           {{"samples", p.samples},
+            {"sample_rate_hz", p.fs},
+            {"period_s", p.T},
+            {"duration_s", p.duration},
+            {"prefilter", p.filter},
+            {"prefilter_f3db_hz", p.filter_f3db},
+            {"padlen", p.padlen}}},
+          {"filtered_model",
+           {{"lambda", r.options.lambda},
+            {"gd_variant", r.options.gd_variant == signal::GdVariant::Consistent ? "consistent" : "printed"}}},
+          {"least_squares", {{"LS", ls_json(r.ls_standard)}, {"FMLS", ls_json(r.ls_filtered)}}},
+          {"gradient_descent", gd},
+          {"prediction_error", {{"standard", to_json(r.errors_standard)}, {"filtered", to_json(r.errors_filtered)}}},
+          {"warnings", r.warnings}};
+}
+
+}  // namespace quadid
