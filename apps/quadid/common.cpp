@@ -1,0 +1,55 @@
+#include "common.hpp"
+
+#include <fmt/format.h>
+
+#include <stdexcept>
+
+namespace quadid::cli {
+
+void ProcessingArgs::add_to(CLI::App* sub) {
+  sub->add_option("--filter", filter, "zero-phase pre-filter: butter (Butterworth IIR) or fir (31-tap Blackman-Harris)")
+      ->capture_default_str();
+  sub->add_option("--cutoff", cutoff,
+                  "pre-filter cutoff, Hz; 4 Hz passes the excitation (<= 0.5 Hz) and removes 30 Hz motion-capture steps")
+      ->capture_default_str();
+  sub->add_option("--order", order, "Butterworth order (1-8)")->capture_default_str();
+  sub->add_option("--taps", taps, "FIR length (odd)")->capture_default_str();
+  sub->add_option("--lambda", lambda, "bandwidth of f_D, g_D of the filtered model (eqs. 35-36), rad/s")
+      ->capture_default_str();
+  sub->add_option("--derivative-filter", derivative_filter,
+                  "g_D: consistent ((1-a)/T (z-1)/(z-a), the derivative of f_D's output) or printed (eq. 36)")
+      ->capture_default_str();
+  sub->add_option("--g", g, "gravity, m/s^2")->capture_default_str();
+  sub->add_option("--period-tolerance", period_tolerance, "relative tolerance on a uniform sample period")
+      ->capture_default_str();
+  sub->add_option("--map", map, "column name mapping CANONICAL=NAME, e.g. --map tau_phi=tau_x (repeatable)");
+}
+
+ProcessingOptions ProcessingArgs::processing() const {
+  ProcessingOptions p;
+  auto& lp = p.lowpass;
+  if (filter == "butter") lp.kind = signal::LowpassOptions::Kind::Butterworth;
+  else if (filter == "fir") lp.kind = signal::LowpassOptions::Kind::FirBlackmanHarris;
+  else throw std::invalid_argument(fmt::format("--filter {}: expected butter or fir", filter));
+  lp.cutoff_hz = cutoff;
+  lp.order = order;
+  lp.taps = taps;
+  p.g = g;
+  p.period_tolerance = period_tolerance;
+  return p;
+}
+
+signal::GdVariant ProcessingArgs::gd_variant() const {
+  if (derivative_filter == "consistent") return signal::GdVariant::Consistent;
+  if (derivative_filter == "printed") return signal::GdVariant::Printed;
+  throw std::invalid_argument(fmt::format("--derivative-filter {}: expected consistent or printed", derivative_filter));
+}
+
+CsvReadOptions ProcessingArgs::csv() const {
+  CsvReadOptions c;
+  c.map = parse_column_map(map);
+  c.period_tolerance = period_tolerance;
+  return c;
+}
+
+}  // namespace quadid::cli

@@ -1,0 +1,185 @@
+#include "quadid/validation.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+
+namespace quadid {
+
+void SimulationComparisonOptions::validate() const {
+  if (!(window.t0 >= 0.0) || !(window.t1 > window.t0))
+    throw std::invalid_argument(fmt::format("window {}: need 0 <= T0 < T1", window.to_string()));
+}
+
+void PredictionValidationOptions::validate() const {
+  processing.validate();
+  if (!(window.t0 >= 0.0) || !(window.t1 > window.t0))
+    throw std::invalid_argument(fmt::format("window {}: need 0 <= T0 < T1", window.to_string()));
+  if (!(lambda > 0.0) || !std::isfinite(lambda))
+    throw std::invalid_argument(fmt::format("lambda = {} rad/s must be positive", lambda));
+}
+
+namespace {
+
+// Columns of the ten Table 4 signals in a log.
+std::array<int, 10> signal_columns(const FlightLog& log, const std::string& what) {
+  std::array<int, 10> idx{};
+  for (size_t i = 0; i < kTable4Signals.size(); ++i) {
+    idx[i] = log.find(kTable4Signals[i]);
+    if (idx[i] < 0) throw InputError(fmt::format("{}: no column '{}'", what, kTable4Signals[i]));
+  }
+  return idx;
+}
+
+double wrap_pi(double a) { return std::remainder(a, 2.0 * M_PI); }
+
+// RMS of (log - sim) per signal over the window; the simulated log is linearly
+// interpolated at the log's instants (both start at the log's first sample).
+Vec10 rms_difference(const FlightLog& log, const FlightLog& sim, const TimeWindow& w, Eigen::Index* count) {
+  const auto li = signal_columns(log, "flight log");
+  const auto si = signal_columns(sim, "simulated log");
+  const int lt = log.find("t"), st = sim.find("t");
+  const double t0 = log.data(0, lt);
+  const Eigen::Index ns = sim.rows();
+  Vec10 sum = Vec10::Zero();
+  Eigen::Index n = 0, j = 0;
+  for (Eigen::Index k = 0; k < log.rows(); ++k) {
+    const double t = log.data(k, lt) - t0;
+    if (t < w.t0 - 1e-9 || t > w.t1 + 1e-9) continue;
+    while (j + 1 < ns && sim.data(j + 1, st) <= t) ++j;
+    if (j + 1 >= ns && sim.data(ns - 1, st) < t - 1e-9) break;  // simulation shorter than the log
+    const double ta = sim.data(j, st), tb = j + 1 < ns ? sim.data(j + 1, st) : ta;
+    const double a = tb > ta ? (t - ta) / (tb - ta) : 0.0;
+    for (int i = 0; i < 10; ++i) {
+      const double s = (1.0 - a) * sim.data(j, si[static_cast<size_t>(i)]) +
+                       a * sim.data(std::min(j + 1, ns - 1), si[static_cast<size_t>(i)]);
+      double e = log.data(k, li[static_cast<size_t>(i)]) - s;
+      if (i == 5) e = wrap_pi(e);  // psi
+      sum(i) += e * e;
+    }
+    ++n;
+  }
+  if (count) *count = n;
+  if (n == 0) return Vec10::Constant(std::numeric_limits<double>::quiet_NaN());
+  return (sum / static_cast<double>(n)).cwiseSqrt();
+}
+
+}  // namespace
+
+SimulationComparison compare_simulations(const FlightLog& log, const Trajectory& traj, const SimulationOptions& base,
+                                         const std::vector<NamedParams>& sets, const NamedParams& reference,
+                                         const SimulationComparisonOptions& opt) {
+  opt.validate();
+  const int lt = log.find("t");
+  if (lt < 0 || log.rows() < 2) throw InputError("flight log: needs a 't' column and at least two samples");
+  const double duration = log.data(log.rows() - 1, lt) - log.data(0, lt);
+  if (opt.window.t0 >= duration)
+    throw InputError(fmt::format("window {} starts after the log ends ({:.3f} s)", opt.window.to_string(), duration));
+
+  SimulationComparison out;
+  out.window = opt.window;
+  std::vector<NamedParams> all;
+  all.push_back(reference);
+  all.insert(all.end(), sets.begin(), sets.end());
+  for (size_t s = 0; s < all.size(); ++s) {
+    SimulationOptions o = base;
+    o.plant = all[s].params;
+    o.duration = duration;
+    o.record_truth = false;
+    if (!opt.with_noise) o.sensors.noise = NoiseSigmas::none();
+    SimulationComparisonRow row;
+    row.name = all[s].name;
+    try {
+      all[s].params.validate(all[s].name);
+      SimulationResult r = simulate(traj, o);
+      Eigen::Index n = 0;
+      row.rms = rms_difference(log, r.log, opt.window, &n);
+      out.samples = std::max(out.samples, n);
+      if (opt.keep_logs) out.logs.push_back(std::move(r.log));
+    } catch (const SimulationDiverged& e) {
+      row.failure = fmt::format("re-flight diverged at t = {:.3f} s: {}", e.time(), e.reason());
+      if (opt.keep_logs) out.logs.emplace_back();
+    } catch (const std::invalid_argument& e) {
+      row.failure = e.what();
+      if (opt.keep_logs) out.logs.emplace_back();
+    }
+    if (s == 0) out.reference = row; else out.rows.push_back(row);
+  }
+  for (auto& r : out.rows)
+    for (int i = 0; i < 10; ++i)
+      r.improvement_pct(i) = (out.reference.rms(i) - r.rms(i)) / out.reference.rms(i) * 100.0;  // P_imp%
+  return out;
+}
+
+std::string format_simulation_table(const SimulationComparison& c, std::string_view title) {
+  static const std::array<const char*, 10> units = {"m", "m", "m", "deg", "deg", "deg", "N", "N m", "N m", "N m"};
+  fmt::memory_buffer out;
+  auto it = std::back_inserter(out);
+  fmt::format_to(it, "{}: RMS of experiment - simulation, window {} ({} samples)\n", title, c.window.to_string(),
+                 c.samples);
+  fmt::format_to(it, "{:<12}{:<6}{:>12}", "Error", "Units", "e_" + c.reference.name);
+  for (const auto& r : c.rows) fmt::format_to(it, "{:>12}{:>9}", "e_" + r.name, "P_imp%");
+  fmt::format_to(it, "\n");
+  for (int i = 0; i < 10; ++i) {
+    const double scale = (i >= 3 && i <= 5) ? 180.0 / M_PI : 1.0;
+    fmt::format_to(it, "{:<12}{:<6}{:>12.5f}", fmt::format("e_{}", kTable4Signals[static_cast<size_t>(i)]),
+                   units[static_cast<size_t>(i)], c.reference.rms(i) * scale);
+    for (const auto& r : c.rows) {
+      if (!r.failure.empty())
+        fmt::format_to(it, "{:>12}{:>9}", "diverged", "-");
+      else
+        fmt::format_to(it, "{:>12.5f}{:>9.2f}", r.rms(i) * scale, r.improvement_pct(i));
+    }
+    fmt::format_to(it, "\n");
+  }
+  for (const auto& r : c.rows)
+    if (!r.failure.empty()) fmt::format_to(it, "{}: {}\n", r.name, r.failure);
+  if (!c.reference.failure.empty()) fmt::format_to(it, "{}: {}\n", c.reference.name, c.reference.failure);
+  return fmt::to_string(out);
+}
+
+nlohmann::json to_json(const SimulationComparison& c) {
+  using nlohmann::json;
+  auto row_json = [](const SimulationComparisonRow& r, bool with_imp) {
+    json rms = json::object(), imp = json::object();
+    for (int i = 0; i < 10; ++i) {
+      const char* k = kTable4Signals[static_cast<size_t>(i)];
+      rms[k] = std::isfinite(r.rms(i)) ? json(r.rms(i)) : json(nullptr);
+      imp[k] = std::isfinite(r.improvement_pct(i)) ? json(r.improvement_pct(i)) : json(nullptr);
+    }
+    json j = {{"name", r.name}, {"rms", rms}};
+    if (with_imp) j["improvement_pct"] = imp;
+    if (!r.failure.empty()) j["failure"] = r.failure;
+    return j;
+  };
+  json rows = json::array();
+  for (const auto& r : c.rows) rows.push_back(row_json(r, true));
+  return {{"window", {{"t0", c.window.t0}, {"t1", std::isfinite(c.window.t1) ? json(c.window.t1) : json(nullptr)}}},
+          {"samples", c.samples},
+          {"units", "SI (m, rad, N, N m)"},
+          {"reference", row_json(c.reference, false)},
+          {"rows", rows}};
+}
+
+PredictionValidation validate_prediction(const FlightLog& log, const std::vector<NamedParams>& sets,
+                                         const NamedParams& reference, const PredictionValidationOptions& opt) {
+  opt.validate();
+  const auto signals = process_log(log, opt.processing);
+  PredictionValidation v;
+  v.standard = prediction_error(Regression(signals, RegressionModel::Standard, opt.window, opt.lambda, opt.gd_variant),
+                                sets, reference);
+  v.filtered = prediction_error(Regression(signals, RegressionModel::Filtered, opt.window, opt.lambda, opt.gd_variant),
+                                sets, reference);
+  return v;
+}
+
+PredictionErrorTable select_rows(const PredictionErrorTable& t, const std::vector<std::string>& names) {
+  PredictionErrorTable out = t;
+  out.rows.clear();
+  for (const auto& n : names)
+    for (const auto& r : t.rows)
+      if (r.name == n) out.rows.push_back(r);
+  return out;
+}
+
+}  // namespace quadid
