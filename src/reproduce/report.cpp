@@ -1,0 +1,352 @@
+// The reproduction's report folder: report.html with the paper's tables and
+// figures (Figs. 3-9) as inline SVG, and the JSON/CSV data behind them.
+#include "quadid/report.hpp"
+#include "quadid/reproduce.hpp"
+
+#include <fmt/format.h>
+
+namespace quadid {
+
+namespace {
+
+using report::Plot;
+using report::Series;
+using report::Table;
+
+constexpr double kRad2Deg = 180.0 / M_PI;
+
+std::vector<double> col(const FlightLog& log, std::string_view name, double scale = 1.0) {
+  const int c = log.find(name);
+  std::vector<double> v;
+  if (c < 0) return v;
+  v.resize(static_cast<size_t>(log.rows()));
+  for (Eigen::Index k = 0; k < log.rows(); ++k) v[static_cast<size_t>(k)] = log.data(k, c) * scale;
+  return v;
+}
+
+std::string sim_label(const std::string& set) { return set == "Exp" ? "Exp" : fmt::format("Sim({})", set); }
+
+// Experiment (black) and the five re-flights (nominal red, LS blue, GD purple,
+// FMLS green, FMGD orange), as in the paper's Figs. 6-9.
+Plot compare_plot(const Reproduction& r, std::string_view signal, const std::string& ylabel, double scale,
+                  std::string_view title) {
+  Plot p;
+  p.title = std::string(title);
+  p.xlabel = "time (s)";
+  p.ylabel = ylabel;
+  p.height = 280;
+  const auto t = col(r.flight.log, "t");
+  p.series.push_back({"Exp", t, col(r.flight.log, signal, scale), report::color_for("Exp", 0), false, 2.0});
+  std::vector<std::string> names{r.table4.reference.name};
+  for (const auto& row : r.table4.rows) names.push_back(row.name);
+  for (size_t i = 0; i < r.table4.logs.size() && i < names.size(); ++i) {
+    const auto& l = r.table4.logs[i];
+    if (l.rows() == 0) continue;
+    p.series.push_back({sim_label(names[i]), col(l, "t"), col(l, signal, scale), report::color_for(names[i], i),
+                        false, 1.2});
+  }
+  return p;
+}
+
+Table table3(const Reproduction& r) {
+  Table t;
+  t.title = fmt::format("Table 3. Estimated parameters (window {}), true plant and nominal set",
+                        r.identification.window.to_string());
+  t.header = {"Parameter", "Units", "true"};
+  for (const auto& e : r.identification.estimates) {
+    t.header.push_back(e.name);
+    t.header.push_back("error %");
+  }
+  t.header.push_back("nominal");
+  const Theta truth = r.options.plant.theta(), nom = r.options.nominal.theta();
+  for (int j = 0; j < 7; ++j) {
+    std::vector<std::string> row = {kThetaNames[static_cast<size_t>(j)], j == 0 ? "kg" : "kg m²",
+                                    report::sig(truth(j), 5)};
+    for (const auto& e : r.identification.estimates) {
+      row.push_back(e.valid ? report::sig(e.theta(j), 5) : "diverged");
+      row.push_back(report::fixed((e.theta(j) - truth(j)) / std::abs(truth(j)) * 100.0, 2));
+    }
+    row.push_back(report::sig(nom(j), 5));
+    t.rows.push_back(row);
+  }
+  t.note = "error % = (estimate − true) / |true| × 100. The products of inertia are 5-100 times smaller than the "
+           "moments, so a small absolute error is a large percentage.";
+  return t;
+}
+
+Table table4(const SimulationComparison& c, const std::string& title) {
+  static const std::array<const char*, 10> units = {"m", "m", "m", "deg", "deg", "deg", "N", "N m", "N m", "N m"};
+  Table t;
+  t.title = fmt::format("{} (window {}, RMS of experiment − simulation)", title, c.window.to_string());
+  t.header = {"Error", "Units", "e_" + c.reference.name};
+  for (const auto& r : c.rows) {
+    t.header.push_back("e_" + r.name);
+    t.header.push_back("P_imp%");
+  }
+  for (int i = 0; i < 10; ++i) {
+    const double s = (i >= 3 && i <= 5) ? kRad2Deg : 1.0;
+    std::vector<std::string> row = {fmt::format("e_{}", kTable4Signals[static_cast<size_t>(i)]),
+                                    units[static_cast<size_t>(i)], report::fixed(c.reference.rms(i) * s, 5)};
+    for (const auto& r : c.rows) {
+      row.push_back(r.failure.empty() ? report::fixed(r.rms(i) * s, 5) : "diverged");
+      row.push_back(r.failure.empty() ? report::fixed(r.improvement_pct(i), 2) : "");
+    }
+    t.rows.push_back(row);
+  }
+  return t;
+}
+
+Table prediction_table(const PredictionErrorTable& p, const std::string& title) {
+  static const std::array<const char*, 4> comp = {"1: Fz (N)", "2: τ_φ (N m)", "3: τ_θ (N m)", "4: τ_ψ (N m)"};
+  Table t;
+  t.title = fmt::format("{}: RMS output prediction error of the {} regression model (eq. {}), window {}", title,
+                        to_string(p.model), p.model == RegressionModel::Standard ? 34 : 38, p.window.to_string());
+  t.header = {"Component", "e_" + p.reference.name};
+  for (const auto& r : p.rows) {
+    t.header.push_back("e_" + r.name);
+    t.header.push_back("P_imp%");
+  }
+  for (int i = 0; i < 4; ++i) {
+    std::vector<std::string> row = {comp[static_cast<size_t>(i)], report::sig(p.reference.rms(i), 4)};
+    for (const auto& r : p.rows) {
+      row.push_back(report::sig(r.rms(i), 4));
+      row.push_back(report::fixed(r.improvement_pct(i), 2));
+    }
+    t.rows.push_back(row);
+  }
+  return t;
+}
+
+Table coefficient_table(const FourierTrajectory& tr) {
+  Table t;
+  t.title = fmt::format("Table 2. Coefficients of the excitation trajectory (eq. 18), w_f = {:.4g} rad/s "
+                        "({:.4g} deg/s), N = {}",
+                        tr.wf(), tr.wf() * kRad2Deg, tr.harmonics());
+  t.header = {"axis", "l", "a_l", "b_l", "c"};
+  for (int i = 0; i < 4; ++i)
+    for (int l = 1; l <= tr.harmonics(); ++l)
+      t.rows.push_back({l == 1 ? kAxisNames[static_cast<size_t>(i)] : "", std::to_string(l),
+                        report::fixed(tr.axis(i).a(l - 1), 4), report::fixed(tr.axis(i).b(l - 1), 4),
+                        l == 1 ? report::fixed(tr.axis(i).c, 4) : ""});
+  return t;
+}
+
+Table check_table(const CheckReport& c) {
+  Table t;
+  t.title = fmt::format("Constraints of section III-B on a {:g} ms grid over {:g} s", c.constraint_dt * 1e3,
+                        c.duration);
+  t.header = {"constraint", "limit", "worst", "at t (s)", "holds"};
+  for (const auto& k : c.constraints) {
+    const bool ang = k.unit.find("rad") != std::string::npos;
+    const double s = ang ? kRad2Deg : 1.0;
+    std::string unit = k.unit;
+    if (ang) unit.replace(unit.find("rad"), 3, "deg");
+    const std::string rel = k.kind == "abs" ? "|·| ≤ " : k.kind == "min" ? "≥ " : "≤ ";
+    t.rows.push_back({k.name, fmt::format("{}{} {}", rel, report::sig(k.limit * s, 4), unit),
+                      fmt::format("{} {}", report::sig(k.worst * s, 4), unit), report::fixed(k.time, 3),
+                      k.holds ? "yes" : "NO"});
+  }
+  t.note = fmt::format("cond(W) = {:.4f} (eq. 20, T = {:g} ms, one period); start and end conditions {}.",
+                       c.criteria.cond, c.cond_dt * 1e3, c.endpoints_hold ? "hold" : "do NOT hold");
+  return t;
+}
+
+Plot evolution_plot(const Reproduction& r, int param) {
+  const auto& ev = r.identification.evolution;
+  Plot p;
+  const char* name = kThetaNames[static_cast<size_t>(param)];
+  p.title = fmt::format("{} estimate over time", name);
+  p.xlabel = "time (s)";
+  p.ylabel = fmt::format("{} ({})", name, param == 0 ? "kg" : "kg m²");
+  p.width = 520;
+  p.height = 260;
+  std::vector<double> t(static_cast<size_t>(ev.data.rows()));
+  for (Eigen::Index k = 0; k < ev.data.rows(); ++k) t[static_cast<size_t>(k)] = ev.data(k, 0);
+  const double truth = r.options.plant.theta()(param);
+  for (size_t s = 0; s < 4; ++s) {
+    const std::string set = r.identification.estimates[s].name;
+    const int c = static_cast<int>(1 + 7 * s) + param;
+    std::vector<double> y(t.size());
+    for (Eigen::Index k = 0; k < ev.data.rows(); ++k) y[static_cast<size_t>(k)] = ev.data(k, c);
+    p.series.push_back({set, t, y, report::color_for(set, s), false, 1.5});
+  }
+  if (!t.empty()) p.series.push_back({"true", {t.front(), t.back()}, {truth, truth}, "#000000", true, 1.2});
+  return p;
+}
+
+}  // namespace
+
+std::string reproduction_html(const Reproduction& r) {
+  report::HtmlDocument d("quadid: reproduction of Lopez-Sanchez et al. (IEEE Access 2020) on the virtual QBall 2");
+  const auto& o = r.options;
+  d.paragraph(fmt::format(
+      "The paper's whole procedure, run on the built-in virtual QBall 2 (the plant is Table 3's LS set; the "
+      "controller uses the nominal Table 1 mass): excitation trajectory ({}), {:g} s identification flight with {} "
+      "sensors (30 Hz motion capture, 500 Hz IMU), identification of the four sets, and validation on the "
+      "identification flight and on the three circular paths of eq. (44). Seed {}; wall time {:.1f} s.",
+      o.trajectory == "designed" ? "optimized by quadid design" : "Table 2 of the paper", o.duration,
+      o.noise ? "noisy" : "noise-free", o.seed, r.seconds));
+
+  d.heading("1. Excitation trajectory (section III-B, Fig. 3)");
+  d.table(coefficient_table(r.trajectory));
+  d.table(check_table(r.check));
+  {
+    Plot pp, pa;
+    pp.title = "Desired position p_d(t)";
+    pp.xlabel = "time (s)";
+    pp.ylabel = "position (m)";
+    pa.title = "Desired attitude η_d(t) (eqs. 26-27)";
+    pa.xlabel = "time (s)";
+    pa.ylabel = "angle (deg)";
+    pp.width = pa.width = 620;
+    std::array<std::vector<double>, 6> y;
+    std::vector<double> t;
+    for (double s = 0.0; s <= r.trajectory.period() + 1e-9; s += 0.01) {
+      const Reference ref = reference_at(r.trajectory, s);
+      t.push_back(s);
+      for (int i = 0; i < 3; ++i) {
+        y[static_cast<size_t>(i)].push_back(ref.p(i));
+        y[static_cast<size_t>(3 + i)].push_back(ref.eta(i) * kRad2Deg);
+      }
+    }
+    const char* pn[] = {"x_d", "y_d", "z_d"};
+    const char* an[] = {"φ_d", "θ_d", "ψ_d"};
+    for (size_t i = 0; i < 3; ++i) {
+      pp.series.push_back({pn[i], t, y[i], report::color_for("", i), false, 1.8});
+      pa.series.push_back({an[i], t, y[3 + i], report::color_for("", i), false, 1.8});
+    }
+    d.figure_row({pp, pa}, "Optimized trajectories p_d(t) and η_d(t), one period (paper Fig. 3).");
+  }
+
+  d.heading("2. Identification (section III-D, Table 3, Figs. 4-5)");
+  d.table(table3(r));
+  d.figure(evolution_plot(r, 0), "Time evolution of the estimated mass (paper Fig. 4); dashed: true value.");
+  d.figure_row({evolution_plot(r, 1), evolution_plot(r, 4), evolution_plot(r, 6)},
+               "Time evolution of the estimated moments of inertia (paper Fig. 5).");
+  d.figure_row({evolution_plot(r, 2), evolution_plot(r, 3), evolution_plot(r, 5)},
+               "Time evolution of the estimated products of inertia (paper Fig. 5).");
+  for (const auto& w : r.identification.warnings) d.paragraph("Warning: " + w);
+
+  d.heading("3. Validation using the identification experiment (section IV-B, Table 4, Figs. 6-9)");
+  d.table(table4(r.table4, "Table 4. Validation using the identification experiment"));
+  {
+    Plot path;
+    path.title = "Path drawn by the quadrotor (x-y plane)";
+    path.xlabel = "x (m)";
+    path.ylabel = "y (m)";
+    path.equal_aspect = true;
+    path.width = 620;
+    path.height = 520;
+    path.series.push_back({"Exp", col(r.flight.log, "x"), col(r.flight.log, "y"), "#000000", false, 2.0});
+    std::vector<std::string> names{r.table4.reference.name};
+    for (const auto& row : r.table4.rows) names.push_back(row.name);
+    for (size_t i = 0; i < r.table4.logs.size(); ++i)
+      if (r.table4.logs[i].rows() > 0)
+        path.series.push_back({sim_label(names[i]), col(r.table4.logs[i], "x"), col(r.table4.logs[i], "y"),
+                               report::color_for(names[i], i), false, 1.2});
+    d.figure(path, "Validation using the identification experiment: path drawn by the quadrotor (paper Fig. 6).");
+  }
+  d.figure_row({compare_plot(r, "x", "x (m)", 1.0, "x"), compare_plot(r, "y", "y (m)", 1.0, "y"),
+                compare_plot(r, "z", "z (m)", 1.0, "z")},
+               "Position in experiment and simulations (paper Fig. 7).");
+  d.figure_row({compare_plot(r, "phi", "φ (deg)", kRad2Deg, "roll φ"),
+                compare_plot(r, "theta", "θ (deg)", kRad2Deg, "pitch θ"),
+                compare_plot(r, "psi", "ψ (deg)", kRad2Deg, "yaw ψ")},
+               "Orientation in experiment and simulations (paper Fig. 8).");
+  d.figure_row({compare_plot(r, "Fz", "F_z (N)", 1.0, "thrust F_z"),
+                compare_plot(r, "tau_phi", "τ_φ (N m)", 1.0, "torque τ_φ"),
+                compare_plot(r, "tau_theta", "τ_θ (N m)", 1.0, "torque τ_θ"),
+                compare_plot(r, "tau_psi", "τ_ψ (N m)", 1.0, "torque τ_ψ")},
+               "Control inputs in experiment and simulations (paper Fig. 9).");
+  d.table(prediction_table(select_rows(r.identification.errors_standard, {"LS", "GD"}),
+                           "Table 5. Identification experiment"));
+  d.table(prediction_table(select_rows(r.identification.errors_filtered, {"FMLS", "FMGD"}),
+                           "Table 6. Identification experiment"));
+
+  d.heading("4. Validation using different experiments: circular paths (section IV-C, Tables 7-12)");
+  int table = 7;
+  std::vector<Plot> paths;
+  for (const auto& c : r.circles) {
+    d.heading(fmt::format("Circle experiment {}: {}", c.name.back(), c.describe), 3);
+    d.table(prediction_table(select_rows(c.errors.standard, {"LS", "GD"}), fmt::format("Table {}", table)));
+    d.table(prediction_table(select_rows(c.errors.filtered, {"FMLS", "FMGD"}), fmt::format("Table {}", table + 1)));
+    table += 2;
+    Plot p;
+    p.title = fmt::format("Circle experiment {}", c.name.back());
+    p.xlabel = "x (m)";
+    p.ylabel = "y (m)";
+    p.equal_aspect = true;
+    p.width = 400;
+    p.height = 400;
+    p.series.push_back({"Exp", col(c.log, "x"), col(c.log, "y"), "#000000", false, 1.5});
+    p.series.push_back({"desired", col(c.log, "x_d"), col(c.log, "y_d"), "#d62728", true, 1.2});
+    paths.push_back(p);
+  }
+  d.figure_row(paths, "Paths of the circle experiments (eq. 44): flown (black) and desired (dashed).");
+
+  d.heading("5. Files");
+  d.raw("<ul><li><code>summary.json</code>: every number of this page</li>"
+        "<li><code>trajectory.json</code>: the excitation trajectory (DESIGN.md format)</li>"
+        "<li><code>identification.json</code>: the identification result (estimates.LS/GD/FMLS/FMGD)</li>"
+        "<li><code>evolution.csv</code>: the estimates over time (Figs. 4-5)</li>"
+        "<li><code>flight_identification.csv</code>, <code>flight_circle1..3.csv</code>: the flight logs</li>"
+        "<li><code>simulation_&lt;set&gt;.csv</code>: the re-flights of Table 4</li>"
+        "<li><code>tables.md</code>: Tables 2-12 in Markdown</li></ul>\n");
+  return d.str();
+}
+
+void write_reproduction(const Reproduction& r, const std::filesystem::path& dir) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) throw InputError(fmt::format("{}: cannot create directory: {}", dir.string(), ec.message()));
+  nlohmann::json summary;
+  summary["seed"] = r.options.seed;
+  summary["trajectory_source"] = r.options.trajectory;
+  summary["duration"] = r.options.duration;
+  summary["noise"] = r.options.noise;
+  summary["seconds"] = r.seconds;
+  summary["true_plant"] = to_json(r.options.plant);
+  summary["nominal"] = to_json(r.options.nominal);
+  summary["trajectory"] = to_json(r.trajectory);
+  summary["check"] = to_json(r.check);
+  summary["identification"] = to_json(r.identification);
+  summary["simulation_comparison"] = to_json(r.table4);
+  nlohmann::json circles = nlohmann::json::array();
+  for (const auto& c : r.circles)
+    circles.push_back({{"name", c.name},
+                       {"describe", c.describe},
+                       {"standard", to_json(c.errors.standard)},
+                       {"filtered", to_json(c.errors.filtered)}});
+  summary["circles"] = circles;
+
+  std::string md;
+  md += coefficient_table(r.trajectory).to_markdown() + "\n" + check_table(r.check).to_markdown() + "\n";
+  md += table3(r).to_markdown() + "\n" + table4(r.table4, "Table 4").to_markdown() + "\n";
+  md += prediction_table(select_rows(r.identification.errors_standard, {"LS", "GD"}), "Table 5").to_markdown() + "\n";
+  md += prediction_table(select_rows(r.identification.errors_filtered, {"FMLS", "FMGD"}), "Table 6").to_markdown() + "\n";
+  int table = 7;
+  for (const auto& c : r.circles) {
+    md += prediction_table(select_rows(c.errors.standard, {"LS", "GD"}), fmt::format("Table {} ({})", table, c.name))
+              .to_markdown() + "\n";
+    md += prediction_table(select_rows(c.errors.filtered, {"FMLS", "FMGD"}),
+                           fmt::format("Table {} ({})", table + 1, c.name)).to_markdown() + "\n";
+    table += 2;
+  }
+
+  nlohmann::json traj = to_json(r.trajectory);
+  traj["check"] = to_json(r.check);
+  write_file_atomic(dir / "trajectory.json", traj.dump(2) + "\n");
+  write_file_atomic(dir / "identification.json", to_json(r.identification).dump(2) + "\n");
+  write_file_atomic(dir / "evolution.csv", format_evolution_csv(r.identification.evolution));
+  write_flight_log(r.flight.log, dir / "flight_identification.csv");
+  for (const auto& c : r.circles) write_flight_log(c.log, dir / fmt::format("flight_{}.csv", c.name));
+  std::vector<std::string> names{r.table4.reference.name};
+  for (const auto& row : r.table4.rows) names.push_back(row.name);
+  for (size_t i = 0; i < r.table4.logs.size() && i < names.size(); ++i)
+    if (r.table4.logs[i].rows() > 0) write_flight_log(r.table4.logs[i], dir / fmt::format("simulation_{}.csv", names[i]));
+  write_file_atomic(dir / "tables.md", md);
+  write_file_atomic(dir / "summary.json", summary.dump(2) + "\n");
+  write_file_atomic(dir / "report.html", reproduction_html(r));  // last: its presence means the folder is complete
+}
+
+}  // namespace quadid
