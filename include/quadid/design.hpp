@@ -1,0 +1,231 @@
+// Excitation-trajectory design (paper section II-B2, eqs. 20-27; limits of
+// section III-B): the constraints of a desired trajectory, the conditioning
+// of the regressor stack W of eq. (20), a check of any trajectory against
+// both, and an NLopt SLSQP optimizer of the Fourier coefficients of eq. (18).
+//
+// Units: SI and radians everywhere in this API; reports convert to degrees
+// only when they print for people.
+#pragma once
+
+#include "quadid/model.hpp"
+#include "quadid/trajectory.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <limits>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace quadid {
+
+inline constexpr double kDeg = M_PI / 180.0;
+inline constexpr double kInf = std::numeric_limits<double>::infinity();
+
+/// Limits on the desired trajectory, eqs. (22)-(25) with the values of
+/// section III-B as defaults. An infinite limit means "no constraint".
+struct Constraints {
+  double x_max = 1.0;                 // |x_d| <= x_max, m
+  double y_max = 1.0;                 // |y_d| <= y_max, m
+  double z_min = 0.7;                 // z_min <= z_d, m
+  double z_max = 1.5;                 // z_d <= z_max, m
+  double psi_max = 180.0 * kDeg;      // |psi_d| <= psi_max, rad
+  double tilt_max = 5.73 * kDeg;      // |phi_d|, |theta_d| of eqs. (26)-(27) <= tilt_max, rad
+  double xdot_max = 0.5;              // m/s
+  double ydot_max = 0.5;              // m/s
+  double zdot_max = 0.5;              // m/s
+  double psidot_max = 28.65 * kDeg;   // rad/s
+  double zddot_min = -9.81;           // m/s^2, keeps z_ddot + g > 0 for eqs. (26)-(27)
+  double zddot_max = kInf;            // m/s^2 (paper: unbounded)
+  double psiddot_max = kInf;          // rad/s^2 (paper: unbounded)
+  /// Start (and, for a periodic trajectory, end) hover point q0 = (x, y, z, psi);
+  /// velocity and acceleration there are zero.
+  double x0 = 0.0, y0 = 0.0, z0 = 0.7, psi0 = 0.0;  // m, m, m, rad
+
+  /// Throws std::invalid_argument naming the bad limit: non-positive or NaN
+  /// bounds, z_min > z_max, zddot_min > zddot_max, or a start outside the box.
+  void validate() const;
+};
+
+/// Excitation criteria. All use M = W^T W = sum_k Phi_k^T Phi_k (eq. 20).
+enum class Criterion {
+  Cond,        // cond(W), the paper's J: sqrt(lambda_max / lambda_min) of M
+  CondScaled,  // cond(W S), S = diag of parameter scales from a reference set
+  DOpt,        // -(1/7) log det(S M S / K): D-optimality per sample, per parameter
+};
+std::string_view criterion_name(Criterion c);             // "cond", "cond-scaled", "dopt"
+/// Parses a name of criterion_name(); throws std::invalid_argument listing the valid ones.
+Criterion parse_criterion(std::string_view name);
+
+/// Parameter scales S for the scale-aware criteria: |m| and the moments of
+/// `reference`; a product of inertia gets max(|I_ij|, product_floor *
+/// sqrt(I_ii I_jj)) so that a reference without products still scales them.
+Theta parameter_scales(const Params& reference, double product_floor = 0.1);
+
+/// The three criteria of one trajectory on one time grid.
+struct CriterionValues {
+  double cond = 0.0;         // cond(W)
+  double cond_scaled = 0.0;  // cond(W S)
+  double dopt = 0.0;         // -(1/7) log det(S M S / K)
+  Eigen::Matrix<double, 7, 1> eigenvalues = Eigen::Matrix<double, 7, 1>::Zero();  // of M, ascending
+  int samples = 0;           // K
+  double value(Criterion c) const;
+};
+
+/// Options of check_trajectory().
+struct CheckOptions {
+  Constraints limits;
+  double duration = 0.0;         // s; 0 = the trajectory's period (one cycle)
+  double constraint_dt = 0.001;  // s, grid on which every limit is checked (t = 0, dt, ..., duration)
+  double cond_dt = 0.002;        // s, the sampling period T of eq. (20): W stacks Phi at t = 0, T, ..., < period
+  double endpoint_tol = 1e-3;    // SI units; start/end conditions hold within this (Table 2 holds to ~1e-4)
+  double g = kDefaultGravity;    // m/s^2
+  Params reference = Params::qball2_nominal();  // for the scaled criteria
+  double product_floor = 0.1;    // see parameter_scales()
+  void validate() const;         // throws std::invalid_argument naming the option
+};
+
+/// One inequality of eqs. (22)-(27) evaluated over the constraint grid.
+struct ConstraintCheck {
+  std::string name;     // "x", "z_min", "tilt_phi", ...
+  std::string unit;     // SI unit of worst/limit: "m", "rad", "m/s", ...
+  std::string kind;     // "abs" (|f| <= limit), "min" (f >= limit) or "max" (f <= limit)
+  double limit = 0.0;
+  double worst = 0.0;   // max |f|, min f or max f over the grid
+  double time = 0.0;    // s, where the worst value occurs
+  double margin = 0.0;  // limit - worst for abs/max, worst - limit for min (negative = violated)
+  bool holds = true;
+};
+
+/// q, q_dot, q_ddot of one axis at one end of the trajectory, against the hover target.
+struct EndpointCheck {
+  std::string axis;    // x, y, z, psi
+  double time = 0.0;   // s (0 or the duration)
+  double value = 0.0, velocity = 0.0, acceleration = 0.0;
+  double target = 0.0;           // q0 of that axis
+  double error = 0.0;            // max(|value - target|, |velocity|, |acceleration|)
+  bool holds = true;
+};
+
+struct CheckReport {
+  std::string trajectory;     // Trajectory::describe()
+  double duration = 0.0;      // s
+  double constraint_dt = 0.0; // s
+  double cond_dt = 0.0;       // s
+  std::vector<ConstraintCheck> constraints;
+  std::vector<EndpointCheck> endpoints;  // 4 at t = 0, then 4 at t = duration
+  CriterionValues criteria;   // on the cond_dt grid over one period
+  double cond = 0.0;          // = criteria.cond, cond(W) of eq. (20)
+  bool constraints_hold = true;
+  bool endpoints_hold = true;
+  bool feasible = true;       // = constraints_hold && endpoints_hold
+  bool all_hold() const { return constraints_hold && endpoints_hold; }
+};
+
+/// Evaluates every limit on a fine grid, the start/end conditions and cond(W)
+/// (eq. 20: Phi of eq. 12 on the reference of eqs. 26-27 and the kinematics
+/// below eq. 20, sampled every cond_dt over one period, unscaled, 2-norm).
+CheckReport check_trajectory(const Trajectory& traj, const CheckOptions& opt = {});
+
+/// The criteria of a trajectory on the grid t = 0, dt, ..., < period (eq. 20).
+CriterionValues evaluate_criteria(const Trajectory& traj, double dt, double g = kDefaultGravity,
+                                  const Theta& scales = Theta::Ones());
+
+/// Options of design_trajectory(). Defaults are the paper's problem (section III-B).
+struct DesignOptions {
+  Constraints limits;
+  int harmonics = 5;                   // N of eq. (18)
+  double wf = 36.0 * kDeg;             // fundamental frequency, rad/s (period 2 pi / wf)
+  Criterion criterion = Criterion::Cond;
+  Params reference = Params::qball2_nominal();  // scales of cond-scaled and dopt
+  double product_floor = 0.1;          // see parameter_scales()
+  int starts = 8;                      // random multi-start
+  std::uint64_t seed = 1;              // same seed -> same result, whatever the thread count
+  int threads = 0;                     // 0 = min(starts, hardware threads)
+  double grid_dt = 0.05;               // s, criterion samples while optimizing (spectrally accurate, see docs)
+  double check_dt = 0.001;             // s, grid on which every limit is imposed and checked
+  double cell_dt = 0.5;                // s, each round constrains every limit at its worst instant per cell
+
+  double cond_dt = 0.002;              // s, T of eq. (20) for the reported criteria
+  double margin = 1e-5;                // relative tightening of every limit while optimizing
+  int max_evals = 300;                 // SLSQP evaluations per round of one start
+  int refine_rounds = 6;               // exchange rounds: re-pick the constraint instants and re-polish
+  double ftol_rel = 1e-8;              // stop when the best feasible criterion improves by less for 40 evaluations
+  double start_fill = 0.8;             // random starts use this fraction of the tightest limit
+  double g = kDefaultGravity;          // m/s^2
+  void validate() const;               // throws std::invalid_argument naming the option
+};
+
+/// What happened to one random start.
+struct StartSummary {
+  int index = 0;
+  double criterion = 0.0;     // criterion value on the cond_dt grid (eq. 20)
+  double cond = 0.0;          // cond(W) on the cond_dt grid
+  bool feasible = false;      // every limit holds on the check_dt grid
+  double worst_violation = 0.0;  // largest relative excess over a limit on the check grid (0 if feasible)
+  int evaluations = 0;        // criterion evaluations, all rounds
+  int rounds = 0;             // SLSQP rounds (1 + re-polish rounds)
+  std::string status;         // NLopt's result of the last round
+  double seconds = 0.0;       // wall time of this start
+};
+
+struct DesignResult {
+  // The best feasible start (or the least infeasible one); the initializer is a placeholder.
+  FourierTrajectory trajectory = FourierTrajectory::table2();
+  int best = -1;                 // index into starts
+  std::vector<StartSummary> starts;
+  CheckReport check;             // of `trajectory`, with the options' limits and grids
+  double seconds = 0.0;          // wall time of the whole run
+};
+
+/// Called once per finished start (from worker threads, serialized).
+using DesignProgress = std::function<void(const StartSummary&, int total)>;
+
+/// Minimizes the criterion over the Fourier coefficients with NLopt SLSQP
+/// under the limits (imposed on the check_dt grid through per-cell maxima)
+/// and the 12 start conditions (eliminated: the search runs in their null
+/// space). Throws std::invalid_argument for bad options.
+DesignResult design_trajectory(const DesignOptions& opt, const DesignProgress& progress = {});
+
+/// The optimization problem on fixed grids, exposed for tests and benchmarks.
+/// Variables are the stacked coefficients of FourierTrajectory::coefficients().
+class ExcitationProblem {
+ public:
+  ExcitationProblem(const DesignOptions& opt, double grid_dt);
+  int dimension() const { return 4 * (2 * N_ + 1); }
+  int samples() const { return static_cast<int>(times_.size()); }
+  /// Criterion on the grid; `grad` (size dimension()) gets its exact gradient when non-null.
+  double criterion(const Eigen::VectorXd& coeffs, Eigen::VectorXd* grad = nullptr) const;
+  /// Roll and pitch of eqs. (26)-(27) at every grid time (rows: phi, theta), with
+  /// their gradients (2 K x dimension(), row 2k = phi_k, 2k + 1 = theta_k) when non-null.
+  Eigen::MatrixXd tilt(const Eigen::VectorXd& coeffs, Eigen::MatrixXd* jac = nullptr) const;
+  /// The 12 start conditions q(0) = q0, q_dot(0) = 0, q_ddot(0) = 0 as A x = b
+  /// (rows 3 axis + order). With one period they also fix the end.
+  void start_conditions(Eigen::MatrixXd& A, Eigen::VectorXd& b) const;
+  const std::vector<double>& times() const { return times_; }
+
+ private:
+  int N_;
+  double wf_, g_;
+  Criterion crit_;
+  Theta scales_;
+  std::array<double, 4> q0_;
+  std::vector<double> times_;
+  std::array<Eigen::MatrixXd, 5> basis_;  // basis_[order]: K x (2N + 1)
+};
+
+// --- JSON and text ------------------------------------------------------------
+
+nlohmann::json to_json(const Constraints& c);
+nlohmann::json to_json(const CheckReport& r);
+nlohmann::json to_json(const StartSummary& s);
+/// The trajectory JSON of DESIGN.md plus "criterion", "constraints", "check",
+/// "seed", "starts" (and "start_results").
+nlohmann::json design_to_json(const DesignResult& r, const DesignOptions& opt);
+/// Human-readable tables (degrees for angles, units in the column titles).
+std::string format_check_report(const CheckReport& r);
+
+}  // namespace quadid

@@ -1,0 +1,209 @@
+// The limits of eqs. (22)-(27) (values of section III-B) and the check of a
+// trajectory against them, its start/end conditions and cond(W) of eq. (20).
+#include "design_internal.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <stdexcept>
+
+namespace quadid {
+
+using design_detail::Family;
+
+namespace {
+
+void require(bool ok, const std::string& msg) {
+  if (!ok) throw std::invalid_argument(msg);
+}
+
+// A positive upper bound; +inf allowed (no constraint), NaN and <= 0 not.
+void positive_limit(double v, const char* name, const char* unit) {
+  require(!std::isnan(v) && v > 0.0, fmt::format("constraint {} = {} {} must be positive (or inf for none)", name, v, unit));
+}
+
+}  // namespace
+
+void Constraints::validate() const {
+  positive_limit(x_max, "x_max", "m");
+  positive_limit(y_max, "y_max", "m");
+  positive_limit(psi_max, "psi_max", "rad");
+  positive_limit(tilt_max, "tilt_max", "rad");
+  positive_limit(xdot_max, "xdot_max", "m/s");
+  positive_limit(ydot_max, "ydot_max", "m/s");
+  positive_limit(zdot_max, "zdot_max", "m/s");
+  positive_limit(psidot_max, "psidot_max", "rad/s");
+  positive_limit(psiddot_max, "psiddot_max", "rad/s^2");
+  require(tilt_max < M_PI / 2, fmt::format("constraint tilt_max = {} rad must be below pi/2", tilt_max));
+  require(!std::isnan(z_min) && !std::isnan(z_max),
+          "constraints z_min and z_max must be numbers");
+  require(z_min < z_max, fmt::format("constraint z_min = {} m must be below z_max = {} m", z_min, z_max));
+  require(!std::isnan(zddot_min) && !std::isnan(zddot_max) && zddot_min < zddot_max,
+          fmt::format("constraint zddot_min = {} m/s^2 must be below zddot_max = {} m/s^2", zddot_min, zddot_max));
+  require(std::isfinite(x0) && std::isfinite(y0) && std::isfinite(z0) && std::isfinite(psi0),
+          "the start point (x0, y0, z0, psi0) must be finite");
+  require(std::abs(x0) <= x_max, fmt::format("start x0 = {} m is outside |x| <= x_max = {} m", x0, x_max));
+  require(std::abs(y0) <= y_max, fmt::format("start y0 = {} m is outside |y| <= y_max = {} m", y0, y_max));
+  require(z0 >= z_min && z0 <= z_max,
+          fmt::format("start z0 = {} m is outside [z_min, z_max] = [{}, {}] m", z0, z_min, z_max));
+  require(std::abs(psi0) <= psi_max,
+          fmt::format("start psi0 = {} rad is outside |psi| <= psi_max = {} rad", psi0, psi_max));
+  // The start hovers (zero acceleration), so it must satisfy the acceleration limits too.
+  require(zddot_min <= 0.0 && zddot_max >= 0.0,
+          fmt::format("the hover start (z_ddot = 0) is outside [zddot_min, zddot_max] = [{}, {}] m/s^2",
+                      zddot_min, zddot_max));
+}
+
+void CheckOptions::validate() const {
+  limits.validate();
+  require(std::isfinite(duration) && duration >= 0.0,
+          fmt::format("duration = {} s must be >= 0 (0 = one period)", duration));
+  require(std::isfinite(constraint_dt) && constraint_dt > 0.0,
+          fmt::format("constraint_dt = {} s must be positive", constraint_dt));
+  require(std::isfinite(cond_dt) && cond_dt > 0.0, fmt::format("cond_dt = {} s must be positive", cond_dt));
+  require(std::isfinite(endpoint_tol) && endpoint_tol >= 0.0,
+          fmt::format("endpoint_tol = {} must be >= 0", endpoint_tol));
+  require(std::isfinite(g) && g > 0.0, fmt::format("g = {} m/s^2 must be positive", g));
+  require(std::isfinite(product_floor) && product_floor > 0.0,
+          fmt::format("product_floor = {} must be positive", product_floor));
+  reference.validate("reference parameters");
+}
+
+namespace design_detail {
+
+std::vector<Family> families(const Constraints& c) {
+  std::vector<Family> out;
+  auto add = [&](const char* name, const char* unit, Family::Kind kind, bool tilt, int axis, int order,
+                 double limit, double scale, bool pinned = false) {
+    if (std::isinf(limit)) return;
+    Family f;
+    f.name = name;
+    f.unit = unit;
+    f.kind = kind;
+    f.tilt = tilt;
+    f.axis = axis;
+    f.order = order;
+    f.limit = limit;
+    f.scale = scale;
+    f.pinned = pinned;
+    out.push_back(f);
+  };
+  const double zrange = c.z_max - c.z_min;
+  add("x", "m", Family::Abs, false, kX, 0, c.x_max, c.x_max);                      // eq. (22)
+  add("y", "m", Family::Abs, false, kY, 0, c.y_max, c.y_max);
+  add("z_min", "m", Family::Min, false, kZ, 0, c.z_min, zrange, c.z0 == c.z_min);
+  add("z_max", "m", Family::Max, false, kZ, 0, c.z_max, zrange, c.z0 == c.z_max);
+  add("psi", "rad", Family::Abs, false, kPsi, 0, c.psi_max, c.psi_max, std::abs(c.psi0) == c.psi_max);
+  add("phi", "rad", Family::Abs, true, 0, 2, c.tilt_max, c.tilt_max);              // eq. (27)
+  add("theta", "rad", Family::Abs, true, 1, 2, c.tilt_max, c.tilt_max);            // eq. (26)
+  add("xdot", "m/s", Family::Abs, false, kX, 1, c.xdot_max, c.xdot_max);
+  add("ydot", "m/s", Family::Abs, false, kY, 1, c.ydot_max, c.ydot_max);
+  add("zdot", "m/s", Family::Abs, false, kZ, 1, c.zdot_max, c.zdot_max);
+  add("psidot", "rad/s", Family::Abs, false, kPsi, 1, c.psidot_max, c.psidot_max);
+  add("zddot_min", "m/s^2", Family::Min, false, kZ, 2, c.zddot_min, std::max(std::abs(c.zddot_min), 1.0));  // eq. (25)
+  add("zddot_max", "m/s^2", Family::Max, false, kZ, 2, c.zddot_max, std::max(std::abs(c.zddot_max), 1.0));
+  add("psiddot", "rad/s^2", Family::Abs, false, kPsi, 2, c.psiddot_max, c.psiddot_max);  // eq. (24)
+  return out;
+}
+
+const char* kind_name(Family::Kind k) {
+  switch (k) {
+    case Family::Abs: return "abs";
+    case Family::Min: return "min";
+    case Family::Max: return "max";
+  }
+  return "?";
+}
+
+std::vector<double> periodic_grid(double period, double dt) {
+  const long K = std::max(1L, std::lround(period / dt));
+  const double h = period / static_cast<double>(K);
+  std::vector<double> t(static_cast<size_t>(K));
+  for (long k = 0; k < K; ++k) t[static_cast<size_t>(k)] = h * static_cast<double>(k);
+  return t;
+}
+
+std::vector<double> closed_grid(double duration, double dt) {
+  // Multiples of dt (not of an adjusted step) so that a 1 ms grid has its
+  // samples at whole milliseconds; the end point is always included.
+  const long K = static_cast<long>(std::floor(duration / dt + 1e-9));
+  std::vector<double> t;
+  t.reserve(static_cast<size_t>(K + 2));
+  for (long k = 0; k <= K; ++k) t.push_back(dt * static_cast<double>(k));
+  if (duration - t.back() > 1e-12 * std::max(1.0, duration)) t.push_back(duration);
+  return t;
+}
+
+}  // namespace design_detail
+
+CheckReport check_trajectory(const Trajectory& traj, const CheckOptions& opt) {
+  opt.validate();
+  using namespace design_detail;
+  CheckReport rep;
+  rep.trajectory = traj.describe();
+  rep.duration = opt.duration > 0.0 ? opt.duration : traj.period();
+  rep.constraint_dt = opt.constraint_dt;
+  rep.cond_dt = opt.cond_dt;
+
+  const auto fams = families(opt.limits);
+  rep.constraints.resize(fams.size());
+  std::vector<double> worst_excess(fams.size(), -kInf);
+  for (size_t f = 0; f < fams.size(); ++f) {
+    auto& c = rep.constraints[f];
+    c.name = fams[f].name;
+    c.unit = fams[f].unit;
+    c.kind = kind_name(fams[f].kind);
+    c.limit = fams[f].limit;
+  }
+  for (double t : closed_grid(rep.duration, opt.constraint_dt)) {
+    const FlatOutput d = traj.eval(t);
+    std::array<double, 2> tilt{0.0, 0.0};
+    if (d(kZ, 2) + opt.g > 0.0) {
+      tilt = tilt_angles(d(kX, 2), d(kY, 2), d(kZ, 2), d(kPsi, 0), opt.g);
+    } else {
+      // Eqs. (26)-(27) have no meaning without upward thrust: report the tilt as violated.
+      tilt = {M_PI / 2, M_PI / 2};
+    }
+    for (size_t f = 0; f < fams.size(); ++f) {
+      const Family& fam = fams[f];
+      const double v = fam.tilt ? tilt[static_cast<size_t>(fam.axis)] : d(fam.axis, fam.order);
+      const double e = excess(fam, v);
+      if (e > worst_excess[f]) {
+        worst_excess[f] = e;
+        auto& c = rep.constraints[f];
+        c.worst = fam.kind == Family::Abs ? std::abs(v) : v;
+        c.time = t;
+      }
+    }
+  }
+  for (size_t f = 0; f < fams.size(); ++f) {
+    auto& c = rep.constraints[f];
+    c.margin = -worst_excess[f];
+    c.holds = c.margin >= -kCheckRoundoff * std::max(1.0, std::abs(c.limit));
+    rep.constraints_hold = rep.constraints_hold && c.holds;
+  }
+
+  const double q0[4] = {opt.limits.x0, opt.limits.y0, opt.limits.z0, opt.limits.psi0};
+  for (double t : {0.0, rep.duration}) {
+    const FlatOutput d = traj.eval(t);
+    for (int i = 0; i < 4; ++i) {
+      EndpointCheck e;
+      e.axis = kAxisNames[static_cast<size_t>(i)];
+      e.time = t;
+      e.value = d(i, 0);
+      e.velocity = d(i, 1);
+      e.acceleration = d(i, 2);
+      e.target = q0[i];
+      e.error = std::max({std::abs(e.value - e.target), std::abs(e.velocity), std::abs(e.acceleration)});
+      e.holds = e.error <= opt.endpoint_tol;
+      rep.endpoints_hold = rep.endpoints_hold && e.holds;
+      rep.endpoints.push_back(e);
+    }
+  }
+  rep.criteria = evaluate_criteria(traj, opt.cond_dt, opt.g, parameter_scales(opt.reference, opt.product_floor));
+  rep.cond = rep.criteria.cond;
+  rep.feasible = rep.constraints_hold && rep.endpoints_hold;
+  return rep;
+}
+
+}  // namespace quadid

@@ -1,0 +1,226 @@
+// Excitation criteria of the regressor stack W (eq. 20) and their exact
+// gradients with respect to the Fourier coefficients of eq. (18).
+//
+// Phi_k depends on the coefficients only through 15 flat derivatives per
+// sample (x, y, z orders 1..4, psi orders 0..2), each linear in the
+// coefficients. A forward-mode dual over those 15 inputs gives dPhi_k/du_k
+// exactly; the criterion's sensitivity to Phi_k is closed form (below), and
+// the chain to the coefficients is a product with the precomputed basis.
+#include "design_internal.hpp"
+
+#include "quadid/regressor.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <fmt/format.h>
+
+#include <stdexcept>
+
+namespace quadid {
+
+using design_detail::Dual;
+using design_detail::kInputs;
+
+std::string_view criterion_name(Criterion c) {
+  switch (c) {
+    case Criterion::Cond: return "cond";
+    case Criterion::CondScaled: return "cond-scaled";
+    case Criterion::DOpt: return "dopt";
+  }
+  return "?";
+}
+
+Criterion parse_criterion(std::string_view name) {
+  for (Criterion c : {Criterion::Cond, Criterion::CondScaled, Criterion::DOpt})
+    if (name == criterion_name(c)) return c;
+  throw std::invalid_argument(
+      fmt::format("unknown criterion '{}' (expected cond, cond-scaled or dopt)", name));
+}
+
+Theta parameter_scales(const Params& ref, double product_floor) {
+  const Mat3& I = ref.I;
+  auto product = [&](int i, int j) {
+    return std::max(std::abs(I(i, j)), product_floor * std::sqrt(std::abs(I(i, i) * I(j, j))));
+  };
+  Theta s;
+  s << std::abs(ref.m), std::abs(I(0, 0)), product(0, 1), product(0, 2), std::abs(I(1, 1)), product(1, 2),
+      std::abs(I(2, 2));
+  return s;
+}
+
+double CriterionValues::value(Criterion c) const {
+  switch (c) {
+    case Criterion::Cond: return cond;
+    case Criterion::CondScaled: return cond_scaled;
+    case Criterion::DOpt: return dopt;
+  }
+  return cond;
+}
+
+namespace design_detail {
+
+Eigen::Matrix<double, 4, 7> regressor_sample(const FlatOutput& d, double g,
+                                             Eigen::Matrix<double, 28, kInputs>* jac) {
+  if (!jac) {
+    const Reference r = reference_from_flat<double>(d, g);
+    return regressor<double>(r.v, r.omega, r.eta, r.v_dot, r.omega_dot, g);
+  }
+  using D = Dual<kInputs>;
+  Eigen::Matrix<D, 4, 5> dd;
+  for (int i = 0; i < 4; ++i)
+    for (int n = 0; n < 5; ++n)
+      dd(i, n) = is_input(i, n) ? D::seed(d(i, n), input_index(i, n)) : D(d(i, n));
+  const ReferenceT<D> r = reference_from_flat<D>(dd, g);  // eqs. (26)-(27) and below eq. (20)
+  const Regressor<D> P = regressor<D>(r.v, r.omega, r.eta, r.v_dot, r.omega_dot, g);  // eq. (12)
+  Eigen::Matrix<double, 4, 7> out;
+  for (int rr = 0; rr < 4; ++rr)
+    for (int c = 0; c < 7; ++c) {
+      out(rr, c) = P(rr, c).v;
+      for (int j = 0; j < kInputs; ++j) (*jac)(7 * rr + c, j) = P(rr, c).d[static_cast<size_t>(j)];
+    }
+  return out;
+}
+
+}  // namespace design_detail
+
+namespace {
+
+using Mat7 = Eigen::Matrix<double, 7, 7>;
+
+// The criterion J of the information matrix M = sum Phi_k^T Phi_k (K samples)
+// and, when H is non-null, the symmetric H with dJ/dPhi_k = Phi_k H for every k.
+//   cond:  J = sqrt(l_max / l_min) of S M S;  d l_i = u_i^T dM u_i, so
+//          dJ/dPhi_k = Phi_k S J (u_max u_max^T / l_max - u_min u_min^T / l_min) S.
+//   dopt:  J = -(1/7) log det(S M S / K);  d log det M = tr(M^-1 dM), so
+//          dJ/dPhi_k = -(2/7) Phi_k M^-1 (the scaling only adds a constant).
+double criterion_of(const Mat7& M, int K, Criterion crit, const Theta& s, Mat7* H) {
+  const Eigen::DiagonalMatrix<double, 7> S(crit == Criterion::Cond ? Theta::Ones() : s);
+  const Mat7 Ms = S * M * S;
+  if (crit == Criterion::DOpt) {
+    const Eigen::LDLT<Mat7> ldlt(Ms / K);
+    const Eigen::Matrix<double, 7, 1> dg = ldlt.vectorD();
+    if (!(dg.minCoeff() > 0.0)) {
+      if (H) H->setZero();
+      return kInf;
+    }
+    if (H) *H = -(2.0 / 7.0) * M.inverse();
+    return -dg.array().log().sum() / 7.0;
+  }
+  const Eigen::SelfAdjointEigenSolver<Mat7> es(Ms);
+  const auto& l = es.eigenvalues();
+  if (!(l(0) > 0.0)) {
+    if (H) H->setZero();
+    return kInf;
+  }
+  const double J = std::sqrt(l(6) / l(0));
+  if (H) {
+    const auto umax = es.eigenvectors().col(6), umin = es.eigenvectors().col(0);
+    *H = S * (J * (umax * umax.transpose() / l(6) - umin * umin.transpose() / l(0))) * S;
+  }
+  return J;
+}
+
+}  // namespace
+
+CriterionValues evaluate_criteria(const Trajectory& traj, double dt, double g, const Theta& scales) {
+  if (!(dt > 0.0)) throw std::invalid_argument(fmt::format("sampling period T = {} s must be positive", dt));
+  Mat7 M = Mat7::Zero();
+  const auto times = design_detail::periodic_grid(traj.period(), dt);
+  for (double t : times) {
+    const auto Phi = design_detail::regressor_sample(traj.eval(t), g, nullptr);
+    M.noalias() += Phi.transpose() * Phi;  // W^T W of eq. (20), row block by row block
+  }
+  CriterionValues v;
+  v.samples = static_cast<int>(times.size());
+  v.eigenvalues = Eigen::SelfAdjointEigenSolver<Mat7>(M, Eigen::EigenvaluesOnly).eigenvalues();
+  v.cond = criterion_of(M, v.samples, Criterion::Cond, scales, nullptr);
+  v.cond_scaled = criterion_of(M, v.samples, Criterion::CondScaled, scales, nullptr);
+  v.dopt = criterion_of(M, v.samples, Criterion::DOpt, scales, nullptr);
+  return v;
+}
+
+ExcitationProblem::ExcitationProblem(const DesignOptions& opt, double grid_dt)
+    : N_(opt.harmonics), wf_(opt.wf), g_(opt.g), crit_(opt.criterion),
+      scales_(parameter_scales(opt.reference, opt.product_floor)),
+      q0_{opt.limits.x0, opt.limits.y0, opt.limits.z0, opt.limits.psi0} {
+  if (N_ < 1) throw std::invalid_argument(fmt::format("harmonics = {} must be at least 1", N_));
+  if (!(wf_ > 0.0)) throw std::invalid_argument(fmt::format("wf = {} rad/s must be positive", wf_));
+  if (!(grid_dt > 0.0)) throw std::invalid_argument(fmt::format("grid_dt = {} s must be positive", grid_dt));
+  times_ = design_detail::periodic_grid(2.0 * M_PI / wf_, grid_dt);
+  const auto K = static_cast<Eigen::Index>(times_.size());
+  for (int o = 0; o < 5; ++o) {
+    basis_[static_cast<size_t>(o)].resize(K, 2 * N_ + 1);
+    for (Eigen::Index k = 0; k < K; ++k)
+      basis_[static_cast<size_t>(o)].row(k) = FourierTrajectory::basis(wf_, N_, times_[static_cast<size_t>(k)], o);
+  }
+}
+
+double ExcitationProblem::criterion(const Eigen::VectorXd& x, Eigen::VectorXd* grad) const {
+  const int n1 = 2 * N_ + 1;
+  const auto K = static_cast<Eigen::Index>(times_.size());
+  // Flat derivatives at every sample: column 5 axis + order.
+  Eigen::MatrixXd F(K, 20);
+  for (int i = 0; i < 4; ++i)
+    for (int o = 0; o < 5; ++o) F.col(5 * i + o) = basis_[static_cast<size_t>(o)] * x.segment(i * n1, n1);
+
+  std::vector<Eigen::Matrix<double, 4, 7>> Phi(static_cast<size_t>(K));
+  std::vector<Eigen::Matrix<double, 28, kInputs>> dPhi(grad ? static_cast<size_t>(K) : 0);
+  Mat7 M = Mat7::Zero();
+  for (Eigen::Index k = 0; k < K; ++k) {
+    FlatOutput d;
+    for (int i = 0; i < 4; ++i)
+      for (int o = 0; o < 5; ++o) d(i, o) = F(k, 5 * i + o);
+    Phi[static_cast<size_t>(k)] = design_detail::regressor_sample(d, g_, grad ? &dPhi[static_cast<size_t>(k)] : nullptr);
+    M.noalias() += Phi[static_cast<size_t>(k)].transpose() * Phi[static_cast<size_t>(k)];
+  }
+  Mat7 H;
+  const double J = criterion_of(M, static_cast<int>(K), crit_, scales_, grad ? &H : nullptr);
+  if (!grad) return J;
+
+  // dJ/du_k = dPhi_k^T vec(Phi_k H), then through the linear basis to the coefficients.
+  Eigen::MatrixXd dJdu(K, kInputs);
+  for (Eigen::Index k = 0; k < K; ++k) {
+    const Eigen::Matrix<double, 4, 7, Eigen::RowMajor> G = Phi[static_cast<size_t>(k)] * H;
+    const Eigen::Map<const Eigen::Matrix<double, 28, 1>> g(G.data());
+    dJdu.row(k) = (dPhi[static_cast<size_t>(k)].transpose() * g).transpose();
+  }
+  grad->setZero(dimension());
+  for (int i = 0; i < 4; ++i)
+    for (int o = 0; o < 5; ++o)
+      if (design_detail::is_input(i, o))
+        grad->segment(i * n1, n1).noalias() +=
+            basis_[static_cast<size_t>(o)].transpose() * dJdu.col(design_detail::input_index(i, o));
+  return J;
+}
+
+Eigen::MatrixXd ExcitationProblem::tilt(const Eigen::VectorXd& x, Eigen::MatrixXd* jac) const {
+  const int n1 = 2 * N_ + 1;
+  const auto K = static_cast<Eigen::Index>(times_.size());
+  const Eigen::VectorXd ax = basis_[2] * x.segment(0, n1), ay = basis_[2] * x.segment(n1, n1),
+                        az = basis_[2] * x.segment(2 * n1, n1), psi = basis_[0] * x.segment(3 * n1, n1);
+  Eigen::MatrixXd out(2, K);
+  if (jac) jac->setZero(2 * K, dimension());
+  for (Eigen::Index k = 0; k < K; ++k) {
+    const auto p = design_detail::tilt_point(ax(k), ay(k), az(k), psi(k), g_);
+    out(0, k) = p.phi;
+    out(1, k) = p.theta;
+    if (!jac) continue;
+    for (int r = 0; r < 2; ++r) {
+      const Eigen::Vector4d& dv = r == 0 ? p.dphi : p.dtheta;
+      for (int i = 0; i < 3; ++i) jac->block(2 * k + r, i * n1, 1, n1) = dv(i) * basis_[2].row(k);
+      jac->block(2 * k + r, 3 * n1, 1, n1) = dv(3) * basis_[0].row(k);
+    }
+  }
+  return out;
+}
+
+void ExcitationProblem::start_conditions(Eigen::MatrixXd& A, Eigen::VectorXd& b) const {
+  const int n1 = 2 * N_ + 1;
+  A.setZero(12, dimension());
+  b.setZero(12);
+  for (int i = 0; i < 4; ++i) {
+    for (int o = 0; o < 3; ++o) A.block(3 * i + o, i * n1, 1, n1) = FourierTrajectory::basis(wf_, N_, 0.0, o);
+    b(3 * i) = q0_[static_cast<size_t>(i)];
+  }
+}
+
+}  // namespace quadid

@@ -1,0 +1,165 @@
+// Private to the design module: a forward-mode dual number for exact
+// gradients through the templated reference map and regressor, and the list
+// of limit "families" (one inequality of eqs. 22-27 each) shared by the
+// checker and the optimizer.
+#pragma once
+
+#include "quadid/design.hpp"
+
+#include <Eigen/Core>
+#include <array>
+#include <cmath>
+#include <string>
+#include <vector>
+
+namespace quadid::design_detail {
+
+/// Value plus gradient with respect to N seeded inputs. Plain loops over a
+/// fixed array: the compiler vectorizes them, and unlike Eigen's
+/// AutoDiffScalar it has the atan that eqs. (26)-(27) need.
+template <int N>
+struct Dual {
+  double v = 0.0;
+  std::array<double, N> d{};
+
+  Dual() = default;
+  Dual(double x) : v(x) {}  // NOLINT: constants mix freely with duals
+  static Dual seed(double x, int i) {
+    Dual r(x);
+    r.d[static_cast<size_t>(i)] = 1.0;
+    return r;
+  }
+  // f(a) with f'(a.v) = fp.
+  static Dual chain(const Dual& a, double f, double fp) {
+    Dual r(f);
+    for (int i = 0; i < N; ++i) r.d[i] = fp * a.d[i];
+    return r;
+  }
+};
+
+template <int N> Dual<N> operator+(const Dual<N>& a, const Dual<N>& b) {
+  Dual<N> r(a.v + b.v);
+  for (int i = 0; i < N; ++i) r.d[i] = a.d[i] + b.d[i];
+  return r;
+}
+template <int N> Dual<N> operator-(const Dual<N>& a, const Dual<N>& b) {
+  Dual<N> r(a.v - b.v);
+  for (int i = 0; i < N; ++i) r.d[i] = a.d[i] - b.d[i];
+  return r;
+}
+template <int N> Dual<N> operator-(const Dual<N>& a) {
+  Dual<N> r(-a.v);
+  for (int i = 0; i < N; ++i) r.d[i] = -a.d[i];
+  return r;
+}
+template <int N> Dual<N> operator*(const Dual<N>& a, const Dual<N>& b) {
+  Dual<N> r(a.v * b.v);
+  for (int i = 0; i < N; ++i) r.d[i] = a.d[i] * b.v + a.v * b.d[i];
+  return r;
+}
+template <int N> Dual<N> operator/(const Dual<N>& a, const Dual<N>& b) {
+  const double ib = 1.0 / b.v, q = a.v * ib;
+  Dual<N> r(q);
+  for (int i = 0; i < N; ++i) r.d[i] = (a.d[i] - q * b.d[i]) * ib;
+  return r;
+}
+template <int N> Dual<N> operator+(const Dual<N>& a, double c) { return Dual<N>::chain(a, a.v + c, 1.0); }
+template <int N> Dual<N> operator+(double c, const Dual<N>& a) { return a + c; }
+template <int N> Dual<N> operator-(const Dual<N>& a, double c) { return a + (-c); }
+template <int N> Dual<N> operator-(double c, const Dual<N>& a) { return Dual<N>::chain(a, c - a.v, -1.0); }
+template <int N> Dual<N> operator*(const Dual<N>& a, double c) { return Dual<N>::chain(a, a.v * c, c); }
+template <int N> Dual<N> operator*(double c, const Dual<N>& a) { return a * c; }
+template <int N> Dual<N> operator/(const Dual<N>& a, double c) { return a * (1.0 / c); }
+template <int N> Dual<N>& operator+=(Dual<N>& a, const Dual<N>& b) { return a = a + b; }
+template <int N> Dual<N>& operator-=(Dual<N>& a, const Dual<N>& b) { return a = a - b; }
+template <int N> Dual<N>& operator*=(Dual<N>& a, const Dual<N>& b) { return a = a * b; }
+
+template <int N> Dual<N> sin(const Dual<N>& a) { return Dual<N>::chain(a, std::sin(a.v), std::cos(a.v)); }
+template <int N> Dual<N> cos(const Dual<N>& a) { return Dual<N>::chain(a, std::cos(a.v), -std::sin(a.v)); }
+template <int N> Dual<N> atan(const Dual<N>& a) { return Dual<N>::chain(a, std::atan(a.v), 1.0 / (1.0 + a.v * a.v)); }
+
+/// Roll and pitch of eqs. (26)-(27) from the accelerations and yaw; the same
+/// formulas as reference_from_flat, written once more so that the tilt limits
+/// can be differentiated with respect to only four inputs.
+template <class S>
+std::array<S, 2> tilt_angles(const S& ax, const S& ay, const S& az, const S& psi, double g) {
+  using std::atan;
+  using std::cos;
+  using std::sin;
+  const S cpsi = cos(psi), spsi = sin(psi);
+  const S den = az + g;
+  const S theta = atan((cpsi * ax + spsi * ay) / den);             // eq. (26)
+  const S phi = atan((cos(theta) * (spsi * ax - cpsi * ay)) / den);  // eq. (27)
+  return {phi, theta};
+}
+
+/// One inequality over time. Linear families read derivative `order` of flat
+/// output `axis`; tilt families are phi (index 0) or theta (index 1) of eqs. (26)-(27).
+struct Family {
+  std::string name, unit;
+  enum Kind { Abs, Min, Max } kind = Abs;
+  bool tilt = false;
+  int axis = 0;      // kX..kPsi, or the tilt index
+  int order = 0;     // derivative order (linear families)
+  double limit = 0.0;
+  double scale = 1.0;   // normalizes the constraint for the optimizer (|limit| or the z range)
+  bool pinned = false;  // the limit equals the start/end target: the value touches it at t = 0
+};
+
+/// The finite limits of `c`, in report order.
+std::vector<Family> families(const Constraints& c);
+const char* kind_name(Family::Kind k);
+
+/// Signed excess over the limit: positive = violated. `f` is the family's value.
+inline double excess(const Family& fam, double f) {
+  switch (fam.kind) {
+    case Family::Abs: return std::abs(f) - fam.limit;
+    case Family::Min: return fam.limit - f;
+    case Family::Max: return f - fam.limit;
+  }
+  return 0.0;
+}
+
+/// Time grid 0, dt, ..., < period with dt adjusted so that it divides the
+/// period exactly (the periodic rectangle rule of eq. 20 is then spectrally accurate).
+std::vector<double> periodic_grid(double period, double dt);
+/// Time grid 0, dt, 2 dt, ... up to and including `duration` (last point = duration).
+std::vector<double> closed_grid(double duration, double dt);
+
+/// Relative allowance for floating-point rounding when a limit is checked.
+inline constexpr double kCheckRoundoff = 1e-9;
+
+}  // namespace quadid::design_detail
+
+namespace quadid::design_detail {
+
+/// Roll and pitch with their gradients with respect to (x_ddot, y_ddot, z_ddot, psi).
+struct TiltPoint {
+  double phi = 0.0, theta = 0.0;
+  Eigen::Vector4d dphi = Eigen::Vector4d::Zero(), dtheta = Eigen::Vector4d::Zero();
+};
+inline TiltPoint tilt_point(double ax, double ay, double az, double psi, double g) {
+  using D = Dual<4>;
+  const auto a = tilt_angles(D::seed(ax, 0), D::seed(ay, 1), D::seed(az, 2), D::seed(psi, 3), g);
+  TiltPoint p;
+  p.phi = a[0].v;
+  p.theta = a[1].v;
+  for (int i = 0; i < 4; ++i) {
+    p.dphi(i) = a[0].d[static_cast<size_t>(i)];
+    p.dtheta(i) = a[1].d[static_cast<size_t>(i)];
+  }
+  return p;
+}
+
+/// The 15 per-sample inputs on which Phi depends: x, y, z derivatives of
+/// orders 1..4 (index 4 axis + order - 1) and psi of orders 0..2 (index 12 + order).
+inline constexpr int kInputs = 15;
+inline int input_index(int axis, int order) { return axis < 3 ? 4 * axis + order - 1 : 12 + order; }
+inline bool is_input(int axis, int order) { return axis < 3 ? (order >= 1 && order <= 4) : order <= 2; }
+
+/// Phi of eq. (12) on the reference of eqs. (26)-(27) at one sample, with
+/// dPhi/du for the 15 inputs when `jac` is non-null (28 x 15, row = 7 r + c).
+Eigen::Matrix<double, 4, 7> regressor_sample(const FlatOutput& d, double g,
+                                             Eigen::Matrix<double, 28, kInputs>* jac);
+
+}  // namespace quadid::design_detail

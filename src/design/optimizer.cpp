@@ -1,0 +1,519 @@
+// Excitation-trajectory optimizer (paper section II-B2, eq. 21 with the
+// limits of eqs. 22-27): NLopt SLSQP, the analogue of the paper's fmincon,
+// over the Fourier coefficients of eq. (18), from random starts.
+//
+// Choices (docs/design.md explains them):
+// - The 12 start conditions are linear equalities A x = b; the search runs in
+//   their null space x = x_h + Z y (x_h the hover, Z orthonormal), so every
+//   iterate meets them to rounding and SLSQP sees 32 instead of 44 variables.
+// - The semi-infinite limits are imposed on the fine check grid (check_dt)
+//   itself, aggregated per cell of cell_dt: one constraint per limit, sign and
+//   cell, the largest value over the cell (see Round). A result that meets
+//   them passes the final check by construction; a small relative margin
+//   absorbs SLSQP's constraint tolerance.
+// - The criterion is sampled every grid_dt: the periodic rectangle rule of
+//   eq. (20) converges spectrally, so 50 ms gives the 2 ms value to ~1e-12.
+// - Starts are drawn in sequence from one seeded std::mt19937_64 before any
+//   thread runs, and each start is deterministic, so the result does not
+//   depend on the number of threads.
+#include "design_internal.hpp"
+
+#include <Eigen/QR>
+#include <fmt/format.h>
+#include <nlopt.hpp>
+
+#include <algorithm>
+#include <cstdlib>
+#include <atomic>
+#include <chrono>
+#include <mutex>
+#include <random>
+#include <set>
+#include <tuple>
+#include <stdexcept>
+#include <thread>
+
+namespace quadid {
+
+using design_detail::Family;
+
+// Fine local maxima closer than this (relative to the limit's scale) become constraints.
+constexpr double kNearActive = 0.05;
+// SQP iterates meet active constraints only in the limit: a point counts as
+// feasible for a round when every normalized constraint is below this. The
+// margin (1e-5 relative by default) keeps such points inside the true limits.
+constexpr double kFeasTol = 1e-9;
+// Constraint instants of one limit closer than this (s) are merged.
+constexpr double kMinSeparation = 0.01;
+
+void DesignOptions::validate() const {
+  auto require = [](bool ok, const std::string& msg) {
+    if (!ok) throw std::invalid_argument(msg);
+  };
+  limits.validate();
+  require(harmonics >= 1, fmt::format("harmonics = {} must be at least 1", harmonics));
+  require(harmonics >= 2, fmt::format("harmonics = {} leaves no freedom: the 12 start conditions fix all "
+                                      "3 coefficients per axis; use at least 2", harmonics));
+  require(harmonics <= 50, fmt::format("harmonics = {} is too many (at most 50)", harmonics));
+  require(std::isfinite(wf) && wf > 0.0, fmt::format("wf = {} rad/s must be positive", wf));
+  require(starts >= 1, fmt::format("starts = {} must be at least 1", starts));
+  require(threads >= 0, fmt::format("threads = {} must be >= 0 (0 = automatic)", threads));
+  const double period = 2.0 * M_PI / wf;
+  require(std::isfinite(grid_dt) && grid_dt > 0.0 && grid_dt <= period / (8.0 * harmonics),
+          fmt::format("grid_dt = {} s must be positive and resolve the highest harmonic (<= {} s)", grid_dt,
+                      period / (8.0 * harmonics)));
+  require(std::isfinite(check_dt) && check_dt > 0.0 && check_dt <= period / (8.0 * harmonics),
+          fmt::format("check_dt = {} s must be positive and resolve the highest harmonic (<= {} s)", check_dt,
+                      period / (8.0 * harmonics)));
+  require(std::isfinite(cell_dt) && cell_dt >= check_dt && cell_dt <= period / 4.0,
+          fmt::format("cell_dt = {} s must be between check_dt = {} s and a quarter period", cell_dt, check_dt));
+  require(std::isfinite(cond_dt) && cond_dt > 0.0, fmt::format("cond_dt = {} s must be positive", cond_dt));
+  require(std::isfinite(margin) && margin >= 1e-8 && margin < 0.1,
+          fmt::format("margin = {} must be in [1e-8, 0.1)", margin));
+  require(max_evals >= 1, fmt::format("max_evals = {} must be at least 1", max_evals));
+  require(refine_rounds >= 0, fmt::format("refine_rounds = {} must be >= 0", refine_rounds));
+  require(std::isfinite(ftol_rel) && ftol_rel > 0.0, fmt::format("ftol_rel = {} must be positive", ftol_rel));
+  require(std::isfinite(start_fill) && start_fill > 0.0 && start_fill <= 1.0,
+          fmt::format("start_fill = {} must be in (0, 1]", start_fill));
+  require(std::isfinite(g) && g > 0.0, fmt::format("g = {} m/s^2 must be positive", g));
+  require(std::isfinite(product_floor) && product_floor > 0.0,
+          fmt::format("product_floor = {} must be positive", product_floor));
+  reference.validate("reference parameters");
+}
+
+namespace {
+
+// What every start shares (read-only once built).
+struct Setup {
+  const DesignOptions& opt;
+  ExcitationProblem problem;  // the criterion on grid_dt
+  std::vector<Family> fams;
+  int n = 0, n1 = 0, ny = 0;
+  double period = 0.0;
+  Eigen::VectorXd xh;  // hover: a = b = 0, c = q0; meets the start conditions
+  Eigen::MatrixXd Z;   // orthonormal null space of the start conditions
+  std::vector<double> fine_t;                 // the check grid, 0..period
+  std::array<Eigen::MatrixXd, 3> fine_basis;  // orders 0..2 on the fine grid
+  std::vector<Eigen::Index> cell_begin;       // cells of the fine grid (last entry = end)
+  std::vector<Eigen::VectorXd> bound;         // per family and fine instant: the tightened limit
+  bool has_tilt = false;
+
+  explicit Setup(const DesignOptions& o) : opt(o), problem(o, o.grid_dt), fams(design_detail::families(o.limits)) {
+    n1 = 2 * o.harmonics + 1;
+    n = 4 * n1;
+    period = 2.0 * M_PI / o.wf;
+    Eigen::MatrixXd A;
+    Eigen::VectorXd b;
+    problem.start_conditions(A, b);
+    xh = Eigen::VectorXd::Zero(n);
+    for (int i = 0; i < 4; ++i) xh(i * n1 + n1 - 1) = b(3 * i);
+    const Eigen::HouseholderQR<Eigen::MatrixXd> qr(A.transpose());
+    const Eigen::MatrixXd Q = qr.householderQ() * Eigen::MatrixXd::Identity(n, n);
+    ny = n - 12;
+    Z = Q.rightCols(ny);
+    fine_t = design_detail::closed_grid(period, o.check_dt);
+    const auto K = static_cast<Eigen::Index>(fine_t.size());
+    for (int ord = 0; ord < 3; ++ord) fine_basis[static_cast<size_t>(ord)] = basis_at(fine_t, ord);
+    const auto per_cell = std::max<Eigen::Index>(1, std::lround(o.cell_dt / o.check_dt));
+    for (Eigen::Index k = 0; k < K; k += per_cell) cell_begin.push_back(k);
+    if (K - cell_begin.back() < per_cell / 2 && cell_begin.size() > 1) cell_begin.pop_back();  // no tiny last cell
+    cell_begin.push_back(K);
+    for (const auto& f : fams) {
+      has_tilt = has_tilt || f.tilt;
+      Eigen::VectorXd bd(K);
+      for (Eigen::Index k = 0; k < K; ++k) {
+        const double m = margin_at(f, fine_t[static_cast<size_t>(k)]);
+        bd(k) = f.kind == Family::Min ? f.limit + m : f.limit - m;
+      }
+      bound.push_back(bd);
+    }
+  }
+
+  int cells() const { return static_cast<int>(cell_begin.size()) - 1; }
+
+  Eigen::MatrixXd basis_at(const std::vector<double>& t, int order) const {
+    Eigen::MatrixXd B(static_cast<Eigen::Index>(t.size()), n1);
+    for (size_t k = 0; k < t.size(); ++k)
+      B.row(static_cast<Eigen::Index>(k)) = FourierTrajectory::basis(opt.wf, opt.harmonics, t[k], order);
+    return B;
+  }
+
+  // Margin of one instant. Where the limit equals the start value (z_min =
+  // z0 = 0.7 m) the trajectory touches it at t = 0, so the tightening fades
+  // out towards both ends of the period.
+  double margin_at(const Family& f, double t) const {
+    const double m = opt.margin * f.scale;
+    if (!f.pinned) return m;
+    const double tau = 0.1 * period, dist = std::min(t, period - t);
+    return m * std::min(1.0, std::pow(dist / tau, 4));
+  }
+
+  // Every family's value at every fine instant (columns = families).
+  Eigen::MatrixXd fine_values(const Eigen::VectorXd& x) const {
+    const auto K = static_cast<Eigen::Index>(fine_t.size());
+    Eigen::MatrixXd V(K, static_cast<Eigen::Index>(fams.size()));
+    Eigen::VectorXd phi, theta;
+    if (has_tilt) {
+      const Eigen::VectorXd ax = fine_basis[2] * x.segment(0, n1), ay = fine_basis[2] * x.segment(n1, n1),
+                            az = fine_basis[2] * x.segment(2 * n1, n1), psi = fine_basis[0] * x.segment(3 * n1, n1);
+      phi.resize(K);
+      theta.resize(K);
+      for (Eigen::Index k = 0; k < K; ++k) {
+        if (az(k) + opt.g > 0.0) {
+          const auto a = design_detail::tilt_angles(ax(k), ay(k), az(k), psi(k), opt.g);
+          phi(k) = a[0];
+          theta(k) = a[1];
+        } else {  // no upward thrust: eqs. (26)-(27) undefined, count as fully tilted
+          phi(k) = theta(k) = M_PI / 2;
+        }
+      }
+    }
+    for (size_t f = 0; f < fams.size(); ++f) {
+      const Family& fam = fams[f];
+      const auto c = static_cast<Eigen::Index>(f);
+      if (fam.tilt)
+        V.col(c) = fam.axis == 0 ? phi : theta;
+      else
+        V.col(c).noalias() = fine_basis[static_cast<size_t>(fam.order)] * x.segment(fam.axis * n1, n1);
+    }
+    return V;
+  }
+
+  // Largest relative excess over the (untightened) limits on the fine grid; 0 when all hold.
+  double worst_violation(const Eigen::VectorXd& x) const {
+    const Eigen::MatrixXd V = fine_values(x);
+    double worst = 0.0;
+    for (size_t f = 0; f < fams.size(); ++f) {
+      const double tolf = design_detail::kCheckRoundoff * std::max(1.0, std::abs(fams[f].limit));
+      for (Eigen::Index k = 0; k < V.rows(); ++k) {
+        const double e = design_detail::excess(fams[f], V(k, static_cast<Eigen::Index>(f)));
+        if (e > tolf) worst = std::max(worst, e / fams[f].scale);
+      }
+    }
+    return worst;
+  }
+};
+
+// One constraint instant: family f, sign sigma (+1: f <= bound, -1: f >= bound
+// or -f <= bound for |f|), fine-grid index k.
+struct Instant {
+  int fam;
+  int sign;
+  Eigen::Index k;
+  bool operator<(const Instant& o) const { return std::tie(fam, sign, k) < std::tie(o.fam, o.sign, o.k); }
+};
+
+// One SLSQP round: the limits imposed at a fixed set of fine-grid instants,
+// so that every constraint is smooth (linear for the box, speed and
+// acceleration limits, and eqs. 26-27 for the tilt). Constraints are
+// c = (sigma f - bound) / scale <= 0.
+//
+// Stopping is ours: NLopt 2.7's SLSQP may stop on ftol at an infeasible
+// iterate, so its ftol/xtol are off. Every evaluated point whose constraints
+// all hold is a candidate; the round stops when the best feasible criterion
+// has not improved by ftol_rel for `patience` evaluations (or at max_evals).
+struct Round {
+  const Setup& s;
+  std::vector<Instant> tilt;  // nonlinear instants
+  Eigen::MatrixXd GZ;         // linear instants: c = GZ y + g0
+  Eigen::VectorXd g0;
+  nlopt::opt* solver = nullptr;
+  int evals = 0;
+  double f_last = kInf;  // criterion at the point last evaluated
+  double best_f = kInf, anchor_f = kInf;
+  Eigen::VectorXd best_y;
+  int stall = 0;
+  static constexpr int patience = 40;
+
+  Round(const Setup& setup, const std::set<Instant>& instants) : s(setup) {
+    std::vector<Instant> lin;
+    for (const auto& in : instants) (s.fams[static_cast<size_t>(in.fam)].tilt ? tilt : lin).push_back(in);
+    Eigen::MatrixXd G = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(lin.size()), s.n);
+    Eigen::VectorXd h(static_cast<Eigen::Index>(lin.size()));
+    for (size_t i = 0; i < lin.size(); ++i) {
+      const Family& fam = s.fams[static_cast<size_t>(lin[i].fam)];
+      const auto r = static_cast<Eigen::Index>(i);
+      G.block(r, fam.axis * s.n1, 1, s.n1) =
+          (lin[i].sign / fam.scale) * s.fine_basis[static_cast<size_t>(fam.order)].row(lin[i].k);
+      const double bsign = fam.kind == Family::Min ? -1.0 : 1.0;  // -f <= -bound for a lower limit
+      h(r) = bsign * s.bound[static_cast<size_t>(lin[i].fam)](lin[i].k) / fam.scale;
+    }
+    GZ = G * s.Z;
+    g0 = G * s.xh - h;
+  }
+
+  unsigned count() const { return static_cast<unsigned>(GZ.rows()) + static_cast<unsigned>(tilt.size()); }
+
+  Eigen::VectorXd x_of(const double* y) const {
+    return s.xh + s.Z * Eigen::Map<const Eigen::VectorXd>(y, s.ny);
+  }
+
+  double objective(const double* y, double* grad) {
+    ++evals;
+    const Eigen::VectorXd x = x_of(y);
+    if (!grad) return f_last = s.problem.criterion(x);
+    Eigen::VectorXd gx;
+    f_last = s.problem.criterion(x, &gx);
+    Eigen::Map<Eigen::VectorXd>(grad, s.ny) = s.Z.transpose() * gx;
+    return f_last;
+  }
+
+  void constraints(double* c, const double* y, double* grad) const {
+    const Eigen::Map<const Eigen::VectorXd> yv(y, s.ny);
+    const Eigen::Index m1 = GZ.rows();
+    Eigen::Map<Eigen::VectorXd>(c, m1) = GZ * yv + g0;
+    using RowMat = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+    Eigen::Map<RowMat> J(grad, grad ? static_cast<Eigen::Index>(count()) : 0, s.ny);  // NLopt: row-major
+    if (grad) J.topRows(m1) = GZ;
+    if (tilt.empty()) return;
+    const int n1 = s.n1;
+    const Eigen::VectorXd x = x_of(y);
+    const auto& B2 = s.fine_basis[2];
+    const auto& B0 = s.fine_basis[0];
+    Eigen::RowVectorXd gx(s.n);
+    for (size_t i = 0; i < tilt.size(); ++i) {
+      const Instant& in = tilt[i];
+      const Family& fam = s.fams[static_cast<size_t>(in.fam)];
+      const Eigen::Index k = in.k;
+      const auto p = design_detail::tilt_point(B2.row(k).dot(x.segment(0, n1)), B2.row(k).dot(x.segment(n1, n1)),
+                                               B2.row(k).dot(x.segment(2 * n1, n1)),
+                                               B0.row(k).dot(x.segment(3 * n1, n1)), s.opt.g);
+      const double v = fam.axis == 0 ? p.phi : p.theta;
+      const Eigen::Index r = m1 + static_cast<Eigen::Index>(i);
+      c[r] = (in.sign * v - s.bound[static_cast<size_t>(in.fam)](k)) / fam.scale;
+      if (!grad) continue;
+      const Eigen::Vector4d& dv = fam.axis == 0 ? p.dphi : p.dtheta;
+      for (int a = 0; a < 3; ++a) gx.segment(a * n1, n1) = dv(a) * B2.row(k);
+      gx.segment(3 * n1, n1) = dv(3) * B0.row(k);
+      J.row(r).noalias() = (in.sign / fam.scale) * (gx * s.Z);
+    }
+  }
+
+  // Called with the constraints of the point whose criterion is f_last
+  // (SLSQP evaluates the criterion, then the constraints, at each point).
+  void record(const double* y, double cmax) {
+    if (!(cmax <= kFeasTol) || !std::isfinite(f_last)) return;
+    if (f_last < best_f) {
+      best_f = f_last;
+      best_y = Eigen::Map<const Eigen::VectorXd>(y, s.ny);
+    }
+    if (!std::isfinite(anchor_f) || best_f < anchor_f - s.opt.ftol_rel * std::abs(anchor_f)) {
+      anchor_f = best_f;
+      stall = 0;
+    } else if (++stall >= patience && solver) {
+      solver->force_stop();
+    }
+  }
+};
+
+double objective_cb(unsigned, const double* y, double* grad, void* data) {
+  return static_cast<Round*>(data)->objective(y, grad);
+}
+void constraints_cb(unsigned m, double* c, unsigned, const double* y, double* grad, void* data) {
+  auto* rd = static_cast<Round*>(data);
+  rd->constraints(c, y, grad);
+  rd->record(y, m ? *std::max_element(c, c + m) : 0.0);
+}
+
+std::string nlopt_status(nlopt::result r) {
+  switch (r) {
+    case nlopt::SUCCESS: return "success";
+    case nlopt::STOPVAL_REACHED: return "stopval reached";
+    case nlopt::FTOL_REACHED: return "ftol reached";
+    case nlopt::XTOL_REACHED: return "xtol reached";
+    case nlopt::MAXEVAL_REACHED: return "max evaluations";
+    case nlopt::MAXTIME_REACHED: return "max time";
+    default: return fmt::format("nlopt code {}", static_cast<int>(r));
+  }
+}
+
+// A random start in y: velocity amplitudes a, b uniform in [-1, 1] m/s,
+// projected onto the start conditions, then shrunk so that the largest
+// position, velocity and (through eqs. 26-27, approximately) tilt excursion
+// uses start_fill of its limit.
+Eigen::VectorXd random_start(const Setup& s, std::mt19937_64& rng) {
+  std::uniform_real_distribution<double> U(-1.0, 1.0);
+  Eigen::VectorXd x = s.xh;
+  for (int i = 0; i < 4; ++i)
+    for (int j = 0; j < 2 * s.opt.harmonics; ++j) x(i * s.n1 + j) = U(rng);
+  Eigen::VectorXd y = s.Z.transpose() * (x - s.xh);
+  const Eigen::VectorXd dx = s.Z * y;
+  double ratio = 0.0;
+  const auto grid = s.basis_at(s.problem.times(), 0), grid1 = s.basis_at(s.problem.times(), 1),
+             grid2 = s.basis_at(s.problem.times(), 2);
+  const auto& L = s.opt.limits;
+  auto peak = [&](const Eigen::MatrixXd& G, int axis) { return (G * dx.segment(axis * s.n1, s.n1)).cwiseAbs().maxCoeff(); };
+  const double tilt_acc = s.opt.g * std::tan(L.tilt_max);
+  const std::array<std::pair<double, double>, 10> use = {{
+      {peak(grid, kX), L.x_max - std::abs(L.x0)},
+      {peak(grid, kY), L.y_max - std::abs(L.y0)},
+      {peak(grid, kZ), L.z_max - L.z_min},
+      {peak(grid, kPsi), L.psi_max - std::abs(L.psi0)},
+      {peak(grid1, kX), L.xdot_max},
+      {peak(grid1, kY), L.ydot_max},
+      {peak(grid1, kZ), L.zdot_max},
+      {peak(grid1, kPsi), L.psidot_max},
+      {peak(grid2, kX), tilt_acc},
+      {peak(grid2, kY), tilt_acc},
+  }};
+  for (const auto& [p, avail] : use)
+    if (std::isfinite(avail) && avail > 0.0) ratio = std::max(ratio, p / avail);
+  if (ratio > 0.0) y *= s.opt.start_fill / ratio;
+  return y;
+}
+
+// The instants of the next round, per limit and sign: every near-active fine
+// local maximum of the current point (a "peak", kept for later rounds too),
+// plus a cover every cell_dt. A new peak replaces any older one closer than
+// kMinSeparation: nearly coincident instants give nearly parallel constraint
+// gradients, which SLSQP's subproblem handles badly.
+void pick_instants(const Setup& s, const Eigen::VectorXd& x, std::vector<std::vector<Eigen::Index>>& peaks,
+                   std::set<Instant>& out) {
+  const Eigen::MatrixXd V = s.fine_values(x);
+  out.clear();
+  const auto K = V.rows();
+  const auto sep = static_cast<Eigen::Index>(std::lround(kMinSeparation / s.opt.check_dt));
+  for (size_t f = 0; f < s.fams.size(); ++f) {
+    const Family& fam = s.fams[f];
+    const auto v = V.col(static_cast<Eigen::Index>(f));
+    const Eigen::VectorXd& bd = s.bound[f];
+    const double near = kNearActive * fam.scale;
+    for (int sign : {1, -1}) {
+      if (fam.kind == Family::Max && sign < 0) continue;
+      if (fam.kind == Family::Min && sign > 0) continue;
+      const double bsign = fam.kind == Family::Min ? -1.0 : 1.0;
+      // Where the limit equals the start value the start conditions already
+      // hold the value at both ends; there the constraint has no gradient
+      // in y, which SLSQP's subproblem cannot take, so those instants are left out.
+      auto usable = [&](Eigen::Index k) { return !(fam.pinned && (k < sep || k >= K - sep)); };
+      auto c = [&](Eigen::Index k) { return sign * v(k) - bsign * bd(k); };  // <= 0 wanted
+      auto& pk = peaks[2 * f + (sign > 0 ? 0 : 1)];
+      for (Eigen::Index k = 0; k < K; ++k) {
+        const double ck = c(k);
+        const bool peak = (k == 0 || ck >= c(k - 1)) && (k + 1 == K || ck > c(k + 1));
+        if (!peak || ck <= -near || !usable(k)) continue;
+        pk.erase(std::remove_if(pk.begin(), pk.end(), [&](Eigen::Index q) { return std::abs(q - k) < sep; }),
+                 pk.end());
+        pk.push_back(k);
+      }
+      for (Eigen::Index k : pk) out.insert({static_cast<int>(f), sign, k});
+      for (int cell = 0; cell < s.cells(); ++cell) {
+        const Eigen::Index k = s.cell_begin[static_cast<size_t>(cell)];
+        if (usable(k)) out.insert({static_cast<int>(f), sign, k});
+      }
+    }
+  }
+}
+
+StartSummary run_start(const Setup& s, int index, Eigen::VectorXd y, Eigen::VectorXd& x_out) {
+  const auto t0 = std::chrono::steady_clock::now();
+  StartSummary sum;
+  sum.index = index;
+  Eigen::VectorXd x = s.xh + s.Z * y;
+  std::vector<std::vector<Eigen::Index>> peaks(2 * s.fams.size());
+  std::set<Instant> instants;
+  for (int round = 0; round <= s.opt.refine_rounds; ++round) {
+    pick_instants(s, x, peaks, instants);
+    Round rd(s, instants);
+    nlopt::opt o(nlopt::LD_SLSQP, static_cast<unsigned>(s.ny));
+    rd.solver = &o;
+    o.set_min_objective(objective_cb, &rd);
+    o.add_inequality_mconstraint(constraints_cb, &rd, std::vector<double>(rd.count(), kFeasTol));
+    o.set_maxeval(s.opt.max_evals);
+    std::vector<double> yv(y.data(), y.data() + y.size());
+    double f = 0.0;
+    try {
+      sum.status = nlopt_status(o.optimize(yv, f));
+    } catch (const nlopt::forced_stop&) {
+      sum.status = "converged";
+    } catch (const nlopt::roundoff_limited&) {
+      sum.status = "roundoff limited";
+    } catch (const std::runtime_error& e) {
+      sum.status = fmt::format("failure ({})", e.what());
+    }
+    y = rd.best_y.size() ? rd.best_y : Eigen::VectorXd(Eigen::Map<const Eigen::VectorXd>(yv.data(), s.ny));
+    sum.evaluations += rd.evals;
+    sum.rounds = round + 1;
+    x = s.xh + s.Z * y;
+    sum.worst_violation = s.worst_violation(x);
+    sum.feasible = sum.worst_violation == 0.0;
+    if (std::getenv("QUADID_DESIGN_DEBUG"))
+      fmt::print(stderr, "  start {} round {}: m={} evals={} J={:.6f} status={} feasible-in-round={} worst={:.3e}\n",
+                 index, round, rd.count(), rd.evals, s.problem.criterion(x), sum.status, rd.best_y.size() > 0,
+                 sum.worst_violation);
+    if (sum.feasible) break;
+  }
+  x_out = x;
+  const auto traj = FourierTrajectory::from_coefficients(s.opt.wf, s.opt.harmonics, x);
+  const auto cv = evaluate_criteria(traj, s.opt.cond_dt, s.opt.g, parameter_scales(s.opt.reference, s.opt.product_floor));
+  sum.criterion = cv.value(s.opt.criterion);
+  sum.cond = cv.cond;
+  sum.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return sum;
+}
+
+}  // namespace
+
+DesignResult design_trajectory(const DesignOptions& opt, const DesignProgress& progress) {
+  opt.validate();
+  const auto t0 = std::chrono::steady_clock::now();
+  const Setup setup(opt);
+
+  std::mt19937_64 rng(opt.seed);
+  std::vector<Eigen::VectorXd> y0;
+  for (int i = 0; i < opt.starts; ++i) y0.push_back(random_start(setup, rng));
+
+  DesignResult res;
+  res.starts.resize(static_cast<size_t>(opt.starts));
+  std::vector<Eigen::VectorXd> xs(static_cast<size_t>(opt.starts));
+  const int hw = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  const int nthreads = std::min(opt.starts, opt.threads > 0 ? opt.threads : hw);
+  std::atomic<int> next{0};
+  std::mutex mu;
+  std::exception_ptr error;
+  auto worker = [&] {
+    for (int i = next++; i < opt.starts; i = next++) {
+      try {
+        auto sum = run_start(setup, i, y0[static_cast<size_t>(i)], xs[static_cast<size_t>(i)]);
+        const std::lock_guard<std::mutex> lock(mu);
+        res.starts[static_cast<size_t>(i)] = sum;
+        if (progress) progress(sum, opt.starts);
+      } catch (...) {
+        const std::lock_guard<std::mutex> lock(mu);
+        if (!error) error = std::current_exception();
+      }
+    }
+  };
+  std::vector<std::thread> pool;
+  for (int t = 1; t < nthreads; ++t) pool.emplace_back(worker);
+  worker();
+  for (auto& th : pool) th.join();
+  if (error) std::rethrow_exception(error);
+
+  // Best feasible start by criterion; ties and infeasible runs go by index / least violation.
+  for (int i = 0; i < opt.starts; ++i) {
+    const auto& s = res.starts[static_cast<size_t>(i)];
+    if (res.best < 0) {
+      res.best = i;
+      continue;
+    }
+    const auto& b = res.starts[static_cast<size_t>(res.best)];
+    const bool better = s.feasible != b.feasible ? s.feasible
+                        : s.feasible             ? s.criterion < b.criterion
+                                                 : s.worst_violation < b.worst_violation;
+    if (better) res.best = i;
+  }
+  res.trajectory = FourierTrajectory::from_coefficients(opt.wf, opt.harmonics, xs[static_cast<size_t>(res.best)]);
+  CheckOptions co;
+  co.limits = opt.limits;
+  co.constraint_dt = opt.check_dt;
+  co.cond_dt = opt.cond_dt;
+  co.g = opt.g;
+  co.reference = opt.reference;
+  co.product_floor = opt.product_floor;
+  res.check = check_trajectory(res.trajectory, co);
+  res.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return res;
+}
+
+}  // namespace quadid

@@ -1,0 +1,167 @@
+// JSON and text forms of the design module's results. JSON keeps SI units and
+// radians; the text tables convert angles to degrees for people.
+#include "design_internal.hpp"
+
+#include "quadid/io.hpp"
+
+#include <fmt/format.h>
+
+namespace quadid {
+
+using nlohmann::json;
+
+namespace {
+
+json number_or_null(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
+
+// Angles are shown in degrees; the unit string says which.
+struct Shown {
+  double factor;
+  std::string unit;
+};
+Shown shown(const std::string& si_unit) {
+  if (si_unit == "rad") return {1.0 / kDeg, "deg"};
+  if (si_unit == "rad/s") return {1.0 / kDeg, "deg/s"};
+  if (si_unit == "rad/s^2") return {1.0 / kDeg, "deg/s^2"};
+  return {1.0, si_unit};
+}
+
+std::string pad(const std::string& s, size_t w, bool left) {
+  if (s.size() >= w) return s;
+  return left ? s + std::string(w - s.size(), ' ') : std::string(w - s.size(), ' ') + s;
+}
+
+std::string table(const std::vector<std::string>& head, const std::vector<std::vector<std::string>>& rows) {
+  std::vector<size_t> w(head.size());
+  for (size_t c = 0; c < head.size(); ++c) {
+    w[c] = head[c].size();
+    for (const auto& r : rows) w[c] = std::max(w[c], r[c].size());
+  }
+  std::string out;
+  auto line = [&](const std::vector<std::string>& r) {
+    for (size_t c = 0; c < r.size(); ++c) out += (c ? "  " : "") + pad(r[c], w[c], c == 0);
+    out += '\n';
+  };
+  line(head);
+  for (const auto& r : rows) line(r);
+  return out;
+}
+
+}  // namespace
+
+json to_json(const Constraints& c) {
+  return {{"x_max", number_or_null(c.x_max)},
+          {"y_max", number_or_null(c.y_max)},
+          {"z_min", number_or_null(c.z_min)},
+          {"z_max", number_or_null(c.z_max)},
+          {"psi_max", number_or_null(c.psi_max)},
+          {"tilt_max", number_or_null(c.tilt_max)},
+          {"xdot_max", number_or_null(c.xdot_max)},
+          {"ydot_max", number_or_null(c.ydot_max)},
+          {"zdot_max", number_or_null(c.zdot_max)},
+          {"psidot_max", number_or_null(c.psidot_max)},
+          {"zddot_min", number_or_null(c.zddot_min)},
+          {"zddot_max", number_or_null(c.zddot_max)},
+          {"psiddot_max", number_or_null(c.psiddot_max)},
+          {"start", {{"x", c.x0}, {"y", c.y0}, {"z", c.z0}, {"psi", c.psi0}}},
+          {"units", "SI: m, m/s, m/s^2, rad, rad/s, rad/s^2; null = unbounded"}};
+}
+
+json to_json(const CheckReport& r) {
+  json cons = json::array();
+  for (const auto& c : r.constraints)
+    cons.push_back({{"name", c.name}, {"unit", c.unit}, {"kind", c.kind}, {"limit", c.limit},
+                    {"worst", c.worst}, {"time", c.time}, {"margin", c.margin}, {"holds", c.holds}});
+  json ends = json::array();
+  for (const auto& e : r.endpoints)
+    ends.push_back({{"axis", e.axis}, {"time", e.time}, {"value", e.value}, {"velocity", e.velocity},
+                    {"acceleration", e.acceleration}, {"target", e.target}, {"error", e.error},
+                    {"holds", e.holds}});
+  const auto& cv = r.criteria;
+  return {{"trajectory", r.trajectory},
+          {"duration", r.duration},
+          {"constraint_dt", r.constraint_dt},
+          {"cond_dt", r.cond_dt},
+          {"constraints", cons},
+          {"endpoints", ends},
+          {"cond", number_or_null(cv.cond)},
+          {"criteria",
+           {{"cond", number_or_null(cv.cond)},
+            {"cond_scaled", number_or_null(cv.cond_scaled)},
+            {"dopt", number_or_null(cv.dopt)},
+            {"samples", cv.samples},
+            {"eigenvalues", std::vector<double>(cv.eigenvalues.data(), cv.eigenvalues.data() + 7)}}},
+          {"constraints_hold", r.constraints_hold},
+          {"endpoints_hold", r.endpoints_hold},
+          {"all_hold", r.all_hold()}};
+}
+
+json to_json(const StartSummary& s) {
+  return {{"index", s.index},
+          {"criterion", number_or_null(s.criterion)},
+          {"cond", number_or_null(s.cond)},
+          {"feasible", s.feasible},
+          {"worst_violation", s.worst_violation},
+          {"evaluations", s.evaluations},
+          {"rounds", s.rounds},
+          {"status", s.status}};
+}
+
+json design_to_json(const DesignResult& r, const DesignOptions& opt) {
+  json j = to_json(r.trajectory);
+  j["criterion"] = {{"name", std::string(criterion_name(opt.criterion))},
+                    {"value", number_or_null(r.check.criteria.value(opt.criterion))}};
+  if (opt.criterion != Criterion::Cond) {
+    j["criterion"]["reference"] = to_json(opt.reference);
+    j["criterion"]["product_floor"] = opt.product_floor;
+  }
+  j["constraints"] = to_json(opt.limits);
+  j["check"] = to_json(r.check);
+  j["seed"] = opt.seed;
+  j["starts"] = opt.starts;
+  json starts = json::array();
+  for (const auto& s : r.starts) starts.push_back(to_json(s));
+  j["start_results"] = starts;
+  j["best_start"] = r.best;
+  j["grid"] = {{"grid_dt", opt.grid_dt}, {"check_dt", opt.check_dt}, {"cell_dt", opt.cell_dt}, {"cond_dt", opt.cond_dt}, {"margin", opt.margin}};
+  return j;
+}
+
+std::string format_check_report(const CheckReport& r) {
+  std::string out = fmt::format("trajectory: {}\n", r.trajectory);
+  out += fmt::format("limits checked every {:g} ms over 0..{:g} s; cond(W) from {} samples every {:g} ms (eq. 20)\n\n",
+                     r.constraint_dt * 1e3, r.duration, r.criteria.samples, r.cond_dt * 1e3);
+  std::vector<std::vector<std::string>> rows;
+  for (const auto& c : r.constraints) {
+    const Shown s = shown(c.unit);
+    const std::string name = c.kind == "abs" ? "|" + c.name + "|" : c.name;
+    const std::string rel = c.kind == "min" ? ">=" : "<=";
+    rows.push_back({fmt::format("{} ({})", name, s.unit), fmt::format("{} {:.4f}", rel, c.limit * s.factor),
+                    fmt::format("{:.4f}", c.worst * s.factor), fmt::format("{:.3f}", c.time),
+                    fmt::format("{:+.4f}", c.margin * s.factor), c.holds ? "yes" : "NO"});
+  }
+  out += table({"constraint (unit)", "limit", "worst", "at t (s)", "margin", "holds"}, rows);
+
+  rows.clear();
+  for (const auto& e : r.endpoints) {
+    const double f = e.axis == "psi" ? 1.0 / kDeg : 1.0;
+    rows.push_back({e.time == 0.0 ? "start" : "end", fmt::format("{:.3f}", e.time), e.axis,
+                    fmt::format("{:.6f}", e.value * f), fmt::format("{:.6f}", e.target * f),
+                    fmt::format("{:+.2e}", e.velocity * f), fmt::format("{:+.2e}", e.acceleration * f),
+                    e.holds ? "yes" : "NO"});
+  }
+  out += "\nstart and end conditions (q = q0, q_dot = 0, q_ddot = 0; psi in deg)\n";
+  out += table({"end", "t (s)", "axis", "q (m|deg)", "q0 (m|deg)", "q_dot (m/s|deg/s)", "q_ddot (m/s^2|deg/s^2)", "holds"},
+               rows);
+
+  const auto& cv = r.criteria;
+  out += fmt::format("\ncond(W)           = {:.4f}   (W: {} x 7, unscaled, 2-norm)\n", cv.cond, 4 * cv.samples);
+  out += fmt::format("cond(W S)         = {:.4f}   (parameters scaled by the reference set)\n", cv.cond_scaled);
+  out += fmt::format("D-opt criterion   = {:.4f}   (-(1/7) log det(S W^T W S / K))\n", cv.dopt);
+  out += fmt::format("eig(W^T W)        = [{:.4g}]\n", fmt::join(cv.eigenvalues, ", "));
+  out += fmt::format("\nconstraints: {}   start/end: {}\n", r.constraints_hold ? "all hold" : "VIOLATED",
+                     r.endpoints_hold ? "hold" : "VIOLATED");
+  return out;
+}
+
+}  // namespace quadid
