@@ -1,12 +1,119 @@
+// quadid design: optimize the Fourier coefficients of eq. (18) for an
+// excitation criterion (cond(W) of eq. 20 by default) under the limits of
+// section III-B, with NLopt SLSQP from random starts.
 #include "commands.hpp"
+#include "quadid/design.hpp"
+#include "quadid/io.hpp"
 
+#include <fmt/format.h>
+
+#include <cstdio>
+#include <memory>
 #include <stdexcept>
 
 namespace quadid::cli {
 
+namespace {
+
+struct DesignArgs {
+  std::string out, criterion = "cond", reference = "qball2-nominal";
+  bool json = false, quiet = false;
+  DesignOptions opt;
+  double wf_deg = 36.0, psi_max_deg = 180.0, tilt_max_deg = 5.73, psidot_max_deg = 28.65;
+};
+
+}  // namespace
+
 void register_design(CLI::App& app) {
-  auto* sub = app.add_subcommand("design", "optimize an excitation trajectory (Fourier series, eq. 18) -> trajectory JSON");
-  sub->callback([] { throw std::runtime_error("not implemented yet"); });
+  auto args = std::make_shared<DesignArgs>();
+  auto* sub = app.add_subcommand(
+      "design", "optimize an excitation trajectory (Fourier series, eq. 18) -> trajectory JSON");
+  sub->footer(
+      "Minimizes the criterion over the coefficients a, b, c of eq. (18) (4 axes x (2N+1)) with NLopt\n"
+      "SLSQP from --starts random starts, under the limits of section III-B (defaults below: the\n"
+      "paper's values) and the start/end hover at (0, 0, 0.7 m, 0). Limits are imposed on a 1 ms grid;\n"
+      "the result is checked on it and cond(W) is reported with T = 2 ms (eq. 20).\n"
+      "Criteria: cond (the paper's cond(W)), cond-scaled (cond(W S), parameters scaled by --reference),\n"
+      "dopt (-(1/7) log det of the per-sample information matrix; see docs/design.md).\n"
+      "The output is the trajectory JSON of DESIGN.md plus the criterion, the limits, the check\n"
+      "report, the seed and the starts. Same --seed -> same bytes. Progress goes to stderr.\n"
+      "Fails (exit 1, nothing written) if no start meets every limit.\n\n"
+      "Examples:\n"
+      "  quadid design --seed 1 -o traj.json\n"
+      "  quadid design --criterion dopt --starts 16 --json > traj.json");
+  auto& o = args->opt;
+  auto& L = o.limits;
+  sub->add_option("-o,--out", args->out, "write the trajectory JSON here (atomically)");
+  sub->add_flag("--json", args->json, "print the trajectory JSON on stdout instead of the tables");
+  sub->add_flag("-q,--quiet", args->quiet, "no progress on stderr");
+  sub->add_option("--seed", o.seed, "seed of the random starts (std::mt19937_64)")->capture_default_str();
+  sub->add_option("--starts", o.starts, "number of random starts")->capture_default_str();
+  sub->add_option("--threads", o.threads, "worker threads; 0 = one per core (result does not depend on it)")
+      ->capture_default_str();
+  sub->add_option("--criterion", args->criterion, "cond | cond-scaled | dopt")->capture_default_str();
+  sub->add_option("--reference", args->reference,
+                  "parameter set scaling cond-scaled and dopt: preset (qball2-nominal, qball2-virtual) or JSON file")
+      ->capture_default_str();
+  sub->add_option("--harmonics", o.harmonics, "number of harmonics N of eq. (18)")->capture_default_str();
+  sub->add_option("--wf", args->wf_deg, "fundamental frequency w_f, deg/s (36 deg/s = 10 s period)")
+      ->capture_default_str();
+  sub->add_option("--max-evals", o.max_evals, "SLSQP evaluations per round of one start")->capture_default_str();
+  sub->add_option("--check-dt", o.check_dt, "grid on which the limits are imposed and checked, s")
+      ->capture_default_str();
+  sub->add_option("--cond-dt", o.cond_dt, "sampling period T of W for the reported criteria (eq. 20), s")
+      ->capture_default_str();
+  sub->add_option("--x-max", L.x_max, "|x| limit, m")->capture_default_str();
+  sub->add_option("--y-max", L.y_max, "|y| limit, m")->capture_default_str();
+  sub->add_option("--z-min", L.z_min, "lower z limit, m")->capture_default_str();
+  sub->add_option("--z-max", L.z_max, "upper z limit, m")->capture_default_str();
+  sub->add_option("--psi-max", args->psi_max_deg, "|psi| limit, deg")->capture_default_str();
+  sub->add_option("--tilt-max", args->tilt_max_deg, "|phi|, |theta| limit of eqs. (26)-(27), deg")
+      ->capture_default_str();
+  sub->add_option("--xdot-max", L.xdot_max, "|x_dot| limit, m/s")->capture_default_str();
+  sub->add_option("--ydot-max", L.ydot_max, "|y_dot| limit, m/s")->capture_default_str();
+  sub->add_option("--zdot-max", L.zdot_max, "|z_dot| limit, m/s")->capture_default_str();
+  sub->add_option("--psidot-max", args->psidot_max_deg, "|psi_dot| limit, deg/s")->capture_default_str();
+  sub->add_option("--zddot-min", L.zddot_min, "lower z_ddot limit, m/s^2")->capture_default_str();
+  sub->add_option("--z0", L.z0, "start/end height, m")->capture_default_str();
+  sub->callback([args] {
+    DesignOptions opt = args->opt;
+    opt.wf = args->wf_deg * kDeg;
+    opt.limits.psi_max = args->psi_max_deg * kDeg;
+    opt.limits.tilt_max = args->tilt_max_deg * kDeg;
+    opt.limits.psidot_max = args->psidot_max_deg * kDeg;
+    opt.criterion = parse_criterion(args->criterion);
+    opt.reference = load_params(args->reference);
+    opt.validate();
+    if (!args->quiet)
+      fmt::print(stderr, "design: {} starts, criterion {}, N = {}, period {:.4g} s, seed {}\n", opt.starts,
+                 criterion_name(opt.criterion), opt.harmonics, 2 * M_PI / opt.wf, opt.seed);
+    DesignProgress progress;
+    if (!args->quiet)
+      progress = [](const StartSummary& s, int total) {
+        fmt::print(stderr, "  start {:>2}/{}: criterion {:.5f}  cond(W) {:.5f}  {}  ({} evaluations, {:.2f} s)\n",
+                   s.index + 1, total, s.criterion, s.cond,
+                   s.feasible ? "feasible" : fmt::format("INFEASIBLE by {:.2e}", s.worst_violation), s.evaluations,
+                   s.seconds);
+      };
+    const DesignResult res = design_trajectory(opt, progress);
+    if (!res.check.feasible)
+      throw std::runtime_error(fmt::format(
+          "no start met every limit on the {:g} ms grid (best violation {:.3g}); try more --starts or a "
+          "different --seed",
+          opt.check_dt * 1e3, res.starts[static_cast<size_t>(res.best)].worst_violation));
+    const nlohmann::json j = design_to_json(res, opt);
+    if (!args->out.empty()) write_file_atomic(args->out, j.dump(2) + "\n");
+    if (!args->quiet)
+      fmt::print(stderr, "design: best start {} in {:.2f} s{}\n", res.best + 1, res.seconds,
+                 args->out.empty() ? "" : fmt::format(", written to {}", args->out));
+    if (args->json) {
+      fmt::print("{}\n", j.dump(2));
+    } else {
+      fmt::print("criterion {} = {:.6f}\n\n{}", criterion_name(opt.criterion),
+                 res.check.criteria.value(opt.criterion), format_check_report(res.check));
+      if (args->out.empty()) fmt::print(stderr, "design: no -o given, the trajectory was not saved\n");
+    }
+  });
 }
 
 }  // namespace quadid::cli

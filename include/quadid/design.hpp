@@ -147,12 +147,12 @@ struct DesignOptions {
   int threads = 0;                     // 0 = min(starts, hardware threads)
   double grid_dt = 0.05;               // s, criterion samples while optimizing (spectrally accurate, see docs)
   double check_dt = 0.001;             // s, grid on which every limit is imposed and checked
-  double cell_dt = 0.5;                // s, each round constrains every limit at its worst instant per cell
+  double cell_dt = 0.25;               // s, one constraint per limit, sign and cell: the worst check_dt instant in it
 
   double cond_dt = 0.002;              // s, T of eq. (20) for the reported criteria
   double margin = 1e-5;                // relative tightening of every limit while optimizing
   int max_evals = 300;                 // SLSQP evaluations per round of one start
-  int refine_rounds = 6;               // exchange rounds: re-pick the constraint instants and re-polish
+  int refine_rounds = 3;               // re-polish rounds for a start that ends infeasible
   double ftol_rel = 1e-8;              // stop when the best feasible criterion improves by less for 40 evaluations
   double start_fill = 0.8;             // random starts use this fraction of the tightest limit
   double g = kDefaultGravity;          // m/s^2

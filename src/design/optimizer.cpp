@@ -10,7 +10,8 @@
 //   itself, aggregated per cell of cell_dt: one constraint per limit, sign and
 //   cell, the largest value over the cell (see Round). A result that meets
 //   them passes the final check by construction; a small relative margin
-//   absorbs SLSQP's constraint tolerance.
+//   absorbs SLSQP's constraint tolerance. A start that ends infeasible is
+//   re-polished from its last point (refine_rounds).
 // - The criterion is sampled every grid_dt: the periodic rectangle rule of
 //   eq. (20) converges spectrally, so 50 ms gives the 2 ms value to ~1e-12.
 // - Starts are drawn in sequence from one seeded std::mt19937_64 before any
@@ -23,13 +24,10 @@
 #include <nlopt.hpp>
 
 #include <algorithm>
-#include <cstdlib>
 #include <atomic>
 #include <chrono>
 #include <mutex>
 #include <random>
-#include <set>
-#include <tuple>
 #include <stdexcept>
 #include <thread>
 
@@ -37,14 +35,10 @@ namespace quadid {
 
 using design_detail::Family;
 
-// Fine local maxima closer than this (relative to the limit's scale) become constraints.
-constexpr double kNearActive = 0.05;
 // SQP iterates meet active constraints only in the limit: a point counts as
 // feasible for a round when every normalized constraint is below this. The
 // margin (1e-5 relative by default) keeps such points inside the true limits.
 constexpr double kFeasTol = 1e-9;
-// Constraint instants of one limit closer than this (s) are merged.
-constexpr double kMinSeparation = 0.01;
 
 void DesignOptions::validate() const {
   auto require = [](bool ok, const std::string& msg) {
@@ -194,29 +188,23 @@ struct Setup {
   }
 };
 
-// One constraint instant: family f, sign sigma (+1: f <= bound, -1: f >= bound
-// or -f <= bound for |f|), fine-grid index k.
-struct Instant {
-  int fam;
-  int sign;
-  Eigen::Index k;
-  bool operator<(const Instant& o) const { return std::tie(fam, sign, k) < std::tie(o.fam, o.sign, o.k); }
-};
-
-// One SLSQP round: the limits imposed at a fixed set of fine-grid instants,
-// so that every constraint is smooth (linear for the box, speed and
-// acceleration limits, and eqs. 26-27 for the tilt). Constraints are
-// c = (sigma f - bound) / scale <= 0.
+// One SLSQP round. Each limit, sign and cell of the check grid gives one
+// constraint: the largest c = (sigma f - bound) / scale over the cell's fine
+// instants, with the gradient at that instant. Meeting them is meeting the
+// final check on the fine grid. The maximum is continuous in x; its gradient
+// jumps only when the worst instant of a cell jumps, which for cells much
+// shorter than the fastest harmonic happens only at cell boundaries.
+// A cell whose worst instant is its first one, with the previous cell still
+// rising towards it, repeats its neighbour's constraint: it is replaced by
+// its value at its centre, which keeps the constraints well separated.
 //
 // Stopping is ours: NLopt 2.7's SLSQP may stop on ftol at an infeasible
 // iterate, so its ftol/xtol are off. Every evaluated point whose constraints
-// all hold is a candidate; the round stops when the best feasible criterion
-// has not improved by ftol_rel for `patience` evaluations (or at max_evals).
+// all hold (to kFeasTol) is a candidate; the round stops when the best
+// feasible criterion has not improved by ftol_rel for `patience` evaluations.
 struct Round {
   const Setup& s;
-  std::vector<Instant> tilt;  // nonlinear instants
-  Eigen::MatrixXd GZ;         // linear instants: c = GZ y + g0
-  Eigen::VectorXd g0;
+  unsigned m = 0;
   nlopt::opt* solver = nullptr;
   int evals = 0;
   double f_last = kInf;  // criterion at the point last evaluated
@@ -225,24 +213,9 @@ struct Round {
   int stall = 0;
   static constexpr int patience = 40;
 
-  Round(const Setup& setup, const std::set<Instant>& instants) : s(setup) {
-    std::vector<Instant> lin;
-    for (const auto& in : instants) (s.fams[static_cast<size_t>(in.fam)].tilt ? tilt : lin).push_back(in);
-    Eigen::MatrixXd G = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(lin.size()), s.n);
-    Eigen::VectorXd h(static_cast<Eigen::Index>(lin.size()));
-    for (size_t i = 0; i < lin.size(); ++i) {
-      const Family& fam = s.fams[static_cast<size_t>(lin[i].fam)];
-      const auto r = static_cast<Eigen::Index>(i);
-      G.block(r, fam.axis * s.n1, 1, s.n1) =
-          (lin[i].sign / fam.scale) * s.fine_basis[static_cast<size_t>(fam.order)].row(lin[i].k);
-      const double bsign = fam.kind == Family::Min ? -1.0 : 1.0;  // -f <= -bound for a lower limit
-      h(r) = bsign * s.bound[static_cast<size_t>(lin[i].fam)](lin[i].k) / fam.scale;
-    }
-    GZ = G * s.Z;
-    g0 = G * s.xh - h;
+  explicit Round(const Setup& setup) : s(setup) {
+    for (const auto& f : s.fams) m += static_cast<unsigned>((f.kind == Family::Abs ? 2 : 1) * s.cells());
   }
-
-  unsigned count() const { return static_cast<unsigned>(GZ.rows()) + static_cast<unsigned>(tilt.size()); }
 
   Eigen::VectorXd x_of(const double* y) const {
     return s.xh + s.Z * Eigen::Map<const Eigen::VectorXd>(y, s.ny);
@@ -259,33 +232,56 @@ struct Round {
   }
 
   void constraints(double* c, const double* y, double* grad) const {
-    const Eigen::Map<const Eigen::VectorXd> yv(y, s.ny);
-    const Eigen::Index m1 = GZ.rows();
-    Eigen::Map<Eigen::VectorXd>(c, m1) = GZ * yv + g0;
-    using RowMat = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
-    Eigen::Map<RowMat> J(grad, grad ? static_cast<Eigen::Index>(count()) : 0, s.ny);  // NLopt: row-major
-    if (grad) J.topRows(m1) = GZ;
-    if (tilt.empty()) return;
-    const int n1 = s.n1;
     const Eigen::VectorXd x = x_of(y);
-    const auto& B2 = s.fine_basis[2];
-    const auto& B0 = s.fine_basis[0];
+    const Eigen::MatrixXd V = s.fine_values(x);
+    const auto K = V.rows();
+    using RowMat = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+    Eigen::Map<RowMat> J(grad, grad ? static_cast<Eigen::Index>(m) : 0, s.ny);  // NLopt: row-major dc_i/dy_j
+    const int n1 = s.n1;
     Eigen::RowVectorXd gx(s.n);
-    for (size_t i = 0; i < tilt.size(); ++i) {
-      const Instant& in = tilt[i];
-      const Family& fam = s.fams[static_cast<size_t>(in.fam)];
-      const Eigen::Index k = in.k;
-      const auto p = design_detail::tilt_point(B2.row(k).dot(x.segment(0, n1)), B2.row(k).dot(x.segment(n1, n1)),
-                                               B2.row(k).dot(x.segment(2 * n1, n1)),
-                                               B0.row(k).dot(x.segment(3 * n1, n1)), s.opt.g);
-      const double v = fam.axis == 0 ? p.phi : p.theta;
-      const Eigen::Index r = m1 + static_cast<Eigen::Index>(i);
-      c[r] = (in.sign * v - s.bound[static_cast<size_t>(in.fam)](k)) / fam.scale;
-      if (!grad) continue;
-      const Eigen::Vector4d& dv = fam.axis == 0 ? p.dphi : p.dtheta;
-      for (int a = 0; a < 3; ++a) gx.segment(a * n1, n1) = dv(a) * B2.row(k);
-      gx.segment(3 * n1, n1) = dv(3) * B0.row(k);
-      J.row(r).noalias() = (in.sign / fam.scale) * (gx * s.Z);
+    Eigen::Index row = 0;
+    for (size_t f = 0; f < s.fams.size(); ++f) {
+      const Family& fam = s.fams[f];
+      const auto v = V.col(static_cast<Eigen::Index>(f));
+      const Eigen::VectorXd& bd = s.bound[f];
+      const int signs = fam.kind == Family::Abs ? 2 : 1;
+      for (int sg = 0; sg < signs; ++sg) {
+        // sigma f <= bound (Abs, Max) or f >= bound (Min, written -f <= -bound).
+        const double sigma = fam.kind == Family::Min ? -1.0 : (sg == 0 ? 1.0 : -1.0);
+        const double bsign = fam.kind == Family::Min ? -1.0 : 1.0;
+        // Where the limit equals the start value the start conditions hold the
+        // value at both ends: no gradient in y there, so those instants are skipped.
+        auto cval = [&](Eigen::Index k) {
+          if (fam.pinned && (k == 0 || k == K - 1)) return -kInf;
+          return sigma * v(k) - bsign * bd(k);
+        };
+        for (int cell = 0; cell < s.cells(); ++cell, ++row) {
+          const Eigen::Index b0 = s.cell_begin[static_cast<size_t>(cell)];
+          const Eigen::Index b1 = s.cell_begin[static_cast<size_t>(cell) + 1];
+          Eigen::Index best = b0;
+          for (Eigen::Index k = b0; k < b1; ++k)
+            if (cval(k) > cval(best)) best = k;
+          if (best == b0 && b0 > 0 && cval(b0 - 1) < cval(b0) && b1 - b0 > 2) best = (b0 + b1) / 2;
+          if (!std::isfinite(cval(best))) best = (b0 + b1) / 2;
+          c[row] = cval(best) / fam.scale;
+          if (!grad) continue;
+          gx.setZero();
+          if (fam.tilt) {
+            const auto& B2 = s.fine_basis[2];
+            const auto& B0 = s.fine_basis[0];
+            const auto p = design_detail::tilt_point(B2.row(best).dot(x.segment(0, n1)),
+                                                     B2.row(best).dot(x.segment(n1, n1)),
+                                                     B2.row(best).dot(x.segment(2 * n1, n1)),
+                                                     B0.row(best).dot(x.segment(3 * n1, n1)), s.opt.g);
+            const Eigen::Vector4d& dv = fam.axis == 0 ? p.dphi : p.dtheta;
+            for (int i = 0; i < 3; ++i) gx.segment(i * n1, n1) = dv(i) * B2.row(best);
+            gx.segment(3 * n1, n1) = dv(3) * B0.row(best);
+          } else {
+            gx.segment(fam.axis * n1, n1) = s.fine_basis[static_cast<size_t>(fam.order)].row(best);
+          }
+          J.row(row).noalias() = (sigma / fam.scale) * (gx * s.Z);
+        }
+      }
     }
   }
 
@@ -362,63 +358,17 @@ Eigen::VectorXd random_start(const Setup& s, std::mt19937_64& rng) {
   return y;
 }
 
-// The instants of the next round, per limit and sign: every near-active fine
-// local maximum of the current point (a "peak", kept for later rounds too),
-// plus a cover every cell_dt. A new peak replaces any older one closer than
-// kMinSeparation: nearly coincident instants give nearly parallel constraint
-// gradients, which SLSQP's subproblem handles badly.
-void pick_instants(const Setup& s, const Eigen::VectorXd& x, std::vector<std::vector<Eigen::Index>>& peaks,
-                   std::set<Instant>& out) {
-  const Eigen::MatrixXd V = s.fine_values(x);
-  out.clear();
-  const auto K = V.rows();
-  const auto sep = static_cast<Eigen::Index>(std::lround(kMinSeparation / s.opt.check_dt));
-  for (size_t f = 0; f < s.fams.size(); ++f) {
-    const Family& fam = s.fams[f];
-    const auto v = V.col(static_cast<Eigen::Index>(f));
-    const Eigen::VectorXd& bd = s.bound[f];
-    const double near = kNearActive * fam.scale;
-    for (int sign : {1, -1}) {
-      if (fam.kind == Family::Max && sign < 0) continue;
-      if (fam.kind == Family::Min && sign > 0) continue;
-      const double bsign = fam.kind == Family::Min ? -1.0 : 1.0;
-      // Where the limit equals the start value the start conditions already
-      // hold the value at both ends; there the constraint has no gradient
-      // in y, which SLSQP's subproblem cannot take, so those instants are left out.
-      auto usable = [&](Eigen::Index k) { return !(fam.pinned && (k < sep || k >= K - sep)); };
-      auto c = [&](Eigen::Index k) { return sign * v(k) - bsign * bd(k); };  // <= 0 wanted
-      auto& pk = peaks[2 * f + (sign > 0 ? 0 : 1)];
-      for (Eigen::Index k = 0; k < K; ++k) {
-        const double ck = c(k);
-        const bool peak = (k == 0 || ck >= c(k - 1)) && (k + 1 == K || ck > c(k + 1));
-        if (!peak || ck <= -near || !usable(k)) continue;
-        pk.erase(std::remove_if(pk.begin(), pk.end(), [&](Eigen::Index q) { return std::abs(q - k) < sep; }),
-                 pk.end());
-        pk.push_back(k);
-      }
-      for (Eigen::Index k : pk) out.insert({static_cast<int>(f), sign, k});
-      for (int cell = 0; cell < s.cells(); ++cell) {
-        const Eigen::Index k = s.cell_begin[static_cast<size_t>(cell)];
-        if (usable(k)) out.insert({static_cast<int>(f), sign, k});
-      }
-    }
-  }
-}
-
 StartSummary run_start(const Setup& s, int index, Eigen::VectorXd y, Eigen::VectorXd& x_out) {
   const auto t0 = std::chrono::steady_clock::now();
   StartSummary sum;
   sum.index = index;
   Eigen::VectorXd x = s.xh + s.Z * y;
-  std::vector<std::vector<Eigen::Index>> peaks(2 * s.fams.size());
-  std::set<Instant> instants;
   for (int round = 0; round <= s.opt.refine_rounds; ++round) {
-    pick_instants(s, x, peaks, instants);
-    Round rd(s, instants);
+    Round rd(s);
     nlopt::opt o(nlopt::LD_SLSQP, static_cast<unsigned>(s.ny));
     rd.solver = &o;
     o.set_min_objective(objective_cb, &rd);
-    o.add_inequality_mconstraint(constraints_cb, &rd, std::vector<double>(rd.count(), kFeasTol));
+    o.add_inequality_mconstraint(constraints_cb, &rd, std::vector<double>(rd.m, kFeasTol));
     o.set_maxeval(s.opt.max_evals);
     std::vector<double> yv(y.data(), y.data() + y.size());
     double f = 0.0;
@@ -437,10 +387,6 @@ StartSummary run_start(const Setup& s, int index, Eigen::VectorXd y, Eigen::Vect
     x = s.xh + s.Z * y;
     sum.worst_violation = s.worst_violation(x);
     sum.feasible = sum.worst_violation == 0.0;
-    if (std::getenv("QUADID_DESIGN_DEBUG"))
-      fmt::print(stderr, "  start {} round {}: m={} evals={} J={:.6f} status={} feasible-in-round={} worst={:.3e}\n",
-                 index, round, rd.count(), rd.evals, s.problem.criterion(x), sum.status, rd.best_y.size() > 0,
-                 sum.worst_violation);
     if (sum.feasible) break;
   }
   x_out = x;
