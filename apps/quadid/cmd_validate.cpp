@@ -28,7 +28,15 @@ struct ValidateArgs {
 void run(const ValidateArgs& a) {
   std::vector<NamedParams> sets;
   for (const auto& spec : a.params)
-    for (auto& [name, P] : load_param_sets(spec)) sets.push_back({name, P});
+    for (auto& [name, P] : load_param_sets(spec)) {
+      try {
+        P.validate(name);
+      } catch (const std::invalid_argument& e) {
+        fmt::print(stderr, "quadid validate: warning: {} (judged by prediction error only; it cannot be flown)\n",
+                   e.what());
+      }
+      sets.push_back({name, P});
+    }
   if (sets.empty()) throw std::invalid_argument("give at least one --params set");
   const NamedParams reference{"nom", load_params(a.reference)};
 

@@ -74,9 +74,11 @@ std::string read_file(const std::filesystem::path& path);
 // --- JSON -------------------------------------------------------------------
 
 nlohmann::json to_json(const Params& P);
-/// Reads {"m":..,"Ixx":..,...}; missing Ixy/Ixz/Iyz default to 0; validates
-/// (m > 0, I positive definite). `source` names the origin in messages.
-Params params_from_json(const nlohmann::json& j, const std::string& source);
+/// Reads {"m":..,"Ixx":..,...}; missing Ixy/Ixz/Iyz default to 0. With
+/// `physical` (the default) also requires m > 0 and I positive definite;
+/// without, only finite numbers (an estimate may be unphysical and still be
+/// judged by its prediction error). `source` names the origin in messages.
+Params params_from_json(const nlohmann::json& j, const std::string& source, bool physical = true);
 
 nlohmann::json to_json(const FourierTrajectory& traj);
 /// Reads the trajectory JSON of DESIGN.md; the error names the field that is wrong.
@@ -88,7 +90,8 @@ std::unique_ptr<Trajectory> load_trajectory(const std::string& spec);
 Params load_params(const std::string& spec);
 /// Named parameter sets from a file or preset: a parameters JSON gives one set
 /// (named after the file), an identification result with "estimates" gives one
-/// per method (LS, GD, FMLS, FMGD), a preset gives itself.
+/// per method (LS, GD, FMLS, FMGD), a preset gives itself. The estimates of a
+/// result are not required to be physical (see params_from_json).
 std::vector<std::pair<std::string, Params>> load_param_sets(const std::string& spec);
 
 /// Parses a JSON file; InputError names the file, line and column of a syntax error.

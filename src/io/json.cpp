@@ -43,7 +43,7 @@ Eigen::VectorXd number_array(const json& j, const std::string& key, const std::s
 
 }  // namespace
 
-Params params_from_json(const json& j, const std::string& source) {
+Params params_from_json(const json& j, const std::string& source, bool physical) {
   if (!j.is_object()) throw InputError(fmt::format("{}: parameters must be a JSON object", source));
   Theta th;
   for (int i = 0; i < 7; ++i) {
@@ -52,6 +52,7 @@ Params params_from_json(const json& j, const std::string& source) {
     th(i) = number_field(j, key, source, !product);
   }
   Params P = Params::from_theta(th);
+  if (!physical) return P;
   try {
     P.validate(source);
   } catch (const std::invalid_argument& e) {
@@ -148,11 +149,11 @@ std::vector<std::pair<std::string, Params>> load_param_sets(const std::string& s
     const json& e = j["estimates"];
     if (!e.is_object()) throw InputError(fmt::format("{}: \"estimates\" must be an object", spec));
     for (const char* key : {"LS", "GD", "FMLS", "FMGD"})
-      if (e.contains(key)) sets.emplace_back(key, params_from_json(e[key], fmt::format("{}: estimates.{}", spec, key)));
+      if (e.contains(key)) sets.emplace_back(key, params_from_json(e[key], fmt::format("{}: estimates.{}", spec, key), false));
     for (auto it = e.begin(); it != e.end(); ++it) {
       const std::string& k = it.key();
       if (k != "LS" && k != "GD" && k != "FMLS" && k != "FMGD")
-        sets.emplace_back(k, params_from_json(it.value(), fmt::format("{}: estimates.{}", spec, k)));
+        sets.emplace_back(k, params_from_json(it.value(), fmt::format("{}: estimates.{}", spec, k), false));
     }
     if (sets.empty()) throw InputError(fmt::format("{}: \"estimates\" is empty", spec));
     return sets;

@@ -29,8 +29,9 @@ std::string sim_label(const std::string& set) { return set == "Exp" ? "Exp" : fm
 // Experiment (black) and the five re-flights (nominal red, LS blue, GD purple,
 // FMLS green, FMGD orange), as in the paper's Figs. 6-9.
 Plot compare_plot(const Reproduction& r, std::string_view signal, const std::string& ylabel, double scale,
-                  std::string_view title) {
+                  std::string_view title, int width) {
   Plot p;
+  p.width = width;
   p.title = std::string(title);
   p.xlabel = "time (s)";
   p.ylabel = ylabel;
@@ -246,17 +247,17 @@ std::string reproduction_html(const Reproduction& r) {
                                report::color_for(names[i], i), false, 1.2});
     d.figure(path, "Validation using the identification experiment: path drawn by the quadrotor (paper Fig. 6).");
   }
-  d.figure_row({compare_plot(r, "x", "x (m)", 1.0, "x"), compare_plot(r, "y", "y (m)", 1.0, "y"),
-                compare_plot(r, "z", "z (m)", 1.0, "z")},
+  d.figure_row({compare_plot(r, "x", "x (m)", 1.0, "x", 520), compare_plot(r, "y", "y (m)", 1.0, "y", 520),
+                compare_plot(r, "z", "z (m)", 1.0, "z", 520)},
                "Position in experiment and simulations (paper Fig. 7).");
-  d.figure_row({compare_plot(r, "phi", "φ (deg)", kRad2Deg, "roll φ"),
-                compare_plot(r, "theta", "θ (deg)", kRad2Deg, "pitch θ"),
-                compare_plot(r, "psi", "ψ (deg)", kRad2Deg, "yaw ψ")},
+  d.figure_row({compare_plot(r, "phi", "φ (deg)", kRad2Deg, "roll φ", 520),
+                compare_plot(r, "theta", "θ (deg)", kRad2Deg, "pitch θ", 520),
+                compare_plot(r, "psi", "ψ (deg)", kRad2Deg, "yaw ψ", 520)},
                "Orientation in experiment and simulations (paper Fig. 8).");
-  d.figure_row({compare_plot(r, "Fz", "F_z (N)", 1.0, "thrust F_z"),
-                compare_plot(r, "tau_phi", "τ_φ (N m)", 1.0, "torque τ_φ"),
-                compare_plot(r, "tau_theta", "τ_θ (N m)", 1.0, "torque τ_θ"),
-                compare_plot(r, "tau_psi", "τ_ψ (N m)", 1.0, "torque τ_ψ")},
+  d.figure_row({compare_plot(r, "Fz", "F_z (N)", 1.0, "thrust F_z", 390),
+                compare_plot(r, "tau_phi", "τ_φ (N m)", 1.0, "torque τ_φ", 390),
+                compare_plot(r, "tau_theta", "τ_θ (N m)", 1.0, "torque τ_θ", 390),
+                compare_plot(r, "tau_psi", "τ_ψ (N m)", 1.0, "torque τ_ψ", 390)},
                "Control inputs in experiment and simulations (paper Fig. 9).");
   d.table(prediction_table(select_rows(r.identification.errors_standard, {"LS", "GD"}),
                            "Table 5. Identification experiment"));

@@ -1,0 +1,100 @@
+// End-to-end tests of `quadid validate` and `quadid reproduce`.
+#include "cli_fixture.hpp"
+#include "quadid/io.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <fstream>
+
+using quadid::testing::CliRun;
+using quadid::testing::CliTest;
+
+class CliValidate : public CliTest {};
+
+TEST_F(CliValidate, JudgesAnIdentifyResultAsFourSetsPlusFiles) {
+  ASSERT_EQ(run("simulate --trajectory table2 --duration 14 --noise default -o " + path("log.csv")).rc, 0);
+  // A short window: gradient descent may end on an unphysical set, which is
+  // still judged by its prediction error (with a warning), not refused.
+  const CliRun id = run("identify " + path("log.csv") + " --window 4:14 -o " + path("result.json"));
+  ASSERT_EQ(id.rc, 0) << id.err;
+  const CliRun r = run("validate --log " + path("log.csv") + " --params " + path("result.json") +
+                       " --params qball2-virtual --window 4:14 --json");
+  ASSERT_EQ(r.rc, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);  // stdout holds only the JSON
+  EXPECT_EQ(j["sets"].size(), 5u);
+  for (const char* k : {"LS", "GD", "FMLS", "FMGD", "qball2-virtual"}) EXPECT_TRUE(j["sets"].contains(k)) << k;
+  EXPECT_EQ(j["simulation"]["rows"].size(), 5u);
+  EXPECT_TRUE(j["prediction_error"].contains("standard"));
+  EXPECT_TRUE(j["prediction_error"].contains("filtered"));
+  // The text form prints the Table 4 layout and both prediction tables.
+  const CliRun t = run("validate --log " + path("log.csv") + " --params qball2-virtual --window 4:14");
+  ASSERT_EQ(t.rc, 0) << t.err;
+  EXPECT_NE(t.out.find("e_tau_psi"), std::string::npos);
+  EXPECT_NE(t.out.find("filtered regression"), std::string::npos);
+}
+
+TEST_F(CliValidate, LogWithoutMetadataSkipsSimulationWithANote) {
+  ASSERT_EQ(run("simulate --trajectory table2 --duration 6 -o " + path("log.csv")).rc, 0);
+  // Strip the '#' metadata, as a log from another tool would have none.
+  std::ifstream in(path("log.csv"));
+  std::ofstream out(path("plain.csv"));
+  for (std::string line; std::getline(in, line);)
+    if (line.empty() || line[0] != '#') out << line << "\n";
+  out.close();
+  const CliRun r = run("validate --log " + path("plain.csv") + " --params qball2-virtual --window 1:6");
+  ASSERT_EQ(r.rc, 0) << r.err;
+  EXPECT_NE(r.err.find("--trajectory"), std::string::npos);
+  EXPECT_EQ(r.out.find("Table 4"), std::string::npos);
+  // With --trajectory it re-flies with the default controller.
+  const CliRun s = run("validate --log " + path("plain.csv") + " --params qball2-virtual --window 1:6 --trajectory table2");
+  ASSERT_EQ(s.rc, 0) << s.err;
+  EXPECT_NE(s.out.find("e_x"), std::string::npos);
+}
+
+TEST_F(CliValidate, BadInputNamesTheFile) {
+  ASSERT_EQ(run("simulate --trajectory table2 --duration 3 -o " + path("log.csv")).rc, 0);
+  std::ofstream(path("bad.json")) << "{\"m\": 1.8, \"Ixx\": -0.01, \"Iyy\": 0.01, \"Izz\": 0.02}";
+  const CliRun r = run("validate --log " + path("log.csv") + " --params " + path("bad.json"));
+  EXPECT_NE(r.rc, 0);
+  EXPECT_NE(r.err.find("bad.json"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("positive definite"), std::string::npos) << r.err;
+  const CliRun m = run("validate --log " + path("missing.csv") + " --params qball2-virtual");
+  EXPECT_NE(m.rc, 0);
+  EXPECT_NE(m.err.find("missing.csv"), std::string::npos);
+  EXPECT_TRUE(m.out.empty());
+}
+
+class CliReproduce : public CliTest {};
+
+// The paper's reproduction with the Table 2 trajectory (no design, so it takes
+// about a second): the whole chain runs, the report holds every table and
+// figure, and the estimated sets beat the nominal one in output prediction
+// error on every flight and component (issue 5).
+TEST_F(CliReproduce, Table2RunWritesACompleteReport) {
+  const CliRun r = run("reproduce --trajectory table2 --out " + path("rep"));
+  ASSERT_EQ(r.rc, 0) << r.err;
+  for (int t = 3; t <= 12; ++t) EXPECT_NE(r.out.find("Table " + std::to_string(t) + "."), std::string::npos) << t;
+  EXPECT_NE(r.err.find("identifying"), std::string::npos);  // progress goes to stderr
+  for (const char* f : {"report.html", "summary.json", "trajectory.json", "identification.json", "evolution.csv",
+                        "flight_identification.csv", "flight_circle1.csv", "flight_circle3.csv", "tables.md",
+                        "simulation_LS.csv"})
+    EXPECT_TRUE(std::filesystem::exists(path("rep/") + f)) << f;
+  // Every estimate's error against the true plant is shown (Table 3 with "true" and "error %").
+  EXPECT_NE(r.out.find("true"), std::string::npos);
+  EXPECT_NE(r.out.find("err%"), std::string::npos);
+  const std::string html = quadid::read_file(path("rep/report.html"));
+  for (int f = 1; f <= 9; ++f) EXPECT_NE(html.find("Figure " + std::to_string(f) + "."), std::string::npos) << f;
+  EXPECT_EQ(html.find("<script"), std::string::npos);
+  EXPECT_EQ(html.find("nan"), std::string::npos);
+  const auto s = nlohmann::json::parse(quadid::read_file(path("rep/summary.json")));
+  auto all_improve = [](const nlohmann::json& table, const std::string& where) {
+    for (const auto& row : table["sets"])
+      for (const auto& p : row["improvement_pct"]) EXPECT_GT(p.get<double>(), 0.0) << where << " " << row["name"];
+  };
+  all_improve(s["identification"]["prediction_error"]["standard"], "identification standard");
+  all_improve(s["identification"]["prediction_error"]["filtered"], "identification filtered");
+  for (const auto& c : s["circles"]) {
+    all_improve(c["standard"], c["name"].get<std::string>());
+    all_improve(c["filtered"], c["name"].get<std::string>());
+  }
+}
