@@ -1,0 +1,134 @@
+// End-to-end tests of `quadid check-trajectory` and `quadid design` (the built program, QUADID_EXE).
+#include "quadid/io.hpp"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <sys/wait.h>
+#include <unistd.h>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct DesignCliRun {
+  int rc = -1;
+  std::string out, err;
+};
+
+class CliDesign : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    dir_ = fs::temp_directory_path() / ("quadid_cli_design_" + std::to_string(::getpid()) + "_" + info->name());
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  std::string path(const std::string& name) const { return (dir_ / name).string(); }
+  void write(const std::string& name, const std::string& text) const { std::ofstream(path(name)) << text; }
+
+  DesignCliRun run(const std::string& args) const {
+    const std::string o = path("stdout.txt"), e = path("stderr.txt");
+    const std::string cmd = std::string("\"") + QUADID_EXE + "\" " + args + " >\"" + o + "\" 2>\"" + e + "\"";
+    const int status = std::system(cmd.c_str());
+    DesignCliRun r;
+    r.rc = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    r.out = quadid::read_file(o);
+    r.err = quadid::read_file(e);
+    return r;
+  }
+
+  fs::path dir_;
+};
+
+const nlohmann::json* constraint(const nlohmann::json& rep, const std::string& name) {
+  for (const auto& c : rep["constraints"])
+    if (c["name"] == name) return &c;
+  return nullptr;
+}
+
+}  // namespace
+
+TEST_F(CliDesign, CheckTable2JsonShowsStartConditionsCondAndViolations) {
+  const auto r = run("check-trajectory table2 --json");
+  ASSERT_EQ(r.rc, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);  // stdout is JSON and nothing else
+  EXPECT_NEAR(j["cond"].get<double>(), 16.22, 0.005);
+  EXPECT_EQ(j["criteria"]["samples"].get<int>(), 5000);
+  // The paper's start (0, 0, 0.7 m, 0) with zero velocity, to ~1e-4.
+  for (const auto& e : j["endpoints"]) {
+    EXPECT_TRUE(e["holds"].get<bool>()) << e.dump();
+    EXPECT_NEAR(e["value"].get<double>(), e["target"].get<double>(), 2e-4) << e.dump();
+  }
+  for (const char* name : {"x", "y", "z_min", "z_max", "psi", "phi", "theta", "xdot", "ydot", "zdot", "psidot",
+                           "zddot_min"})
+    EXPECT_NE(constraint(j, name), nullptr) << name;
+  EXPECT_FALSE((*constraint(j, "phi"))["holds"].get<bool>());
+  EXPECT_TRUE((*constraint(j, "xdot"))["holds"].get<bool>());
+  EXPECT_FALSE(j["all_hold"].get<bool>());
+  // --strict turns the violation into exit status 2.
+  EXPECT_EQ(run("check-trajectory table2 --strict").rc, 2);
+}
+
+TEST_F(CliDesign, CheckTextShowsDegreesAndUnits) {
+  const auto r = run("check-trajectory table2");
+  ASSERT_EQ(r.rc, 0) << r.err;
+  EXPECT_NE(r.out.find("|phi| (deg)"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("|xdot| (m/s)"), std::string::npos);
+  EXPECT_NE(r.out.find("cond(W)"), std::string::npos);
+}
+
+TEST_F(CliDesign, CheckRejectsBadTrajectoryFiles) {
+  write("broken.json", "{\"type\": \"fourier\", \"wf\": 0.6, \"axes\": {\"x\": ");
+  auto r = run("check-trajectory " + path("broken.json"));
+  EXPECT_NE(r.rc, 0);
+  EXPECT_NE(r.err.find("broken.json"), std::string::npos) << r.err;
+  write("noaxis.json", R"({"type": "fourier", "wf": 0.6, "axes": {"x": {"a": [0], "b": [0], "c": 0}}})");
+  r = run("check-trajectory " + path("noaxis.json"));
+  EXPECT_NE(r.rc, 0);
+  EXPECT_NE(r.err.find("\"y\""), std::string::npos) << r.err;
+  r = run("check-trajectory " + path("missing.json"));
+  EXPECT_NE(r.rc, 0);
+  EXPECT_TRUE(r.out.empty());
+  r = run("check-trajectory table2 --z-min 1.6");
+  EXPECT_NE(r.rc, 0);
+  EXPECT_NE(r.err.find("z_min"), std::string::npos) << r.err;
+}
+
+TEST_F(CliDesign, DesignRejectsBadOptionsWithoutWriting) {
+  struct Case {
+    std::string args, expect;
+  };
+  for (const Case& c : {Case{"--harmonics 0", "harmonics"}, Case{"--criterion aopt", "aopt"},
+                        Case{"--z-min 1.6", "z_min"}, Case{"--z0 2.0", "z0"}}) {
+    const auto r = run("design -q " + c.args + " -o " + path("t.json"));
+    EXPECT_NE(r.rc, 0) << c.args;
+    EXPECT_NE(r.err.find(c.expect), std::string::npos) << c.args << ": " << r.err;
+    EXPECT_FALSE(fs::exists(path("t.json"))) << c.args;
+  }
+}
+
+TEST_F(CliDesign, DesignWritesCheckedTrajectoryReproducibly) {
+  // A small problem (N = 3, one start) keeps the test short; see the benchmark for the paper's.
+  const std::string args = "design -q --harmonics 3 --starts 1 --seed 5 --max-evals 120 -o ";
+  const auto r1 = run(args + path("a.json"));
+  ASSERT_EQ(r1.rc, 0) << r1.err;
+  const auto j = quadid::read_json_file(path("a.json"));
+  EXPECT_EQ(j["type"], "fourier");
+  EXPECT_EQ(j["harmonics"].get<int>(), 3);
+  EXPECT_EQ(j["criterion"]["name"], "cond");
+  EXPECT_EQ(j["seed"].get<int>(), 5);
+  EXPECT_TRUE(j["check"]["all_hold"].get<bool>());
+  EXPECT_NEAR(j["constraints"]["z_min"].get<double>(), 0.7, 0);
+  // The file is a valid trajectory for the other commands, and checks the same.
+  const auto c = run("check-trajectory --json " + path("a.json"));
+  ASSERT_EQ(c.rc, 0) << c.err;
+  EXPECT_NEAR(nlohmann::json::parse(c.out)["cond"].get<double>(), j["check"]["cond"].get<double>(), 1e-12);
+  // Same seed, same bytes.
+  ASSERT_EQ(run(args + path("b.json")).rc, 0);
+  EXPECT_EQ(quadid::read_file(path("a.json")), quadid::read_file(path("b.json")));
+}
