@@ -44,8 +44,10 @@ void df2t(const double* b, const double* a, double* z, double* p, std::ptrdiff_t
   for (int k = 0; k < N; ++k) zz[k] = z[k];
   for (std::ptrdiff_t i = 0; i < count; ++i, p += step) {
     const double x = *p;
-    const double y = bb[0] * x + zz[0];
-    for (int k = 0; k < N - 1; ++k) zz[k] = bb[k + 1] * x - aa[k + 1] * y + zz[k + 1];
+    // The operation order of scipy's lfilter and signal::filtfilt, so that the
+    // results agree bit for bit.
+    const double y = zz[0] + bb[0] * x;
+    for (int k = 0; k < N - 1; ++k) zz[k] = (zz[k + 1] + bb[k + 1] * x) - aa[k + 1] * y;
     zz[N - 1] = bb[N] * x - aa[N] * y;
     *p = y;
   }
@@ -67,8 +69,8 @@ void df2t_any(int N, const double* b, const double* a, double* z, double* p, std
   }
   for (std::ptrdiff_t i = 0; i < count; ++i, p += step) {
     const double x = *p;
-    const double y = b[0] * x + z[0];
-    for (int k = 0; k < N - 1; ++k) z[k] = b[k + 1] * x - a[k + 1] * y + z[k + 1];
+    const double y = z[0] + b[0] * x;
+    for (int k = 0; k < N - 1; ++k) z[k] = (z[k + 1] + b[k + 1] * x) - a[k + 1] * y;
     z[N - 1] = b[N] * x - a[N] * y;
     *p = y;
   }

@@ -1,0 +1,171 @@
+// End-to-end tests of `quadid identify` (the built program, QUADID_EXE) on
+// logs written by the simulator library.
+#include "quadid/identification.hpp"
+#include "quadid/io.hpp"
+#include "quadid/simulation.hpp"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <sys/wait.h>
+#include <unistd.h>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct CliRun {
+  int rc = -1;
+  std::string out, err;
+};
+
+// One simulated 50 s Table 2 flight (default noise), shared by the tests.
+const quadid::FlightLog& flight() {
+  static const quadid::FlightLog log = [] {
+    quadid::SimulationOptions o;
+    o.record_truth = false;
+    return quadid::simulate(quadid::FourierTrajectory::table2(), o).log;
+  }();
+  return log;
+}
+
+class CliIdentify : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    dir_ = fs::temp_directory_path() / ("quadid_cli_id_" + std::to_string(::getpid()) + "_" + info->name());
+    fs::create_directories(dir_);
+    quadid::write_flight_log(flight(), path("log.csv"));
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  std::string path(const std::string& name) const { return (dir_ / name).string(); }
+
+  CliRun run(const std::string& args) const {
+    const std::string o = path("stdout.txt"), e = path("stderr.txt");
+    const std::string cmd = std::string("\"") + QUADID_EXE + "\" identify " + args + " >\"" + o + "\" 2>\"" + e + "\"";
+    const int status = std::system(cmd.c_str());
+    CliRun r;
+    r.rc = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    r.out = quadid::read_file(o);
+    r.err = quadid::read_file(e);
+    return r;
+  }
+
+  fs::path dir_;
+};
+
+}  // namespace
+
+TEST_F(CliIdentify, PrintsTable3AndTables5And6) {
+  const CliRun r = run(path("log.csv"));
+  ASSERT_EQ(r.rc, 0) << r.err;
+  for (const char* s : {"Estimated parameters (Table 3): window 10-50 s (20001 samples at 500 Hz)", "kg m^2",
+                        "Table 5: RMS output prediction error of the standard regression model (eq. 34), window 0-50 s",
+                        "Table 6: RMS output prediction error of the filtered regression model (eq. 38)", "e_FMGD",
+                        "P_imp%", "condition number"})
+    EXPECT_NE(r.out.find(s), std::string::npos) << s << "\n" << r.out;
+  EXPECT_EQ(r.err, "");  // no warnings on a well-excited flight
+}
+
+TEST_F(CliIdentify, JsonOnStdoutAloneAndTheSameInTheOutputFile) {
+  const CliRun r = run(path("log.csv") + " --json -o " + path("result.json") + " --evolution " + path("evo.csv"));
+  ASSERT_EQ(r.rc, 0) << r.err;
+  const nlohmann::json j = nlohmann::json::parse(r.out);  // throws if anything else is on stdout
+  EXPECT_EQ(j, quadid::read_json_file(path("result.json")));
+  const quadid::Params truth = quadid::Params::qball2_virtual();
+  for (const char* set : {"LS", "GD", "FMLS", "FMGD"}) ASSERT_TRUE(j["estimates"].contains(set)) << set;
+  // The result is a parameter-set file other commands read (load_param_sets).
+  const auto sets = quadid::load_param_sets(path("result.json"));
+  ASSERT_EQ(sets.size(), 4u);
+  EXPECT_EQ(sets[0].first, "LS");
+  EXPECT_NEAR(sets[0].second.m, truth.m, 0.005 * truth.m);
+  EXPECT_NEAR(j["estimates"]["FMLS"]["Izz"].get<double>(), truth.I(2, 2), 0.03 * truth.I(2, 2));
+  const auto& pe = j["prediction_error"]["standard"];
+  EXPECT_EQ(pe["reference"]["name"], "nom");
+  EXPECT_EQ(pe["sets"].size(), 2u);
+  EXPECT_EQ(pe["sets"][0]["rms"].size(), 4u);
+  EXPECT_EQ(j["window"]["samples"], 20001);
+  EXPECT_EQ(j["gradient_descent"]["discretization"], "exact");
+  EXPECT_TRUE(fs::exists(path("evo.csv")));
+}
+
+TEST_F(CliIdentify, EvolutionFileHasTimeAndTheFourSets) {
+  ASSERT_EQ(run(path("log.csv") + " --evolution " + path("evo.csv") + " --evolution-interval 0.5").rc, 0);
+  const std::string text = quadid::read_file(path("evo.csv"));
+  const std::string header = text.substr(0, text.find('\n'));
+  EXPECT_EQ(std::count(header.begin(), header.end(), ','), 28);
+  EXPECT_EQ(header.rfind("t,LS_m,LS_Ixx", 0), 0u);
+  EXPECT_EQ(std::count(text.begin(), text.end(), '\n'), 1 + 81);  // 10, 10.5, ..., 50 s
+  EXPECT_NE(text.find("\n10,nan,"), std::string::npos);           // one sample does not determine LS
+}
+
+TEST_F(CliIdentify, SameInputSameBytes) {
+  ASSERT_EQ(run(path("log.csv") + " -o " + path("a.json")).rc, 0);
+  ASSERT_EQ(run(path("log.csv") + " -o " + path("b.json")).rc, 0);
+  EXPECT_EQ(quadid::read_file(path("a.json")), quadid::read_file(path("b.json")));
+}
+
+TEST_F(CliIdentify, MapRenamesColumns) {
+  quadid::FlightLog log = flight();
+  for (auto& c : log.columns)
+    if (c == "tau_phi") c = "Mx";
+  quadid::write_flight_log(log, path("renamed.csv"));
+  CliRun r = run(path("renamed.csv"));
+  EXPECT_NE(r.rc, 0);
+  EXPECT_NE(r.err.find("renamed.csv:"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("missing required column(s): tau_phi"), std::string::npos) << r.err;
+  r = run(path("renamed.csv") + " --map tau_phi=Mx --json");
+  ASSERT_EQ(r.rc, 0) << r.err;
+  EXPECT_EQ(nlohmann::json::parse(r.out)["estimates"], nlohmann::json::parse(run(path("log.csv") + " --json").out)["estimates"]);
+}
+
+TEST_F(CliIdentify, BadInputFailsClearlyAndWritesNothing) {
+  // A window past the end of the log.
+  CliRun r = run(path("log.csv") + " --window 10:80 -o " + path("r.json"));
+  EXPECT_EQ(r.rc, 1);
+  EXPECT_NE(r.err.find("quadid identify: error: "), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("log.csv: window 10-80 s ends after the log ends (50 s of data)"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(path("r.json")));
+  EXPECT_EQ(r.out, "");
+  // Text in a number: file, line and column.
+  std::string text = quadid::read_file(path("log.csv"));
+  const int skip = static_cast<int>(flight().comments.size()) + 1 + 3;  // comments, header, 3 rows
+  size_t pos = 0;
+  for (int i = 0; i < skip; ++i) pos = text.find('\n', pos) + 1;
+  text.replace(pos, text.find(',', pos) - pos, "oops");
+  std::ofstream(path("bad.csv")) << text;
+  const std::string where = "bad.csv:" + std::to_string(skip + 1) + ": column 1 ('t'): 'oops' is not a finite number";
+  r = run(path("bad.csv") + " -o " + path("r.json"));
+  EXPECT_EQ(r.rc, 1);
+  EXPECT_NE(r.err.find(where), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(path("r.json")));
+  // Bad options name themselves.
+  EXPECT_NE(run(path("log.csv") + " --filter median").err.find("--filter median: expected butter or fir"),
+            std::string::npos);
+  EXPECT_NE(run(path("log.csv") + " --window 50").err.find("window '50'"), std::string::npos);
+  EXPECT_NE(run(path("log.csv") + " --nominal nosuch").err.find("nosuch"), std::string::npos);
+  EXPECT_NE(run(path("log.csv") + " --cutoff 400").err.find("below Nyquist"), std::string::npos);
+  EXPECT_NE(run(path("missing.csv")).rc, 0);
+}
+
+TEST_F(CliIdentify, LiteralGradientDescentReportsDivergence) {
+  const CliRun r = run(path("log.csv") + " --gd-discretization literal --json");
+  ASSERT_EQ(r.rc, 0) << r.err;
+  EXPECT_NE(r.err.find("warning: GD diverged"), std::string::npos) << r.err;
+  const nlohmann::json j = nlohmann::json::parse(r.out);
+  EXPECT_FALSE(j["estimates"].contains("GD"));
+  EXPECT_TRUE(j["gradient_descent"]["FMGD"]["diverged"].get<bool>());
+}
+
+TEST_F(CliIdentify, HelpTeachesUnitsAndDefaults) {
+  const CliRun r = run("--help");
+  EXPECT_EQ(r.rc, 0);
+  for (const char* s : {"--window", "10:50", "--cutoff", "Hz", "--lambda", "rad/s", "--sigma", "--map", "--json",
+                        "--evolution", "--gd-discretization", "--derivative-filter", "--nominal", "qball2-nominal"})
+    EXPECT_NE(r.out.find(s), std::string::npos) << s;
+}

@@ -1,0 +1,243 @@
+// Flight-log CSV reader and writer (DESIGN.md "Flight log"; io.hpp).
+// Every error must name the file, the line and the column; the chunked,
+// column-selective reading must give exactly the numbers in the file.
+#include "quadid/io.hpp"
+
+#include <gtest/gtest.h>
+
+#include <fmt/format.h>
+
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <string>
+#include <unistd.h>
+
+namespace fs = std::filesystem;
+using namespace quadid;
+
+namespace {
+
+class Csv : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    dir_ = fs::temp_directory_path() / ("quadid_csv_" + std::to_string(::getpid()) + "_" + info->name());
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  std::string write(const std::string& name, const std::string& text) const {
+    const std::string p = (dir_ / name).string();
+    std::ofstream(p, std::ios::binary) << text;
+    return p;
+  }
+  // The error message of reading `text`, or "" if it reads.
+  std::string error_of(const std::string& text, const CsvReadOptions& o = {}) const {
+    const std::string p = write("bad.csv", text);
+    try {
+      read_flight_log(p, o);
+    } catch (const InputError& e) {
+      return e.what();
+    }
+    return "";
+  }
+  fs::path dir_;
+};
+
+const char* kHeader = "t,x,y,z,phi,theta,psi,p,q,r,Fz,tau_phi,tau_theta,tau_psi";
+
+// n rows of the standard columns at period T; value of column c in row k = k + c / 100.
+std::string standard_rows(int n, double T = 0.002, int first = 0) {
+  std::string s;
+  for (int k = first; k < first + n; ++k) {
+    s += fmt::format("{}", k * T);
+    for (int c = 1; c < 14; ++c) s += fmt::format(",{}", k + c / 100.0);
+    s += "\n";
+  }
+  return s;
+}
+
+}  // namespace
+
+TEST_F(Csv, ReadsCommentsHeaderAndValues) {
+  const std::string p = write("a.csv", std::string("# quadid-simulate v1\n#  seed: 3\n") + kHeader + ",extra\n" +
+                                           "0,1,2,3,4,5,6,7,8,9,10,11,12,13,99\n"
+                                           "0.002, 1.5 ,+2,-3e-2,4,5,6,7,8,9,10,11,12,13,98\n"
+                                           "0.004,1,2,3,4,5,6,7,8,9,10,11,12,13,97\n");
+  const FlightLog log = read_flight_log(p);
+  ASSERT_EQ(log.comments.size(), 2u);
+  EXPECT_EQ(log.comments[0], "quadid-simulate v1");
+  EXPECT_EQ(log.comments[1], "seed: 3");
+  ASSERT_EQ(log.columns.size(), 15u);
+  EXPECT_EQ(log.columns.back(), "extra");
+  ASSERT_EQ(log.rows(), 3);
+  EXPECT_EQ(log.column("x")(1), 1.5);   // blanks around a field
+  EXPECT_EQ(log.column("y")(1), 2.0);   // leading '+'
+  EXPECT_EQ(log.column("z")(1), -0.03);
+  EXPECT_EQ(log.column("extra")(2), 97.0);
+}
+
+TEST_F(Csv, DropsExtraColumnsWhenAskedButStillCountsFields) {
+  CsvReadOptions o;
+  o.keep_extra_columns = false;
+  const std::string text = std::string(kHeader) + ",w1,w2\n" + "0,1,2,3,4,5,6,7,8,9,10,11,12,13,junk,x\n" +
+                           "0.002,1,2,3,4,5,6,7,8,9,10,11,12,13,1,2\n";
+  const FlightLog log = read_flight_log(write("a.csv", text), o);
+  EXPECT_EQ(log.columns, standard_log_columns());  // skipped columns are not parsed (no error on "junk")
+  EXPECT_EQ(log.data(1, 13), 13.0);
+  const std::string msg = error_of(std::string(kHeader) + ",w1\n0,1,2,3,4,5,6,7,8,9,10,11,12,13\n", o);
+  EXPECT_NE(msg.find(":2: row has 14 field(s), expected 15"), std::string::npos) << msg;
+}
+
+TEST_F(Csv, WindowsLineEndingsBomAndQuotedHeader) {
+  std::string text = "\xEF\xBB\xBF\"t\",\"x\",y,z,phi,theta,psi,p,q,r,Fz,tau_phi,tau_theta,tau_psi\r\n";
+  text += "0,1,2,3,4,5,6,7,8,9,10,11,12,13\r\n0.002,1,2,3,4,5,6,7,8,9,10,11,12,13.5\r\n";
+  const FlightLog log = read_flight_log(write("crlf.csv", text));
+  EXPECT_EQ(log.columns.front(), "t");
+  EXPECT_EQ(log.columns[1], "x");
+  EXPECT_EQ(log.data(1, 13), 13.5);
+}
+
+TEST_F(Csv, MapRenamesColumnsOntoTheCanonicalNames) {
+  const std::string text = "time,x,y,z,roll,theta,psi,p,q,r,Fz,tau_x,tau_theta,tau_psi\n" + standard_rows(3);
+  CsvReadOptions o;
+  o.map = parse_column_map({"t=time", "phi=roll", "tau_phi=tau_x"});
+  const FlightLog log = read_flight_log(write("m.csv", text), o);
+  EXPECT_EQ(log.column("phi")(2), 2.04);
+  EXPECT_EQ(log.column("tau_phi")(1), 1.11);
+  EXPECT_FALSE(log.has("roll"));
+  // Without the map: the missing columns are named, with the header line and a hint.
+  const std::string msg = error_of(text);
+  EXPECT_NE(msg.find("bad.csv:1: missing required column(s): t, phi, tau_phi"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("--map"), std::string::npos);
+  // A map onto a column the file lacks, or onto a name already present.
+  o.map = parse_column_map({"t=tiempo"});
+  EXPECT_NE(error_of(text, o).find("--map t=tiempo: the file has no column 'tiempo'"), std::string::npos);
+  o.map = parse_column_map({"x=y"});
+  EXPECT_NE(error_of(std::string(kHeader) + "\n" + standard_rows(3), o).find("already has a column 'x'"),
+            std::string::npos);
+  // Swapping two names is fine (each rename reads the original header).
+  o.map = parse_column_map({"x=y", "y=x"});
+  const FlightLog sw = read_flight_log(write("s.csv", std::string(kHeader) + "\n" + standard_rows(3)), o);
+  EXPECT_EQ(sw.column("x")(0), 0.02);
+  EXPECT_THROW(parse_column_map({"tau_phi"}), std::invalid_argument);
+  EXPECT_THROW(parse_column_map({"a=b", "a=c"}), std::invalid_argument);
+}
+
+TEST_F(Csv, NumberErrorsNameFileLineAndColumn) {
+  const std::string head = std::string("# c\n") + kHeader + "\n" + standard_rows(2);
+  std::string msg = error_of(head + "0.004,1,2,3,4,5,6,7,8,9,NaN,11,12,13\n");
+  EXPECT_NE(msg.find("bad.csv:5: column 11 ('Fz'): 'NaN' is not a finite number"), std::string::npos) << msg;
+  msg = error_of(head + "0.004,1,2,3,4,5,6,7,8,9,10,11,12,inf\n");
+  EXPECT_NE(msg.find("bad.csv:5: column 14 ('tau_psi')"), std::string::npos) << msg;
+  msg = error_of(head + "0.004,1,2,3,4,five,6,7,8,9,10,11,12,13\n");
+  EXPECT_NE(msg.find("column 6 ('theta'): 'five'"), std::string::npos) << msg;
+  msg = error_of(head + "0.004,1,2,3,4,5 6,6,7,8,9,10,11,12,13\n");  // junk after a number
+  EXPECT_NE(msg.find("column 6 ('theta'): '5 6'"), std::string::npos) << msg;
+  msg = error_of(head + "0.004,1,,3,4,5,6,7,8,9,10,11,12,13\n");
+  EXPECT_NE(msg.find("column 3 ('y'): an empty field"), std::string::npos) << msg;
+  msg = error_of(head + "0.004,1,2,3\n");
+  EXPECT_NE(msg.find("bad.csv:5: row has 4 field(s), expected 14"), std::string::npos) << msg;
+  msg = error_of(head + "0.004,1,2,3,4,5,6,7,8,9,10,11,12,13,14\n");
+  EXPECT_NE(msg.find("bad.csv:5: row has more than 14 fields"), std::string::npos) << msg;
+}
+
+TEST_F(Csv, TimeMustIncreaseUniformly) {
+  const std::string head = std::string(kHeader) + "\n" + standard_rows(3);
+  std::string msg = error_of(head + "0.004,1,2,3,4,5,6,7,8,9,10,11,12,13\n" + standard_rows(2, 0.002, 4));
+  EXPECT_NE(msg.find("bad.csv:5: column 't': time 0.004 is not after the previous sample's 0.004"), std::string::npos)
+      << msg;
+  msg = error_of(head + "0.0065,1,2,3,4,5,6,7,8,9,10,11,12,13\n" + standard_rows(3, 0.002, 4));
+  EXPECT_NE(msg.find("bad.csv:5: column 't': sample period "), std::string::npos) << msg;
+  EXPECT_NE(msg.find("uniformly sampled"), std::string::npos);
+  // Jitter within the tolerance is accepted.
+  CsvReadOptions o;
+  o.period_tolerance = 0.3;
+  EXPECT_EQ(error_of(head + "0.0065,1,2,3,4,5,6,7,8,9,10,11,12,13\n0.008,1,2,3,4,5,6,7,8,9,10,11,12,13\n", o), "");
+}
+
+TEST_F(Csv, LineNumbersStayRightAcrossCommentsAndBlankLines) {
+  // Rows t = 0, .002, .004 on lines 2-4, a comment and a blank line, t = .006 on
+  // line 7, a repeated .006 on line 8, then .010 and .012 (mean period .002).
+  const std::string text = std::string(kHeader) + "\n" + standard_rows(3) + "# pause\n\n" + standard_rows(1, 0.002, 3) +
+                           standard_rows(1, 0.002, 3) + standard_rows(2, 0.002, 5);
+  const std::string msg = error_of(text);
+  EXPECT_NE(msg.find("bad.csv:8: column 't': time 0.006 is not after the previous sample's 0.006"), std::string::npos)
+      << msg;
+}
+
+TEST_F(Csv, StructuralErrors) {
+  EXPECT_NE(error_of("").find("no header line"), std::string::npos);
+  EXPECT_NE(error_of("# only a comment\n").find("no header line"), std::string::npos);
+  EXPECT_NE(error_of(std::string(kHeader) + "\n" + standard_rows(1)).find("only 1 data row(s)"), std::string::npos);
+  EXPECT_NE(error_of("t,x,x,z\n0,1,2,3\n").find("column 'x' appears twice (columns 2 and 3)"), std::string::npos);
+  EXPECT_NE(error_of("t,,y\n0,1,2\n").find("bad.csv:1: column 2 has an empty name"), std::string::npos);
+  try {
+    read_flight_log(dir_ / "missing.csv");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("missing.csv: cannot open"), std::string::npos);
+  }
+}
+
+// Many rows through the 256 KiB chunks and the capacity estimate: early rows
+// long (17-digit numbers), later rows short, so the estimate from the first
+// rows is too small and the store must grow; then the reverse (estimate too large).
+TEST_F(Csv, LongFilesCrossChunksAndCapacityGuesses) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> U(-1.0, 1.0);
+  for (bool long_first : {true, false}) {
+    const int n = 40000;
+    Eigen::MatrixXd ref(n, 14);
+    std::string text = std::string(kHeader) + "\n";
+    for (int k = 0; k < n; ++k) {
+      ref(k, 0) = k * 0.001;
+      const bool long_row = (k < 3000) == long_first;
+      for (int c = 1; c < 14; ++c) ref(k, c) = long_row ? U(rng) : std::round(10 * U(rng));
+      text += fmt::format("{}", ref(k, 0));
+      for (int c = 1; c < 14; ++c) text += fmt::format(",{}", ref(k, c));
+      text += "\n";
+    }
+    const FlightLog log = read_flight_log(write("long.csv", text));
+    ASSERT_EQ(log.rows(), n);
+    EXPECT_EQ(log.data, ref) << "shortest round-trip text must read back bit for bit";
+  }
+}
+
+TEST_F(Csv, LinesLongerThanTheReadChunk) {
+  std::string comment = "# " + std::string(600000, 'x') + "\n";
+  std::string header = "t,x,y,z,phi,theta,psi,p,q,r,Fz,tau_phi,tau_theta,tau_psi";
+  for (int i = 0; i < 30000; ++i) header += fmt::format(",extra{}", i);
+  std::string row0 = "0,1,2,3,4,5,6,7,8,9,10,11,12,13", row1 = "0.01,1,2,3,4,5,6,7,8,9,10,11,12,13";
+  for (int i = 0; i < 30000; ++i) {
+    row0 += ",1.25";
+    row1 += ",2.5";
+  }
+  const FlightLog log = read_flight_log(write("wide.csv", comment + header + "\n" + row0 + "\n" + row1 + "\n"));
+  EXPECT_EQ(log.comments.front().size(), 600000u);
+  EXPECT_EQ(log.columns.size(), 30014u);
+  EXPECT_EQ(log.data(1, 30013), 2.5);
+}
+
+TEST_F(Csv, WriteThenReadIsExactAndAtomic) {
+  FlightLog log;
+  log.comments = {"made by a test"};
+  log.columns = standard_log_columns();
+  log.data = Eigen::MatrixXd::Random(50, 14);
+  for (int k = 0; k < 50; ++k) log.data(k, 0) = 0.002 * k;
+  const std::string p = (dir_ / "w.csv").string();
+  write_flight_log(log, p);
+  const FlightLog back = read_flight_log(p);
+  EXPECT_EQ(back.comments, log.comments);
+  EXPECT_EQ(back.data, log.data);
+  // A non-finite value is refused and leaves the old file and no temporary behind.
+  FlightLog bad = log;
+  bad.data(3, 5) = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW(write_flight_log(bad, p), InputError);
+  EXPECT_EQ(read_flight_log(p).data, log.data);
+  int files = 0;
+  for (const auto& e : fs::directory_iterator(dir_)) files += e.is_regular_file();
+  EXPECT_EQ(files, 1);
+  EXPECT_THROW(write_flight_log(log, (dir_ / "no_such_dir" / "x.csv").string()), InputError);
+}

@@ -1,0 +1,507 @@
+// Identification from a flight log (section II-C, eqs. 33-43): processing,
+// both regressions, the four estimates, prediction errors, diagnostics.
+//
+// Two independent sources of truth:
+//  - "perfect tracking" logs built here from the exact reference of a
+//    trajectory (reference_at) and the inverse dynamics of a known plant, with
+//    position and yaw held at 30 Hz like the motion capture;
+//  - closed-loop flights of the simulator (simulation.hpp).
+#include "quadid/identification.hpp"
+#include "quadid/regressor.hpp"
+#include "quadid/simulation.hpp"
+#include "quadid/trajectory.hpp"
+
+#include "../src/identification/zero_phase.hpp"
+
+#include <gtest/gtest.h>
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <random>
+
+using namespace quadid;
+
+namespace {
+
+// Samples traj at fs with the plant following it exactly: the inputs are the
+// inverse dynamics; x, y, z and psi are held at mocap_hz (0: not held).
+FlightLog perfect_log(const Params& P, double fs, double duration, double mocap_hz = 30.0,
+                      const Trajectory& traj = FourierTrajectory::table2()) {
+  const Eigen::Index n = static_cast<Eigen::Index>(std::llround(duration * fs)) + 1;
+  FlightLog log;
+  log.columns = standard_log_columns();
+  log.data.resize(n, 14);
+  Vec3 p_held = Vec3::Zero();
+  double psi_held = 0.0, next_mocap = 0.0;
+  for (Eigen::Index k = 0; k < n; ++k) {
+    const double t = static_cast<double>(k) / fs;
+    const Reference ref = reference_at(traj, t);
+    if (mocap_hz <= 0.0 || t >= next_mocap - 1e-12) {
+      p_held = ref.p;
+      psi_held = ref.eta(2);
+      next_mocap += mocap_hz > 0.0 ? 1.0 / mocap_hz : 0.0;
+    }
+    State x;
+    x.p = ref.p;
+    x.v = ref.v;
+    x.eta = ref.eta;
+    x.omega = ref.omega;
+    const Input u = inverse_dynamics(x, ref.v_dot, ref.omega_dot, P);
+    log.data.row(k) << t, p_held(0), p_held(1), p_held(2), ref.eta(0), ref.eta(1), psi_held, ref.omega(0),
+        ref.omega(1), ref.omega(2), u.Fz, u.tau(0), u.tau(1), u.tau(2);
+  }
+  return log;
+}
+
+const FlightLog& perfect_table2() {
+  static const FlightLog log = perfect_log(Params::qball2_virtual(), 500.0, 50.0);
+  return log;
+}
+
+// Relative error of each parameter against the truth.
+Theta rel_error(const Theta& est, const Theta& truth) { return (est - truth).cwiseQuotient(truth); }
+
+// m within tol_m, Ixx, Iyy, Izz within tol_i (relative), for LS and FMLS.
+void expect_ls_accuracy(const IdentificationResult& r, const Params& truth, double tol_m, double tol_i,
+                        const std::string& what) {
+  for (const char* set : {"LS", "FMLS"}) {
+    const Theta e = rel_error(r.estimate(set).theta, truth.theta());
+    EXPECT_LT(std::abs(e(0)), tol_m) << what << " " << set << " m error " << 100 * e(0) << "%";
+    for (int j : {1, 4, 6})
+      EXPECT_LT(std::abs(e(j)), tol_i) << what << " " << set << " " << kThetaNames[static_cast<size_t>(j)]
+                                       << " error " << 100 * e(j) << "%";
+  }
+}
+
+// Every parameter's error for all four sets, for the report.
+std::string error_table(const IdentificationResult& r, const Params& truth) {
+  std::string s = fmt::format("{:6}", "set");
+  for (const char* n : kThetaNames) s += fmt::format("{:>10}", n);
+  s += "   (% error against the plant)\n";
+  for (const auto& e : r.estimates) {
+    s += fmt::format("{:6}", e.name);
+    const Theta d = 100.0 * rel_error(e.theta, truth.theta());
+    for (int j = 0; j < 7; ++j) s += fmt::format("{:>10.3f}", d(j));
+    s += "\n";
+  }
+  return s;
+}
+
+// A 30 g micro quadrotor (Crazyflie class) with the paper's controller scaled
+// by the mass and inertia ratios, so that the closed loop keeps the QBall 2's
+// bandwidths (the raw gains would be ~100x too stiff for it).
+SimulationOptions micro_quad_options(Params* plant) {
+  Params M;
+  M.m = 0.03;
+  M.I << 1.4e-5, -1e-6, 0.0, -1e-6, 1.4e-5, 0.0, 0.0, 0.0, 2.2e-5;
+  SimulationOptions so;
+  so.plant = M;
+  so.controller.params = M;
+  const double km = M.m / 1.79, ki = 1.4e-5 / 0.03;  // against the nominal QBall 2
+  auto& g = so.controller.gains;
+  g.Kpp *= km;
+  g.Kip *= km;
+  g.Kdp *= km;
+  g.Kpo *= ki;
+  g.Kio *= ki;
+  g.Kdo *= ki;
+  so.controller.Fz_max *= km;
+  so.controller.tau_max *= ki;
+  *plant = M;
+  return so;
+}
+
+}  // namespace
+
+// --- Building blocks --------------------------------------------------------------
+
+TEST(Identification, TimeWindowParsing) {
+  const TimeWindow a = TimeWindow::parse("10:50");
+  EXPECT_EQ(a.t0, 10.0);
+  EXPECT_EQ(a.t1, 50.0);
+  EXPECT_TRUE(std::isinf(TimeWindow::parse("2.5:").t1));
+  EXPECT_EQ(TimeWindow::parse(":20").t0, 0.0);
+  for (const char* bad : {"10", "a:5", "5:b", "50:10", "-1:5", "5:5"}) {
+    try {
+      TimeWindow::parse(bad);
+      ADD_FAILURE() << bad;
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(std::string("'") + bad + "'"), std::string::npos) << e.what();
+    }
+  }
+}
+
+TEST(Identification, AssembledRegressorIsPhiAndPhiAPlusPhiB) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> U(-1.0, 1.0);
+  for (int trial = 0; trial < 20; ++trial) {
+    const Vec3 v(U(rng), U(rng), U(rng)), w(U(rng), U(rng), U(rng)), eta(0.5 * U(rng), 0.5 * U(rng), 3 * U(rng));
+    const Vec3 vd(U(rng), U(rng), U(rng)), wd(U(rng), U(rng), U(rng));
+    const double p = w(0), q = w(1), r = w(2);
+    Eigen::Matrix<double, 7, 1> b;
+    b << p * v(1) - q * v(0) + gravity_body<double>(eta, kDefaultGravity)(2), p * q, p * r, q * r, p * p, q * q, r * r;
+    const Regressor4x7 std_ref = regressor<double>(v, w, eta, vd, wd);
+    EXPECT_LT((assemble_regressor(Vec4(vd(2), wd(0), wd(1), wd(2)), b) - std_ref).norm(), 1e-14);
+    const Regressor4x7 ab_ref = regressor_a<double>(v, w) + regressor_b<double>(v, w, eta);
+    EXPECT_LT((assemble_regressor(Vec4(v(2), p, q, r), b) - ab_ref).norm(), 1e-14);
+  }
+}
+
+TEST(Identification, InPlaceFilterAndDifferenceEqualTheSignalModule) {
+  std::mt19937 rng(12);
+  std::normal_distribution<double> N(0.0, 1.0);
+  Eigen::VectorXd x(3001);
+  for (Eigen::Index k = 0; k < x.size(); ++k) x(k) = std::sin(0.01 * static_cast<double>(k)) + 0.1 * N(rng);
+  const signal::TransferFunction butter = signal::butter_lowpass(4, 4.0, 500.0);
+  const signal::TransferFunction fir{signal::fir_lowpass_blackmanharris(31, 4.0, 500.0), {1.0}};
+  for (const auto& tf : {butter, fir}) {
+    detail::ZeroPhaseFilter zf(tf);
+    Eigen::VectorXd y = x;
+    zf.apply(y.data(), y.size());
+    // Same arithmetic up to the FIR path's summation order: 1e-13 of the signal's size.
+    EXPECT_LT((y - signal::filtfilt(tf, x)).cwiseAbs().maxCoeff(), 1e-13);
+    Eigen::VectorXd short_x = x.head(zf.padlen());
+    EXPECT_THROW(zf.apply(short_x.data(), short_x.size()), std::invalid_argument);
+  }
+  Eigen::VectorXd d = x;
+  detail::central_difference_inplace(d.data(), d.size(), 0.002);
+  EXPECT_EQ(d, signal::central_difference(x, 0.002));
+}
+
+// The 15 processed signals against the textbook pipeline written with the
+// signal module (filtfilt, central_difference) and the model (rotation).
+TEST(Identification, ProcessingMatchesSectionIIC) {
+  const FlightLog& log = perfect_table2();
+  ProcessingSummary sum;
+  const auto sig = process_log(log, {}, &sum);
+  EXPECT_EQ(sum.samples, 25001);
+  EXPECT_NEAR(sum.fs, 500.0, 1e-9);
+  EXPECT_EQ(sum.padlen, 12);
+  EXPECT_NEAR(sum.filter_f3db, 3.58, 0.01);  // 4 Hz Butterworth applied twice: |H|^2 = -3 dB at ~0.9 fc
+  const signal::TransferFunction tf = signal::butter_lowpass(4, 4.0, 500.0);
+  auto f = [&](const char* c) { return signal::filtfilt(tf, log.column(c)); };
+  const double T = 0.002;
+  const Eigen::VectorXd xd = signal::central_difference(f("x"), T), yd = signal::central_difference(f("y"), T),
+                        zd = signal::central_difference(f("z"), T);
+  const Eigen::VectorXd phi = f("phi"), th = f("theta"), psi = f("psi"), p = f("p"), q = f("q"), r = f("r");
+  double worst = 0.0;
+  for (Eigen::Index k = 0; k < log.rows(); k += 7) {
+    const Vec3 eta(phi(k), th(k), psi(k));
+    const Vec3 v = rotation<double>(eta).transpose() * Vec3(xd(k), yd(k), zd(k));  // eq. (3)
+    Eigen::Matrix<double, 1, 15> ref;
+    ref << v(2), p(k), q(k), r(k), p(k) * v(1) - q(k) * v(0) + 9.81 * std::cos(th(k)) * std::cos(phi(k)),
+        p(k) * q(k), p(k) * r(k), q(k) * r(k), p(k) * p(k), q(k) * q(k), r(k) * r(k), f("Fz")(k), f("tau_phi")(k),
+        f("tau_theta")(k), f("tau_psi")(k);
+    worst = std::max(worst, (sig->x.row(k) - ref).cwiseAbs().maxCoeff());
+    if (k > 2000) k += 500;  // sample the rest sparsely (f() refilters: keep the test fast)
+  }
+  EXPECT_LT(worst, 1e-11);
+}
+
+// The regressions against eqs. (34) and (37)-(39) built the long way: Phi,
+// Phi_a, Phi_b as full 4x7 matrices per sample, f_D and g_D from the signal module.
+TEST(Identification, RegressionsMatchEquations34And38) {
+  const FlightLog& log = perfect_table2();
+  const auto sig = process_log(log);
+  const double T = sig->T;
+  const signal::TransferFunction tf = signal::butter_lowpass(4, 4.0, 500.0);
+  auto f = [&](const char* c) { return signal::filtfilt(tf, log.column(c)); };
+  const Eigen::VectorXd xd = signal::central_difference(f("x"), T), yd = signal::central_difference(f("y"), T),
+                        zd = signal::central_difference(f("z"), T);
+  const Eigen::VectorXd phi = f("phi"), th = f("theta"), psi = f("psi");
+  const Eigen::Index n = log.rows();
+  Eigen::MatrixXd V(n, 3), W(n, 3), E(n, 3), F(n, 4);
+  W << f("p"), f("q"), f("r");
+  F << f("Fz"), f("tau_phi"), f("tau_theta"), f("tau_psi");
+  for (Eigen::Index k = 0; k < n; ++k) {
+    E.row(k) << phi(k), th(k), psi(k);
+    V.row(k) = (rotation<double>(Vec3(E.row(k).transpose())).transpose() * Vec3(xd(k), yd(k), zd(k))).transpose();
+  }
+  const Eigen::MatrixXd Vd = signal::central_difference(V, T), Wd = signal::central_difference(W, T);
+  Eigen::MatrixXd A(n, 28), B(n, 28);
+  for (Eigen::Index k = 0; k < n; ++k) {
+    const Vec3 v = V.row(k).transpose(), w = W.row(k).transpose(), eta = E.row(k).transpose();
+    A.row(k) = Eigen::Map<const Eigen::Matrix<double, 1, 28>>(regressor_a<double>(v, w).data());
+    B.row(k) = Eigen::Map<const Eigen::Matrix<double, 1, 28>>(regressor_b<double>(v, w, eta).data());
+  }
+  const TimeWindow win{10.0, 12.0};
+  // Standard model, eq. (34).
+  double worst = 0.0;
+  Regression(sig, RegressionModel::Standard, win).for_each([&](Eigen::Index k, const Regressor4x7& G, const Vec4& Y) {
+    const Regressor4x7 ref = regressor<double>(V.row(k).transpose(), W.row(k).transpose(), E.row(k).transpose(),
+                                               Vd.row(k).transpose(), Wd.row(k).transpose());
+    worst = std::max({worst, (G - ref).cwiseAbs().maxCoeff(), (Y - F.row(k).transpose()).cwiseAbs().maxCoeff()});
+  });
+  EXPECT_LT(worst, 1e-10);
+  // Filtered model, eqs. (38)-(39), both g_D variants.
+  for (auto variant : {signal::GdVariant::Consistent, signal::GdVariant::Printed}) {
+    const Eigen::MatrixXd gA = signal::filter_gD(A, 30.0, T, variant), fB = signal::filter_fD(B, 30.0, T),
+                          fF = signal::filter_fD(F, 30.0, T);
+    const Regression reg(sig, RegressionModel::Filtered, win, 30.0, variant);
+    Eigen::Index count = 0;
+    double worst_f = 0.0;
+    reg.for_each([&](Eigen::Index k, const Regressor4x7& G, const Vec4& Y) {
+      const Eigen::Matrix<double, 1, 28> ref = gA.row(k) + fB.row(k);
+      const Regressor4x7 Gref = Eigen::Map<const Regressor4x7>(ref.data());
+      worst_f = std::max({worst_f, (G - Gref).cwiseAbs().maxCoeff(), (Y - fF.row(k).transpose()).cwiseAbs().maxCoeff()});
+      ++count;
+    });
+    EXPECT_EQ(count, 1001);  // 10.000 ... 12.000 s inclusive at 500 Hz
+    EXPECT_LT(worst_f, 1e-10) << (variant == signal::GdVariant::Printed ? "printed" : "consistent");
+  }
+}
+
+// --- The four estimates ---------------------------------------------------------
+
+TEST(Identification, RecoversThePlantFromPerfectTracking) {
+  const Params truth = Params::qball2_virtual();
+  const IdentificationResult r = identify(perfect_table2());
+  // Measured: m 0.002%, Ixx/Iyy/Izz <= 0.02% (LS and FMLS); the criteria of the issue are 0.2% / 1%.
+  expect_ls_accuracy(r, truth, 0.002, 0.01, "perfect tracking");
+  // Products of inertia (~1e-3 of Izz): within 1e-5 kg m^2 (measured <= 7e-6, from the 30 Hz steps).
+  for (const char* set : {"LS", "FMLS"})
+    for (int j : {2, 3, 5}) EXPECT_NEAR(r.estimate(set).theta(j), truth.theta()(j), 1e-5) << set << " " << j;
+  EXPECT_TRUE(r.warnings.empty()) << r.warnings.front();
+  EXPECT_LT(r.ls_standard.condition, 2.0);  // Table 2 was optimized for conditioning
+  EXPECT_EQ(r.window_samples, 20001);
+  // GD is driven by the data, not garbage: mass to 0.5% from the nominal 1.79 kg.
+  for (const char* set : {"GD", "FMGD"}) EXPECT_NEAR(r.estimate(set).theta(0), truth.m, 0.005 * truth.m);
+  std::cout << error_table(r, truth);
+}
+
+TEST(Identification, PrintedDerivativeFilterBiasesTheInertiasByThreePercent) {
+  // ERRATA: the printed g_D is lambda T/(1 - a) = 1.030 times a derivative of
+  // f_D's output, so FMLS's inertias come out ~1/1.03 of the truth; the mass
+  // row has no derivative of w... only through w_dot, which is small against g.
+  IdentificationOptions o;
+  o.gd_variant = signal::GdVariant::Printed;
+  const Params truth = Params::qball2_virtual();
+  const Theta printed = rel_error(identify(perfect_table2(), o).estimate("FMLS").theta, truth.theta());
+  const Theta consistent = rel_error(identify(perfect_table2()).estimate("FMLS").theta, truth.theta());
+  for (int j : {1, 4, 6}) {
+    EXPECT_LT(printed(j), -0.02) << kThetaNames[static_cast<size_t>(j)];  // measured -2.9 .. -3.1%
+    EXPECT_GT(printed(j), -0.04) << kThetaNames[static_cast<size_t>(j)];
+    EXPECT_LT(std::abs(consistent(j)), 0.005) << kThetaNames[static_cast<size_t>(j)];
+  }
+  EXPECT_LT(std::abs(printed(0)), 0.002);
+}
+
+TEST(Identification, EvolutionEndsAtTheEstimates) {
+  IdentificationOptions o;
+  o.window = {10.0, 20.0};
+  o.evolution_interval = 0.1;
+  const IdentificationResult r = identify(perfect_table2(), o);
+  const Evolution& ev = r.evolution;
+  ASSERT_EQ(ev.columns.size(), 29u);
+  EXPECT_EQ(ev.columns[1], "LS_m");
+  EXPECT_EQ(ev.columns[28], "FMGD_Izz");
+  EXPECT_EQ(ev.data.rows(), 101);  // 10.0, 10.1, ..., 20.0 s
+  EXPECT_NEAR(ev.data(0, 0), 10.0, 1e-9);
+  EXPECT_NEAR(ev.data(100, 0), 20.0, 1e-9);
+  EXPECT_TRUE(std::isnan(ev.data(0, 1)));  // one sample does not determine LS
+  for (int s = 0; s < 4; ++s) {
+    const Theta last = ev.data.row(100).segment<7>(1 + 7 * s).transpose();
+    // LS: the same sums solved two ways (LDLT vs eigen-decomposition): 1e-10 relative; GD: the same state.
+    EXPECT_LT((last - r.estimates[static_cast<size_t>(s)].theta).norm(), 1e-10 * last.norm()) << s;
+  }
+  EXPECT_EQ(format_evolution_csv(ev).substr(0, 10), "t,LS_m,LS_");
+}
+
+TEST(Identification, PredictionErrorIsTheRmsOfEq43) {
+  const auto sig = process_log(perfect_table2());
+  const Regression reg(sig, RegressionModel::Filtered, {0.0, 50.0});
+  const Params nom = Params::qball2_nominal(), truth = Params::qball2_virtual();
+  const PredictionErrorTable t = prediction_error(reg, {{"true", truth}, {"nom-again", nom}}, {"nom", nom});
+  Vec4 sse_nom = Vec4::Zero(), sse_true = Vec4::Zero();
+  reg.for_each([&](Eigen::Index, const Regressor4x7& G, const Vec4& Y) {
+    sse_nom += (G * nom.theta() - Y).cwiseAbs2();
+    sse_true += (G * truth.theta() - Y).cwiseAbs2();
+  });
+  const double n = 25001.0;
+  EXPECT_EQ(t.samples, 25001);
+  EXPECT_LT((t.reference.rms - (sse_nom / n).cwiseSqrt()).norm(), 1e-12);
+  ASSERT_EQ(t.rows.size(), 2u);
+  EXPECT_LT((t.rows[0].rms - (sse_true / n).cwiseSqrt()).norm(), 1e-12);
+  for (int i = 0; i < 4; ++i) {
+    EXPECT_NEAR(t.rows[0].improvement_pct(i), 100.0 * (t.reference.rms(i) - t.rows[0].rms(i)) / t.reference.rms(i),
+                1e-9);
+    EXPECT_GT(t.rows[0].improvement_pct(i), 80.0);  // the true plant explains the data far better
+    EXPECT_NEAR(t.rows[1].improvement_pct(i), 0.0, 1e-12);
+  }
+  const std::string text = format_prediction_table(t, "Table 6");
+  EXPECT_NE(text.find("Table 6: RMS output prediction error of the filtered regression model (eq. 38)"),
+            std::string::npos);
+  EXPECT_NE(text.find("e_nom"), std::string::npos);
+  EXPECT_NE(text.find("1 Fz [N]"), std::string::npos);
+}
+
+TEST(Identification, LiteralGradientDescentDivergesAndSaysSo) {
+  IdentificationOptions o;
+  o.gd.discretization = GdDiscretization::ForwardEuler;
+  const IdentificationResult r = identify(perfect_table2(), o);
+  EXPECT_FALSE(r.estimate("GD").valid);
+  EXPECT_FALSE(r.estimate("FMGD").valid);
+  EXPECT_NE(r.estimate("GD").note.find("stability limit 2"), std::string::npos) << r.estimate("GD").note;
+  EXPECT_GT(r.gd_step_gain_standard, 5.0);  // ~ sigma T g^2 = 5.8 and more
+  const nlohmann::json j = to_json(r);
+  EXPECT_FALSE(j["estimates"].contains("GD"));
+  EXPECT_TRUE(j["estimates"].contains("LS"));
+  EXPECT_TRUE(j["gradient_descent"]["GD"]["diverged"].get<bool>());
+  EXPECT_EQ(r.errors_standard.rows.size(), 1u);  // only LS in Table 5
+  EXPECT_NE(format_estimates_table(r).find("diverged"), std::string::npos);
+}
+
+TEST(Identification, HoverOnlyIsRankDeficient) {
+  // A perfect hover: no rotation at all, so nothing determines the inertia.
+  FlightLog log = perfect_table2();
+  const Params truth = Params::qball2_virtual();
+  for (Eigen::Index k = 0; k < log.rows(); ++k) {
+    log.data.row(k).tail<13>().setZero();
+    log.data(k, 3) = 1.0;                   // z
+    log.data(k, 10) = truth.m * 9.81;       // Fz
+  }
+  try {
+    identify(log);
+    FAIL() << "expected an error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("do not determine Ixx, Ixy, Ixz, Iyy, Iyz, Izz"), std::string::npos)
+        << e.what();
+  }
+  IdentificationOptions o;
+  o.allow_rank_deficient = true;
+  const IdentificationResult r = identify(log, o);
+  ASSERT_FALSE(r.warnings.empty());
+  EXPECT_NE(r.warnings.front().find("Ixx"), std::string::npos);
+  EXPECT_NEAR(r.estimate("LS").theta(0), truth.m, 1e-9 * truth.m);  // hover determines the mass
+  EXPECT_EQ(r.estimate("LS").theta.tail<6>(), Params::qball2_nominal().theta().tail<6>());
+}
+
+TEST(Identification, HoverSeenThroughSensorNoiseWarnsThatTheInertiaIsPoorlyDetermined) {
+  // A perfect hover measured by noisy sensors and with noisy commands: the
+  // noise fills the regressor's columns (full rank), but nothing moves, so the
+  // torques carry no information: the standard errors must say so. (A *simulated* noisy hover is
+  // different: the controller turns sensor noise into real wobbling, which does
+  // determine the inertia -- about 5% standard error over 25 s.)
+  FlightLog log = perfect_table2();
+  const Params truth = Params::qball2_virtual();
+  std::mt19937 rng(21);
+  std::normal_distribution<double> N(0.0, 1.0);
+  for (Eigen::Index k = 0; k < log.rows(); ++k) {
+    log.data.row(k).tail<13>().setZero();
+    log.data(k, 3) = 1.0;
+    log.data(k, 10) = truth.m * 9.81;
+    for (int c : {1, 2, 3}) log.data(k, c) += 3e-4 * N(rng);   // mocap position, m
+    for (int c : {4, 5}) log.data(k, c) += 8.7e-4 * N(rng);    // IMU roll, pitch: 0.05 deg
+    for (int c : {7, 8, 9}) log.data(k, c) += 1.4e-3 * N(rng);  // gyro, rad/s
+    log.data(k, 10) += 0.05 * N(rng);                            // thrust, N
+    for (int c : {11, 12, 13}) log.data(k, c) += 5e-3 * N(rng);  // torques, N m
+  }
+  const IdentificationResult r = identify(log);
+  EXPECT_TRUE(r.ls_standard.full_rank());
+  std::string poor;
+  for (const auto& w : r.warnings)
+    if (w.rfind("LS: poorly determined", 0) == 0) poor = w;
+  for (const char* n : {"Ixx", "Iyy", "Izz"}) EXPECT_NE(poor.find(n), std::string::npos) << poor;
+  EXPECT_EQ(poor.find("m ="), std::string::npos) << poor;  // the mass is determined by the hover thrust
+  EXPECT_NEAR(r.estimate("LS").theta(0), truth.m, 0.002 * truth.m);
+}
+
+TEST(Identification, BadLogsAndWindowsGiveClearErrors) {
+  auto message = [](const FlightLog& log, const IdentificationOptions& o = {}) -> std::string {
+    try {
+      identify(log, o);
+    } catch (const std::exception& e) {
+      return e.what();
+    }
+    return "";
+  };
+  const FlightLog& good = perfect_table2();
+  IdentificationOptions o;
+  o.window = {10.0, 60.0};
+  EXPECT_NE(message(good, o).find("window 10-60 s ends after the log ends (50 s of data)"), std::string::npos);
+  o.window = {55.0, 60.0};
+  EXPECT_NE(message(good, o).find("starts after the log ends"), std::string::npos);
+  o.window = {10.0, 10.01};
+  EXPECT_NE(message(good, o).find("holds only 6 sample(s)"), std::string::npos);
+  o.window = {10.0, 50.002};  // up to 1.5 periods past the end is the end
+  EXPECT_EQ(message(good, o), "");
+
+  FlightLog shortlog = good;
+  shortlog.data.conservativeResize(10, 14);
+  EXPECT_NE(message(shortlog).find("10 samples (0.018 s at 500 Hz) is shorter than the Butterworth order 4, 4 Hz "
+                                   "pre-filter needs (more than 12"),
+            std::string::npos)
+      << message(shortlog);
+  FlightLog missing = good;
+  missing.columns[12] = "tau_y";
+  EXPECT_NE(message(missing).find("missing column(s) tau_theta"), std::string::npos);
+  FlightLog nan = good;
+  nan.data(100, 11) = std::nan("");
+  EXPECT_NE(message(nan).find("column 'tau_phi' contains NaN"), std::string::npos);
+  FlightLog jitter = good;
+  jitter.data(200, 0) += 0.0005;
+  EXPECT_NE(message(jitter).find("sample 201 (t = 0.4005)"), std::string::npos) << message(jitter);
+  IdentificationOptions hi;
+  hi.processing.lowpass.cutoff_hz = 300.0;
+  EXPECT_NE(message(good, hi).find("pre-filter for a log sampled at 500 Hz"), std::string::npos);
+  IdentificationOptions lam;
+  lam.lambda = -1.0;
+  EXPECT_THROW(identify(good, lam), std::invalid_argument);
+}
+
+// --- Simulated flights (closed loop, quadid simulate) ----------------------------------
+
+TEST(Identification, SimulatedNoiseFreeFlightMeetsTheAcceptanceCriteria) {
+  SimulationOptions so;
+  so.sensors.noise = NoiseSigmas::none();
+  so.record_truth = false;
+  const IdentificationResult r = identify(simulate(FourierTrajectory::table2(), so).log);
+  // Issue 4: m within 0.2%, Ixx, Iyy, Izz within 1% (measured: 0.003% and <= 0.06%).
+  expect_ls_accuracy(r, so.plant, 0.002, 0.01, "noise-free");
+  EXPECT_TRUE(r.warnings.empty());
+  std::cout << "noise-free 50 s Table 2 flight, 500 Hz, window 10-50 s:\n" << error_table(r, so.plant);
+}
+
+TEST(Identification, SimulatedNoisyFlightMeetsTheAcceptanceCriteria) {
+  SimulationOptions so;  // default noise
+  so.record_truth = false;
+  for (std::uint64_t seed : {1u, 2u, 3u}) {
+    so.sensors.seed = seed;
+    const IdentificationResult r = identify(simulate(FourierTrajectory::table2(), so).log);
+    // Issue 4: m within 0.5%, Ixx, Iyy, Izz within 3% (measured: 0.005% and <= 0.1%).
+    expect_ls_accuracy(r, so.plant, 0.005, 0.03, fmt::format("noise seed {}", seed));
+    if (seed == 1) std::cout << "default noise, seed 1:\n" << error_table(r, so.plant);
+  }
+}
+
+TEST(Identification, WorksAt100HzAnd1kHzWithoutChanges) {
+  for (double rate : {100.0, 1000.0}) {
+    SimulationOptions so;
+    so.controller.rate = rate;
+    so.sensors.imu_rate = rate;
+    so.record_truth = false;
+    const FlightLog log = simulate(FourierTrajectory::table2(), so).log;
+    const IdentificationResult r = identify(log);
+    EXPECT_NEAR(r.processing.fs, rate, 1e-6);
+    // Same criteria as at 500 Hz with noise (measured at 100 Hz: m 0.002%, Ixx -1.8%).
+    expect_ls_accuracy(r, so.plant, 0.005, 0.03, fmt::format("{} Hz", rate));
+    std::cout << rate << " Hz, default noise:\n" << error_table(r, so.plant);
+  }
+}
+
+TEST(Identification, WorksOnAThirtyGramQuadrotor) {
+  Params micro;
+  SimulationOptions so = micro_quad_options(&micro);
+  so.record_truth = false;
+  const FlightLog log = simulate(FourierTrajectory::table2(), so).log;
+  IdentificationOptions o;
+  Params nominal;  // what a manufacturer might state: round numbers, no products
+  nominal.m = 0.028;
+  nominal.I = Vec3(1.2e-5, 1.2e-5, 2.0e-5).asDiagonal();
+  o.reference = {"nom", nominal};
+  const IdentificationResult r = identify(log, o);
+  expect_ls_accuracy(r, micro, 0.005, 0.03, "30 g quad");
+  EXPECT_NEAR(r.estimate("LS").theta(2), micro.I(0, 1), 1e-7);  // Ixy = -1e-6 (measured within 1e-9)
+  std::cout << "30 g quadrotor, default noise:\n" << error_table(r, micro);
+}
