@@ -36,7 +36,7 @@ static void BM_DesignEightStarts(benchmark::State& st) {
   std::string label;
   for (auto _ : st) {
     const DesignResult r = design_trajectory(o);
-    label = "cond(W) = " + std::to_string(r.check.criteria.cond) + (r.check.feasible ? ", feasible" : ", INFEASIBLE") +
+    label = "cond(W) = " + std::to_string(r.check.criteria.cond) + (r.check.all_hold() ? ", feasible" : ", INFEASIBLE") +
             ", best start " + std::to_string(r.best + 1);
     benchmark::DoNotOptimize(r.best);
   }

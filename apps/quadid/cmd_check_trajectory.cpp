@@ -80,7 +80,7 @@ void register_check_trajectory(CLI::App& app) {
       fmt::print("{}", format_check_report(rep));
     }
     std::fflush(stdout);
-    if (args->strict && !rep.feasible) throw CLI::RuntimeError(2);
+    if (args->strict && !rep.all_hold()) throw CLI::RuntimeError(2);
   });
 }
 

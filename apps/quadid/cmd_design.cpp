@@ -96,7 +96,7 @@ void register_design(CLI::App& app) {
                    s.seconds);
       };
     const DesignResult res = design_trajectory(opt, progress);
-    if (!res.check.feasible)
+    if (!res.check.all_hold())
       throw std::runtime_error(fmt::format(
           "no start met every limit on the {:g} ms grid (best violation {:.3g}); try more --starts or a "
           "different --seed",

@@ -118,10 +118,8 @@ struct CheckReport {
   std::vector<ConstraintCheck> constraints;
   std::vector<EndpointCheck> endpoints;  // 4 at t = 0, then 4 at t = duration
   CriterionValues criteria;   // on the cond_dt grid over one period
-  double cond = 0.0;          // = criteria.cond, cond(W) of eq. (20)
   bool constraints_hold = true;
   bool endpoints_hold = true;
-  bool feasible = true;       // = constraints_hold && endpoints_hold
   bool all_hold() const { return constraints_hold && endpoints_hold; }
 };
 

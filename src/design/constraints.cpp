@@ -201,8 +201,6 @@ CheckReport check_trajectory(const Trajectory& traj, const CheckOptions& opt) {
     }
   }
   rep.criteria = evaluate_criteria(traj, opt.cond_dt, opt.g, parameter_scales(opt.reference, opt.product_floor));
-  rep.cond = rep.criteria.cond;
-  rep.feasible = rep.constraints_hold && rep.endpoints_hold;
   return rep;
 }
 
