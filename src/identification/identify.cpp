@@ -168,6 +168,22 @@ IdentificationResult identify(const FlightLog& log, const IdentificationOptions&
                                          name, 100.0 * opt.ls.poor_fraction, fmt::join(detail, ", ")));
     }
   }
+  // The two regressions see the same flight through different filters; when
+  // they disagree the processing is wrong for these data (e.g. motion-capture
+  // steps left in the position, which the standard model differentiates twice).
+  {
+    std::vector<std::string> differ;
+    for (int j : {0, 1, 4, 6}) {
+      const double a = res.ls_standard.theta(j), b = res.ls_filtered.theta(j);
+      if (std::abs(a - b) > 0.03 * std::max(std::abs(a), std::abs(b)))
+        differ.push_back(fmt::format("{} {:.4g} vs {:.4g}", kThetaNames[static_cast<size_t>(j)], a, b));
+    }
+    if (!differ.empty())
+      res.warnings.push_back(fmt::format(
+          "LS and FMLS disagree by more than 3% ({}): the processing does not suit these data; with 30 Hz "
+          "motion capture use the Butterworth pre-filter with a cutoff of a few Hz",
+          fmt::join(differ, ", ")));
+  }
   for (const auto& e : res.estimates) {
     if (!e.valid) continue;
     if (!(e.theta(0) > 0.0))

@@ -19,6 +19,7 @@
 #include <cstdint>
 #include <cstring>
 #include <unistd.h>
+#include <unordered_map>
 #if defined(__linux__)
 #include <sys/mman.h>
 #endif
@@ -265,13 +266,16 @@ FlightLog read_flight_log(const std::filesystem::path& path, const CsvReadOption
       if (header[i] == name) return static_cast<int>(i);
     return -1;
   };
-  for (size_t i = 0; i < header.size(); ++i) {
-    if (header[i].empty())
-      throw InputError(fmt::format("{}:{}: column {} has an empty name", file, header_line, i + 1));
-    for (size_t j = 0; j < i; ++j)
-      if (header[j] == header[i])
+  {
+    std::unordered_map<std::string_view, size_t> seen;  // wide logs have thousands of columns
+    for (size_t i = 0; i < header.size(); ++i) {
+      if (header[i].empty())
+        throw InputError(fmt::format("{}:{}: column {} has an empty name", file, header_line, i + 1));
+      const auto [it, fresh] = seen.emplace(header[i], i);
+      if (!fresh)
         throw InputError(fmt::format("{}:{}: column '{}' appears twice (columns {} and {})", file, header_line,
-                                     header[i], j + 1, i + 1));
+                                     header[i], it->second + 1, i + 1));
+    }
   }
   // --map canonical=name: rename the file's column to the canonical one. All
   // renames are checked against the original header, so they cannot chain.
@@ -317,7 +321,12 @@ FlightLog read_flight_log(const std::filesystem::path& path, const CsvReadOption
   const std::uint64_t file_bytes = std::filesystem::file_size(path, size_ec);
   const std::uint64_t data_start = in.consumed();
   ColumnStore store(static_cast<Eigen::Index>(nkeep));
-  constexpr Eigen::Index kProbeRows = 2048;
+  // The first rows go to a small store (at most 2048 rows, 4 MB, or what the
+  // file can hold at 2 bytes per field), then the estimate sets the capacity.
+  const std::uint64_t min_row_bytes = 2 * nfile;
+  const std::uint64_t can_hold = size_ec ? 2048 : (file_bytes - std::min(file_bytes, data_start)) / min_row_bytes + 1;
+  const Eigen::Index kProbeRows = static_cast<Eigen::Index>(std::clamp<std::uint64_t>(
+      std::min<std::uint64_t>(can_hold, (std::uint64_t{1} << 22) / (8 * std::max<size_t>(nkeep, 1))), 16, 2048));
   store.reserve(kProbeRows);
   RowLines row_lines;
   while (in.next(line)) {
