@@ -48,6 +48,14 @@ struct ProcessingOptions {
   bool unwrap_yaw = true;
   /// Relative tolerance on the uniformity of the log's sample period.
   double period_tolerance = 1e-3;
+  /// Leave out of every regression window the samples whose filtered values
+  /// still depend on how the filters started: the pre-filter's settling time at
+  /// both ends of the log (0.57 s for the default) and, for the filtered model,
+  /// 5/lambda after the start (f_D's unknown initial state). Without this, a
+  /// flight that starts abruptly (the circle paths: at rest on a reference
+  /// already moving at 0.63 m/s) has edge residuals that dominate the 0-50 s
+  /// prediction-error tables. false: the paper's windows taken literally.
+  bool exclude_edges = true;
   void validate() const;
 };
 
@@ -58,6 +66,7 @@ struct ProcessingSummary {
   std::string filter;                       // e.g. "Butterworth order 4, 4 Hz"
   int padlen = 0;                           // filtfilt's padding (samples)
   double filter_f3db = 0.0;                 // Hz, -3 dB of the zero-phase pre-filter
+  double filter_settling = 0.0;             // s, the pre-filter's impulse response above 1% of its peak
 };
 
 /// The processed signals both regressions are built from, one row per log
@@ -73,6 +82,9 @@ struct RegressionSignals {
   static constexpr int kCols = 15;
   double t_start = 0.0;  // the log's t at the first sample
   double T = 0.0;        // sample period, s
+  /// Seconds at each end of the log that regressions leave out (the pre-filter's
+  /// settling time; 0 when ProcessingOptions::exclude_edges is false).
+  double edge = 0.0;
   Eigen::Matrix<double, Eigen::Dynamic, kCols> x;
   Eigen::Index size() const { return x.rows(); }
 };
@@ -94,11 +106,13 @@ Regressor4x7 assemble_regressor(const Vec4& a, const Eigen::Matrix<double, 7, 1>
 /// with t in [t0, t1]. Standard: Gamma = Phi(v_f, w_f, eta_f, v_f', w_f')
 /// (eq. 34, derivatives by eq. 33), Upsilon = F_f. Filtered: Gamma = Phi_dF,
 /// Upsilon = f_D F_f (eqs. 38-39); f_D and g_D start at the log's first sample
-/// (steady-state initial condition), so the window sees no start-up transient.
+/// (steady-state initial condition). The window is clipped to the samples
+/// clear of the log's edges (RegressionSignals::edge, and 5/lambda after the
+/// start for the filtered model); window() tells what was used.
 class Regression {
  public:
-  /// Throws std::invalid_argument when the window is outside the log or holds
-  /// fewer than 8 samples.
+  /// Throws InputError when the window is outside the log or holds fewer than
+  /// 8 samples clear of the edges, std::invalid_argument on a malformed window.
   Regression(std::shared_ptr<const RegressionSignals> signals, RegressionModel model, TimeWindow window,
              double lambda = 30.0, signal::GdVariant gd_variant = signal::GdVariant::Consistent);
 
@@ -111,7 +125,7 @@ class Regression {
   double T() const { return sig_->T; }
   /// The log's t of sample k.
   double time(Eigen::Index k) const { return sig_->t_start + static_cast<double>(k) * sig_->T; }
-  /// Window actually used, in seconds from the log's start.
+  /// Window actually used (after edge clipping), in seconds from the log's start.
   TimeWindow window() const;
   const RegressionSignals& signals() const { return *sig_; }
   /// The same regression over another window.

@@ -50,6 +50,21 @@ double zero_phase_f3db(const signal::TransferFunction& tf, double fs) {
   return 0.5 * (lo + hi);
 }
 
+// How long the filter's impulse response stays above 1% of its peak: the
+// time over which an edge of the log (where filtfilt pads) disturbs its output.
+double settling_time(const signal::TransferFunction& tf, double T) {
+  for (Eigen::Index len = 4096;; len *= 4) {  // long enough when the tail is quiet
+    Eigen::VectorXd imp = Eigen::VectorXd::Zero(len);
+    imp(0) = 1.0;
+    const Eigen::VectorXd h = signal::lfilter(tf, imp);
+    const double peak = h.cwiseAbs().maxCoeff();
+    Eigen::Index last = 0;
+    for (Eigen::Index i = 0; i < len; ++i)
+      if (std::abs(h(i)) > 0.01 * peak) last = i;
+    if (last < len / 2 || len >= (Eigen::Index{1} << 22)) return static_cast<double>(last + 1) * T;
+  }
+}
+
 }  // namespace
 
 void ProcessingOptions::validate() const {
@@ -103,7 +118,9 @@ std::shared_ptr<const RegressionSignals> process_log(const FlightLog& log, const
         "flight log: {} samples ({:g} s at {:g} Hz) is shorter than the {} pre-filter needs (more than {} samples "
         "of filtfilt edge padding)",
         n, static_cast<double>(n - 1) * T, fs, filter_name(opt.lowpass), padlen));
+  const double settling = settling_time(tf, T);
   if (summary) {
+    summary->filter_settling = settling;
     summary->samples = n;
     summary->T = T;
     summary->fs = fs;
@@ -120,6 +137,7 @@ std::shared_ptr<const RegressionSignals> process_log(const FlightLog& log, const
   auto out = std::make_shared<RegressionSignals>();
   out->t_start = t(0);
   out->T = T;
+  out->edge = opt.exclude_edges ? settling : 0.0;
   auto& X = out->x;
   X.resize(n, RegressionSignals::kCols);
   detail::prepare_buffer(X.data(), static_cast<std::size_t>(X.size()) * sizeof(double));

@@ -79,12 +79,27 @@ Regression::Regression(std::shared_ptr<const RegressionSignals> signals, Regress
   if (std::isfinite(window.t1) && window.t1 > duration + 1.5 * T)
     throw InputError(fmt::format("window {} ends after the log ends ({:g} s of data); use e.g. --window {:g}:{:g}",
                                  window.to_string(), duration, window.t0, duration));
-  begin_ = static_cast<Eigen::Index>(std::ceil(window.t0 / T - 1e-9));
-  end_ = std::isfinite(window.t1) ? std::min<Eigen::Index>(n, static_cast<Eigen::Index>(std::floor(window.t1 / T + 1e-9)) + 1)
-                                  : n;
+  Eigen::Index begin = static_cast<Eigen::Index>(std::ceil(window.t0 / T - 1e-9));
+  Eigen::Index end = std::isfinite(window.t1)
+                         ? std::min<Eigen::Index>(n, static_cast<Eigen::Index>(std::floor(window.t1 / T + 1e-9)) + 1)
+                         : n;
+  // Clear of the edges: the pre-filter's settling at both ends, f_D's warm-up
+  // (exp(-5) = 0.7% of its initial state left) after the start.
+  double head = sig_->edge, tail = sig_->edge;
+  if (model == RegressionModel::Filtered && sig_->edge > 0.0) head = std::max(head, 5.0 / lambda);
+  const Eigen::Index first_ok = static_cast<Eigen::Index>(std::ceil(head / T - 1e-9));
+  const Eigen::Index last_ok = n - 1 - static_cast<Eigen::Index>(std::ceil(tail / T - 1e-9));
+  begin_ = std::max(begin, first_ok);
+  end_ = std::min(end, last_ok + 1);
   if (end_ - begin_ < 8)
-    throw InputError(fmt::format("window {} holds only {} sample(s); at least 8 are needed", window.to_string(),
-                                 std::max<Eigen::Index>(0, end_ - begin_)));
+    throw InputError(fmt::format(
+        "window {} holds only {} sample(s){}; at least 8 are needed", window.to_string(),
+        std::max<Eigen::Index>(0, end_ - begin_),
+        (begin_ > begin || end_ < end)
+            ? fmt::format(" clear of the log's edges ({:.3g} s at the start, {:.3g} s at the end, where the filters "
+                          "are still settling)",
+                          head, tail)
+            : std::string()));
 }
 
 TimeWindow Regression::window() const {

@@ -141,6 +141,8 @@ json to_json(const IdentificationResult& r) {
             {"duration_s", p.duration},
             {"prefilter", p.filter},
             {"prefilter_f3db_hz", p.filter_f3db},
+            {"prefilter_settling_s", p.filter_settling},
+            {"edges_excluded", r.options.processing.exclude_edges},
             {"padlen", p.padlen}}},
           {"filtered_model",
            {{"lambda", r.options.lambda},
