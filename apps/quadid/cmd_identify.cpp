@@ -33,6 +33,7 @@ struct IdentifyArgs {
   double g = kDefaultGravity;
   double period_tolerance = 1e-3;
   bool allow_rank_deficient = false;
+  bool keep_edges = false;
   std::string evolution;
   double evolution_interval = 0.01;
   std::string out;
@@ -52,6 +53,7 @@ void run(const IdentifyArgs& a) {
   lp.taps = a.taps;
   opt.processing.g = a.g;
   opt.processing.period_tolerance = a.period_tolerance;
+  opt.processing.exclude_edges = !a.keep_edges;
   opt.lambda = a.lambda;
   if (a.derivative_filter == "consistent") opt.gd_variant = signal::GdVariant::Consistent;
   else if (a.derivative_filter == "printed") opt.gd_variant = signal::GdVariant::Printed;
@@ -89,9 +91,10 @@ void run(const IdentifyArgs& a) {
     fmt::print("{}\n", j.dump(2));
     return;
   }
-  fmt::print("{}: {} samples at {:g} Hz ({:g} s); pre-filter {} (-3 dB at {:.3g} Hz, zero-phase)\n\n", a.log,
-             res.processing.samples, res.processing.fs, res.processing.duration, res.processing.filter,
-             res.processing.filter_f3db);
+  fmt::print("{}: {} samples at {:g} Hz ({:g} s); pre-filter {} (-3 dB at {:.3g} Hz, zero-phase, settles in {:.3g} s{})\n\n",
+             a.log, res.processing.samples, res.processing.fs, res.processing.duration, res.processing.filter,
+             res.processing.filter_f3db, res.processing.filter_settling,
+             opt.processing.exclude_edges ? ", left out at both ends of the log" : "");
   fmt::print("{}\n", format_estimates_table(res));
   fmt::print("Least squares: column-scaled condition number {:.4g} (standard), {:.4g} (filtered)\n",
              res.ls_standard.condition, res.ls_filtered.condition);
@@ -147,6 +150,9 @@ void register_identify(CLI::App& app) {
       ->capture_default_str();
   sub->add_flag("--allow-rank-deficient", a->allow_rank_deficient,
                 "warn instead of failing when the data do not determine some parameters (they keep the nominal values)");
+  sub->add_flag("--keep-edges", a->keep_edges,
+                "use the windows literally, including the filters' settling at the log's two ends (by default the "
+                "pre-filter's settling time, 0.57 s for the default filter, is left out at each end)");
   sub->add_option("--evolution", a->evolution,
                   "write the estimates over time (Figs. 4-5) as CSV: t then LS_m..LS_Izz, GD_*, FMLS_*, FMGD_*");
   sub->add_option("--evolution-interval", a->evolution_interval, "seconds between evolution rows (0 = every sample)")
