@@ -339,6 +339,27 @@ TEST(Identification, PredictionErrorIsTheRmsOfEq43) {
   EXPECT_NE(text.find("1 Fz [N]"), std::string::npos);
 }
 
+TEST(Identification, YawWrappedIntoPlusMinusPiIsUnwrapped) {
+  // Table 2's yaw offset by 3 rad crosses +pi; logged wrapped into (-pi, pi] it
+  // jumps by 2 pi, which the pre-filter would smear into a huge fake yaw rate.
+  // Unwrapped first, it gives the same estimates as the continuous yaw.
+  FlightLog continuous = perfect_table2(), wrapped = perfect_table2();
+  int jumps = 0;
+  for (Eigen::Index k = 0; k < continuous.rows(); ++k) {
+    continuous.data(k, 6) += 3.0;
+    wrapped.data(k, 6) = std::remainder(continuous.data(k, 6), 2.0 * M_PI);
+    jumps += k > 0 && std::abs(wrapped.data(k, 6) - wrapped.data(k - 1, 6)) > M_PI;
+  }
+  ASSERT_GT(jumps, 0);
+  const Theta a = identify(continuous).estimate("LS").theta, b = identify(wrapped).estimate("LS").theta;
+  EXPECT_LT((a - b).cwiseQuotient(a).cwiseAbs().maxCoeff(), 1e-9);
+  IdentificationOptions raw;
+  raw.processing.unwrap_yaw = false;
+  raw.allow_rank_deficient = true;
+  const Theta c = identify(wrapped, raw).estimate("LS").theta;
+  EXPECT_GT(std::abs(c(0) - a(0)) / a(0), 1e-3);  // the smeared jumps corrupt v = R^T p_dot
+}
+
 TEST(Identification, EdgesOfAnAbruptStartAreLeftOut) {
   // Circle path 1 starts at rest on a reference already moving at 0.63 m/s:
   // the first half second has torque steps that no zero-phase filter edge or

@@ -95,7 +95,7 @@ enum class GdDiscretization {
 };
 
 struct GradientDescentOptions {
-  double sigma = 30.0;  // adaptation gain of eq. (41), 1/(s unit^2)
+  double sigma = 30.0;  // adaptation gain of eq. (41), the paper's value
   GdDiscretization discretization = GdDiscretization::Exact;
   /// Divergence: a non-finite estimate, or |Theta - Theta0| above this factor
   /// times max(|Theta0|, 1e-12). The update then stops and the state is reported.
@@ -115,7 +115,9 @@ class GradientDescent {
   /// Index (number of steps taken before) and reason of the divergence.
   long diverged_at() const { return diverged_at_; }
   const std::string& divergence_reason() const { return reason_; }
-  /// Largest sigma T lambda_max(Gamma^T Gamma) seen: above 2, forward Euler diverges.
+  /// Largest sigma T lambda_max(Gamma^T Gamma) seen: above 2, forward Euler
+  /// diverges. Where the torque block's gain is small it is bounded by its
+  /// trace instead of computed exactly (it is then far below the mass row's).
   double max_step_gain() const { return max_gain_; }
 
  private:
