@@ -9,6 +9,7 @@
 
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <string>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -32,10 +33,15 @@ class CliTest : public ::testing::Test {
 
   std::string path(const std::string& name) const { return (dir_ / name).string(); }
 
-  /// Runs `quadid <args>` (args are passed to the shell as written).
+  void write(const std::string& name, const std::string& text) const {
+    std::ofstream(path(name)) << text;
+  }
+
+  /// Runs `quadid <prefix_><args>` (args are passed to the shell as written).
   CliRun run(const std::string& args) const {
     const std::string o = path(".stdout"), e = path(".stderr");
-    const std::string cmd = std::string("\"") + QUADID_EXE + "\" " + args + " >\"" + o + "\" 2>\"" + e + "\"";
+    const std::string cmd =
+        std::string("\"") + QUADID_EXE + "\" " + prefix_ + args + " >\"" + o + "\" 2>\"" + e + "\"";
     const int status = std::system(cmd.c_str());
     CliRun r;
     r.rc = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
@@ -45,6 +51,7 @@ class CliTest : public ::testing::Test {
   }
 
   std::filesystem::path dir_;
+  std::string prefix_;  // e.g. "identify " for a fixture that tests one subcommand
 };
 
 }  // namespace quadid::testing

@@ -1,49 +1,19 @@
 // End-to-end tests of `quadid check-trajectory` and `quadid design` (the built program, QUADID_EXE).
+#include "cli_fixture.hpp"
 #include "quadid/io.hpp"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <string>
-#include <sys/wait.h>
-#include <unistd.h>
 
 namespace fs = std::filesystem;
 
 namespace {
 
-struct DesignCliRun {
-  int rc = -1;
-  std::string out, err;
-};
-
-class CliDesign : public ::testing::Test {
- protected:
-  void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = fs::temp_directory_path() / ("quadid_cli_design_" + std::to_string(::getpid()) + "_" + info->name());
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  std::string path(const std::string& name) const { return (dir_ / name).string(); }
-  void write(const std::string& name, const std::string& text) const { std::ofstream(path(name)) << text; }
-
-  DesignCliRun run(const std::string& args) const {
-    const std::string o = path("stdout.txt"), e = path("stderr.txt");
-    const std::string cmd = std::string("\"") + QUADID_EXE + "\" " + args + " >\"" + o + "\" 2>\"" + e + "\"";
-    const int status = std::system(cmd.c_str());
-    DesignCliRun r;
-    r.rc = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    r.out = quadid::read_file(o);
-    r.err = quadid::read_file(e);
-    return r;
-  }
-
-  fs::path dir_;
-};
+class CliDesign : public quadid::testing::CliTest {};
 
 const nlohmann::json* constraint(const nlohmann::json& rep, const std::string& name) {
   for (const auto& c : rep["constraints"])

@@ -1,5 +1,6 @@
 // End-to-end tests of `quadid identify` (the built program, QUADID_EXE) on
 // logs written by the simulator library.
+#include "cli_fixture.hpp"
 #include "quadid/identification.hpp"
 #include "quadid/io.hpp"
 #include "quadid/simulation.hpp"
@@ -7,21 +8,13 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <string>
-#include <sys/wait.h>
-#include <unistd.h>
 
 namespace fs = std::filesystem;
 
 namespace {
-
-struct CliRun {
-  int rc = -1;
-  std::string out, err;
-};
 
 // One simulated 50 s Table 2 flight (default noise), shared by the tests.
 const quadid::FlightLog& flight() {
@@ -33,36 +26,19 @@ const quadid::FlightLog& flight() {
   return log;
 }
 
-class CliIdentify : public ::testing::Test {
+class CliIdentify : public quadid::testing::CliTest {
  protected:
   void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = fs::temp_directory_path() / ("quadid_cli_id_" + std::to_string(::getpid()) + "_" + info->name());
-    fs::create_directories(dir_);
+    CliTest::SetUp();
+    prefix_ = "identify ";
     quadid::write_flight_log(flight(), path("log.csv"));
   }
-  void TearDown() override { fs::remove_all(dir_); }
-
-  std::string path(const std::string& name) const { return (dir_ / name).string(); }
-
-  CliRun run(const std::string& args) const {
-    const std::string o = path("stdout.txt"), e = path("stderr.txt");
-    const std::string cmd = std::string("\"") + QUADID_EXE + "\" identify " + args + " >\"" + o + "\" 2>\"" + e + "\"";
-    const int status = std::system(cmd.c_str());
-    CliRun r;
-    r.rc = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    r.out = quadid::read_file(o);
-    r.err = quadid::read_file(e);
-    return r;
-  }
-
-  fs::path dir_;
 };
 
 }  // namespace
 
 TEST_F(CliIdentify, PrintsTable3AndTables5And6) {
-  const CliRun r = run(path("log.csv"));
+  const quadid::testing::CliRun r = run(path("log.csv"));
   ASSERT_EQ(r.rc, 0) << r.err;
   // Windows: 10-50 s and the whole log, less the pre-filter's settling time (0.574 s) at the log's ends.
   for (const char* s : {"Estimated parameters (Table 3): window 10-49.426 s (19714 samples at 500 Hz)", "kg m^2",
@@ -75,7 +51,7 @@ TEST_F(CliIdentify, PrintsTable3AndTables5And6) {
 }
 
 TEST_F(CliIdentify, JsonOnStdoutAloneAndTheSameInTheOutputFile) {
-  const CliRun r = run(path("log.csv") + " --json -o " + path("result.json") + " --evolution " + path("evo.csv"));
+  const quadid::testing::CliRun r = run(path("log.csv") + " --json -o " + path("result.json") + " --evolution " + path("evo.csv"));
   ASSERT_EQ(r.rc, 0) << r.err;
   const nlohmann::json j = nlohmann::json::parse(r.out);  // throws if anything else is on stdout
   EXPECT_EQ(j, quadid::read_json_file(path("result.json")));
@@ -117,7 +93,7 @@ TEST_F(CliIdentify, MapRenamesColumns) {
   for (auto& c : log.columns)
     if (c == "tau_phi") c = "Mx";
   quadid::write_flight_log(log, path("renamed.csv"));
-  CliRun r = run(path("renamed.csv"));
+  quadid::testing::CliRun r = run(path("renamed.csv"));
   EXPECT_NE(r.rc, 0);
   EXPECT_NE(r.err.find("renamed.csv:"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("missing required column(s): tau_phi"), std::string::npos) << r.err;
@@ -128,7 +104,7 @@ TEST_F(CliIdentify, MapRenamesColumns) {
 
 TEST_F(CliIdentify, BadInputFailsClearlyAndWritesNothing) {
   // A window past the end of the log.
-  CliRun r = run(path("log.csv") + " --window 10:80 -o " + path("r.json"));
+  quadid::testing::CliRun r = run(path("log.csv") + " --window 10:80 -o " + path("r.json"));
   EXPECT_EQ(r.rc, 1);
   EXPECT_NE(r.err.find("quadid identify: error: "), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("log.csv: window 10-80 s ends after the log ends (50 s of data)"), std::string::npos) << r.err;
@@ -156,7 +132,7 @@ TEST_F(CliIdentify, BadInputFailsClearlyAndWritesNothing) {
 }
 
 TEST_F(CliIdentify, LiteralGradientDescentReportsDivergence) {
-  const CliRun r = run(path("log.csv") + " --gd-discretization literal --json");
+  const quadid::testing::CliRun r = run(path("log.csv") + " --gd-discretization literal --json");
   ASSERT_EQ(r.rc, 0) << r.err;
   EXPECT_NE(r.err.find("warning: GD diverged"), std::string::npos) << r.err;
   const nlohmann::json j = nlohmann::json::parse(r.out);
@@ -165,7 +141,7 @@ TEST_F(CliIdentify, LiteralGradientDescentReportsDivergence) {
 }
 
 TEST_F(CliIdentify, HelpTeachesUnitsAndDefaults) {
-  const CliRun r = run("--help");
+  const quadid::testing::CliRun r = run("--help");
   EXPECT_EQ(r.rc, 0);
   for (const char* s : {"--window", "10:50", "--cutoff", "Hz", "--lambda", "rad/s", "--sigma", "--map", "--json",
                         "--evolution", "--gd-discretization", "--derivative-filter", "--nominal", "qball2-nominal"})

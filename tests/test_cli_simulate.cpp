@@ -1,49 +1,26 @@
 // End-to-end tests of `quadid simulate` (the built program, QUADID_EXE).
+#include "cli_fixture.hpp"
 #include "quadid/io.hpp"
 #include "quadid/simulation.hpp"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include <cstdlib>
 #include <filesystem>
 #include <string>
-#include <sys/wait.h>
-#include <unistd.h>
 
 namespace fs = std::filesystem;
 
 namespace {
 
-struct CliRun {
-  int rc = -1;
-  std::string out, err;
-};
+using quadid::testing::CliRun;
 
-// A scratch directory per test, removed at the end.
-class CliSimulate : public ::testing::Test {
+class CliSimulate : public quadid::testing::CliTest {
  protected:
   void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = fs::temp_directory_path() / ("quadid_cli_sim_" + std::to_string(::getpid()) + "_" + info->name());
-    fs::create_directories(dir_);
+    CliTest::SetUp();
+    prefix_ = "simulate ";
   }
-  void TearDown() override { fs::remove_all(dir_); }
-
-  std::string path(const std::string& name) const { return (dir_ / name).string(); }
-
-  CliRun run(const std::string& args) const {
-    const std::string o = path("stdout.txt"), e = path("stderr.txt");
-    const std::string cmd = std::string("\"") + QUADID_EXE + "\" simulate " + args + " >\"" + o + "\" 2>\"" + e + "\"";
-    const int status = std::system(cmd.c_str());
-    CliRun r;
-    r.rc = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    r.out = quadid::read_file(o);
-    r.err = quadid::read_file(e);
-    return r;
-  }
-
-  fs::path dir_;
 };
 
 }  // namespace

@@ -1,5 +1,6 @@
 // quadid identify LOG: Table 3 and Tables 5-6 from a flight log (docs/identify.md).
 #include "commands.hpp"
+#include "common.hpp"
 #include "quadid/identification.hpp"
 #include "quadid/io.hpp"
 
@@ -19,21 +20,12 @@ struct IdentifyArgs {
   std::string log;
   std::string window = "10:50";
   std::string error_window;
-  std::string filter = "butter";
-  double cutoff = 4.0;
-  int order = 4;
-  int taps = 31;
-  double lambda = 30.0;
-  std::string derivative_filter = "consistent";
   double sigma = 30.0;
   std::string gd_discretization = "exact";
   std::string gd_init = "nominal";
   std::string nominal = "qball2-nominal";
-  std::vector<std::string> map;
-  double g = kDefaultGravity;
-  double period_tolerance = 1e-3;
+  ProcessingArgs proc;
   bool allow_rank_deficient = false;
-  bool keep_edges = false;
   std::string evolution;
   double evolution_interval = 0.01;
   std::string out;
@@ -44,20 +36,9 @@ void run(const IdentifyArgs& a) {
   IdentificationOptions opt;
   opt.window = TimeWindow::parse(a.window);
   if (!a.error_window.empty()) opt.error_window = TimeWindow::parse(a.error_window);
-  auto& lp = opt.processing.lowpass;
-  if (a.filter == "butter") lp.kind = signal::LowpassOptions::Kind::Butterworth;
-  else if (a.filter == "fir") lp.kind = signal::LowpassOptions::Kind::FirBlackmanHarris;
-  else throw std::invalid_argument(fmt::format("--filter {}: expected butter or fir", a.filter));
-  lp.cutoff_hz = a.cutoff;
-  lp.order = a.order;
-  lp.taps = a.taps;
-  opt.processing.g = a.g;
-  opt.processing.period_tolerance = a.period_tolerance;
-  opt.processing.exclude_edges = !a.keep_edges;
-  opt.lambda = a.lambda;
-  if (a.derivative_filter == "consistent") opt.gd_variant = signal::GdVariant::Consistent;
-  else if (a.derivative_filter == "printed") opt.gd_variant = signal::GdVariant::Printed;
-  else throw std::invalid_argument(fmt::format("--derivative-filter {}: expected consistent or printed", a.derivative_filter));
+  opt.processing = a.proc.processing();
+  opt.lambda = a.proc.lambda;
+  opt.gd_variant = a.proc.gd_variant();
   opt.gd.sigma = a.sigma;
   if (a.gd_discretization == "exact") opt.gd.discretization = GdDiscretization::Exact;
   else if (a.gd_discretization == "literal") opt.gd.discretization = GdDiscretization::ForwardEuler;
@@ -68,9 +49,7 @@ void run(const IdentifyArgs& a) {
   opt.evolution_interval = a.evolution_interval;
   opt.validate();
 
-  CsvReadOptions csv;
-  csv.map = parse_column_map(a.map);
-  csv.period_tolerance = a.period_tolerance;
+  CsvReadOptions csv = a.proc.csv();
   csv.keep_extra_columns = false;  // only the 14 standard columns are used
   const FlightLog log = read_flight_log(a.log, csv);
 
@@ -121,18 +100,6 @@ void register_identify(CLI::App& app) {
       ->capture_default_str();
   sub->add_option("--error-window", a->error_window,
                   "window of the prediction-error tables (default: the whole log, as the paper's 0-50 s)");
-  sub->add_option("--filter", a->filter, "zero-phase pre-filter: butter (Butterworth IIR) or fir (31-tap Blackman-Harris)")
-      ->capture_default_str();
-  sub->add_option("--cutoff", a->cutoff,
-                  "pre-filter cutoff, Hz; 4 Hz passes the excitation (<= 0.5 Hz) and removes 30 Hz motion-capture steps")
-      ->capture_default_str();
-  sub->add_option("--order", a->order, "Butterworth order (1-8)")->capture_default_str();
-  sub->add_option("--taps", a->taps, "FIR length (odd)")->capture_default_str();
-  sub->add_option("--lambda", a->lambda, "bandwidth of f_D, g_D of the filtered model (eqs. 35-36), rad/s")
-      ->capture_default_str();
-  sub->add_option("--derivative-filter", a->derivative_filter,
-                  "g_D: consistent ((1-a)/T (z-1)/(z-a), the derivative of f_D's output) or printed (eq. 36)")
-      ->capture_default_str();
   sub->add_option("--sigma", a->sigma, "gradient-descent gain of eq. (41)")->capture_default_str();
   sub->add_option("--gd-discretization", a->gd_discretization,
                   "exact (exact solution over each sample, always stable) or literal (eq. 42, forward Euler: "
@@ -144,15 +111,9 @@ void register_identify(CLI::App& app) {
                   "reference set of Tables 5-6 (preset qball2-nominal|qball2-virtual or a params JSON); also the "
                   "value kept for unidentifiable parameters")
       ->capture_default_str();
-  sub->add_option("--map", a->map, "column name mapping CANONICAL=NAME, e.g. --map tau_phi=tau_x (repeatable)");
-  sub->add_option("--g", a->g, "gravity, m/s^2")->capture_default_str();
-  sub->add_option("--period-tolerance", a->period_tolerance, "relative tolerance on a uniform sample period")
-      ->capture_default_str();
   sub->add_flag("--allow-rank-deficient", a->allow_rank_deficient,
                 "warn instead of failing when the data do not determine some parameters (they keep the nominal values)");
-  sub->add_flag("--keep-edges", a->keep_edges,
-                "use the windows literally, including the filters' settling at the log's two ends (by default the "
-                "pre-filter's settling time, 0.57 s for the default filter, is left out at each end)");
+  a->proc.add_to(sub);
   sub->add_option("--evolution", a->evolution,
                   "write the estimates over time (Figs. 4-5) as CSV: t then LS_m..LS_Izz, GD_*, FMLS_*, FMGD_*");
   sub->add_option("--evolution-interval", a->evolution_interval, "seconds between evolution rows (0 = every sample)")

@@ -22,6 +22,9 @@ void ProcessingArgs::add_to(CLI::App* sub) {
   sub->add_option("--g", g, "gravity, m/s^2")->capture_default_str();
   sub->add_option("--period-tolerance", period_tolerance, "relative tolerance on a uniform sample period")
       ->capture_default_str();
+  sub->add_flag("--keep-edges", keep_edges,
+                "use the windows literally, including the filters' settling at the log's two ends (by default the "
+                "pre-filter's settling time, 0.57 s for the default filter, is left out at each end)");
   sub->add_option("--map", map, "column name mapping CANONICAL=NAME, e.g. --map tau_phi=tau_x (repeatable)");
 }
 
@@ -36,6 +39,7 @@ ProcessingOptions ProcessingArgs::processing() const {
   lp.taps = taps;
   p.g = g;
   p.period_tolerance = period_tolerance;
+  p.exclude_edges = !keep_edges;
   return p;
 }
 

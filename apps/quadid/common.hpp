@@ -12,7 +12,8 @@
 namespace quadid::cli {
 
 /// Section II-C processing and the filtered model's filters: --filter, --cutoff,
-/// --order, --taps, --lambda, --derivative-filter, --g, --period-tolerance, --map.
+/// --order, --taps, --lambda, --derivative-filter, --g, --period-tolerance,
+/// --keep-edges, --map.
 struct ProcessingArgs {
   std::string filter = "butter";
   double cutoff = 4.0;
@@ -22,6 +23,7 @@ struct ProcessingArgs {
   std::string derivative_filter = "consistent";
   double g = kDefaultGravity;
   double period_tolerance = 1e-3;
+  bool keep_edges = false;
   std::vector<std::string> map;
 
   void add_to(CLI::App* sub);

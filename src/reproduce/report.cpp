@@ -123,12 +123,26 @@ Table coefficient_table(const FourierTrajectory& tr) {
   t.title = fmt::format("Table 2. Coefficients of the excitation trajectory (eq. 18), w_f = {:.4g} rad/s "
                         "({:.4g} deg/s), N = {}",
                         tr.wf(), tr.wf() * kRad2Deg, tr.harmonics());
-  t.header = {"axis", "l", "a_l", "b_l", "c"};
-  for (int i = 0; i < 4; ++i)
-    for (int l = 1; l <= tr.harmonics(); ++l)
-      t.rows.push_back({l == 1 ? kAxisNames[static_cast<size_t>(i)] : "", std::to_string(l),
-                        report::fixed(tr.axis(i).a(l - 1), 4), report::fixed(tr.axis(i).b(l - 1), 4),
-                        l == 1 ? report::fixed(tr.axis(i).c, 4) : ""});
+  t.header = {"l"};
+  for (const char* ax : kAxisNames) {
+    t.header.push_back(fmt::format("{}: a_l", ax));
+    t.header.push_back(fmt::format("{}: b_l", ax));
+  }
+  for (int l = 1; l <= tr.harmonics(); ++l) {
+    std::vector<std::string> row = {std::to_string(l)};
+    for (int i = 0; i < 4; ++i) {
+      row.push_back(report::fixed(tr.axis(i).a(l - 1), 4));
+      row.push_back(report::fixed(tr.axis(i).b(l - 1), 4));
+    }
+    t.rows.push_back(row);
+  }
+  std::vector<std::string> c = {"c"};
+  for (int i = 0; i < 4; ++i) {
+    c.push_back(report::fixed(tr.axis(i).c, 4));
+    c.push_back("");
+  }
+  t.rows.push_back(c);
+  t.note = "a_l, b_l in m/s (psi: rad/s), c in m (psi: rad).";
   return t;
 }
 
@@ -164,7 +178,9 @@ Plot evolution_plot(const Reproduction& r, int param) {
   std::vector<double> t(static_cast<size_t>(ev.data.rows()));
   for (Eigen::Index k = 0; k < ev.data.rows(); ++k) t[static_cast<size_t>(k)] = ev.data(k, 0);
   const double truth = r.options.plant.theta()(param);
-  for (size_t s = 0; s < 4; ++s) {
+  // Gradient descent tracks the data sample by sample and is noisy: draw it
+  // first so that the least-squares curves stay visible on top.
+  for (const size_t s : std::array<size_t, 4>{1, 3, 0, 2}) {
     const std::string set = r.identification.estimates[s].name;
     const int c = static_cast<int>(1 + 7 * s) + param;
     std::vector<double> y(t.size());
