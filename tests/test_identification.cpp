@@ -11,7 +11,6 @@
 #include "quadid/simulation.hpp"
 #include "quadid/trajectory.hpp"
 
-#include "../src/identification/zero_phase.hpp"
 
 #include <gtest/gtest.h>
 
@@ -146,27 +145,6 @@ TEST(Identification, AssembledRegressorIsPhiAndPhiAPlusPhiB) {
     const Regressor4x7 ab_ref = regressor_a<double>(v, w) + regressor_b<double>(v, w, eta);
     EXPECT_LT((assemble_regressor(Vec4(v(2), p, q, r), b) - ab_ref).norm(), 1e-14);
   }
-}
-
-TEST(Identification, InPlaceFilterAndDifferenceEqualTheSignalModule) {
-  std::mt19937 rng(12);
-  std::normal_distribution<double> N(0.0, 1.0);
-  Eigen::VectorXd x(3001);
-  for (Eigen::Index k = 0; k < x.size(); ++k) x(k) = std::sin(0.01 * static_cast<double>(k)) + 0.1 * N(rng);
-  const signal::TransferFunction butter = signal::butter_lowpass(4, 4.0, 500.0);
-  const signal::TransferFunction fir{signal::fir_lowpass_blackmanharris(31, 4.0, 500.0), {1.0}};
-  for (const auto& tf : {butter, fir}) {
-    detail::ZeroPhaseFilter zf(tf);
-    Eigen::VectorXd y = x;
-    zf.apply(y.data(), y.size());
-    // Same arithmetic up to the FIR path's summation order: 1e-13 of the signal's size.
-    EXPECT_LT((y - signal::filtfilt(tf, x)).cwiseAbs().maxCoeff(), 1e-13);
-    Eigen::VectorXd short_x = x.head(zf.padlen());
-    EXPECT_THROW(zf.apply(short_x.data(), short_x.size()), std::invalid_argument);
-  }
-  Eigen::VectorXd d = x;
-  detail::central_difference_inplace(d.data(), d.size(), 0.002);
-  EXPECT_EQ(d, signal::central_difference(x, 0.002));
 }
 
 // The 15 processed signals against the textbook pipeline written with the

@@ -5,6 +5,7 @@
 #include <Eigen/Dense>
 
 #include <complex>
+#include <memory>
 #include <vector>
 
 namespace quadid::signal {
@@ -55,6 +56,23 @@ auto filtfilt(const std::vector<double>& fir_taps, const Eigen::MatrixBase<Deriv
   return filtfilt(TransferFunction{fir_taps, {1.0}}, x);
 }
 
+// filtfilt in place on x[0..n), with work space kept across calls: for long
+// logs, where a fresh copy of every column costs more than the filtering. The
+// result equals filtfilt(tf, x) bit for bit. Needs n > padlen().
+class ZeroPhaseFilter {
+ public:
+  explicit ZeroPhaseFilter(const TransferFunction& tf);
+  ~ZeroPhaseFilter();
+  ZeroPhaseFilter(const ZeroPhaseFilter&) = delete;
+  ZeroPhaseFilter& operator=(const ZeroPhaseFilter&) = delete;
+  int padlen() const;
+  void apply(double* x, Eigen::Index n);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
 // The zero-phase low-pass front end of the identification (section II-C, step 1).
 struct LowpassOptions {
   enum class Kind { Butterworth, FirBlackmanHarris };
@@ -73,6 +91,8 @@ Eigen::MatrixXd zero_phase_lowpass(const Eigen::MatrixXd& columns, double fs_hz,
 // differences at the two ends (exact for quadratics). Needs >= 3 samples, T > 0.
 Eigen::VectorXd central_difference(const Eigen::VectorXd& x, double T);
 Eigen::MatrixXd central_difference(const Eigen::MatrixXd& columns, double T);
+// The same, in place on x[0..n) (equal to central_difference bit for bit).
+void central_difference_inplace(double* x, Eigen::Index n, double T);
 template <class Derived>
 auto central_difference(const Eigen::MatrixBase<Derived>& x, double T) {
   if constexpr (Derived::ColsAtCompileTime == 1)

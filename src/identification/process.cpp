@@ -2,11 +2,11 @@
 // omega and F; (2) central differences, eq. (33); (3) v = R(eta)^T p_dot, eq. (3).
 //
 // Memory: everything is computed inside the 15-column RegressionSignals, with
-// one reusable padded work buffer (zero_phase.hpp): for 1.2 million samples
+// one reusable work buffer (signal::ZeroPhaseFilter): for 1.2 million samples
 // that is 144 MB + 10 MB beside the log, each page touched once.
 #include "quadid/identification.hpp"
 
-#include "zero_phase.hpp"
+#include "../common/memory.hpp"
 
 #include <fmt/format.h>
 
@@ -141,7 +141,7 @@ std::shared_ptr<const RegressionSignals> process_log(const FlightLog& log, const
   auto& X = out->x;
   X.resize(n, RegressionSignals::kCols);
   detail::prepare_buffer(X.data(), static_cast<std::size_t>(X.size()) * sizeof(double));
-  detail::ZeroPhaseFilter zf(tf);
+  signal::ZeroPhaseFilter zf(tf);
   // Step 1: zero-phase low-pass (filtfilt with MATLAB's odd padding).
   auto filter_into = [&](int log_col, int x_col) {
     X.col(x_col) = log.data.col(log_col);
@@ -157,7 +157,7 @@ std::shared_ptr<const RegressionSignals> process_log(const FlightLog& log, const
   // Step 2: p_dot by eq. (33) from the filtered position.
   for (int i = 0; i < 3; ++i) {
     filter_into(col[1 + i], 5 + i);
-    detail::central_difference_inplace(X.col(5 + i).data(), n, T);
+    signal::central_difference_inplace(X.col(5 + i).data(), n, T);
   }
   // Step 3: v = R(eta)^T p_dot (eq. 3), then the Phi_b signals.
   const double g = opt.g;

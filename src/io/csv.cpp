@@ -9,6 +9,8 @@
 // columns plus a 256 KiB buffer. Skipped columns are not parsed, only counted.
 #include "quadid/io.hpp"
 
+#include "../common/memory.hpp"
+
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -143,29 +145,6 @@ class LineReader {
   bool eof_ = false;
 };
 
-// Prepares a large fresh buffer before it is first written: transparent huge
-// pages where possible, then the page tables populated in one call. On virtual
-// machines a demand page fault costs ~15 us (measured ~4 ms/MB on the
-// development VM, ~0.5 ms/MB with these hints), so a 134 MB log would
-// otherwise spend ~0.5 s faulting. Both are hints: failure is harmless.
-void prepare_buffer(void* p, std::size_t bytes) {
-#if defined(__linux__)
-  constexpr std::uintptr_t kPage = 4096, kHuge = std::uintptr_t{1} << 21;
-  const auto b = reinterpret_cast<std::uintptr_t>(p);
-#if defined(MADV_HUGEPAGE)
-  if (bytes >= 2 * kHuge) {
-    const std::uintptr_t a = (b + kHuge - 1) & ~(kHuge - 1), e = (b + bytes) & ~(kHuge - 1);
-    if (e > a) ::madvise(reinterpret_cast<void*>(a), e - a, MADV_HUGEPAGE);
-  }
-#endif
-  constexpr int kPopulateWrite = 23;  // MADV_POPULATE_WRITE, Linux >= 5.14
-  const std::uintptr_t a = (b + kPage - 1) & ~(kPage - 1), e = (b + bytes) & ~(kPage - 1);
-  if (bytes >= 16 * kPage && e > a) ::madvise(reinterpret_cast<void*>(a), e - a, kPopulateWrite);
-#else
-  (void)p;
-  (void)bytes;
-#endif
-}
 
 // The kept columns, written straight into a column-major matrix whose row
 // capacity is estimated from the file size; at the end the columns are packed
@@ -178,7 +157,7 @@ class ColumnStore {
   void reserve(Eigen::Index cap) {
     if (cap <= cap_) return;
     Eigen::MatrixXd bigger(cap, ncol_);
-    prepare_buffer(bigger.data(), static_cast<std::size_t>(cap * ncol_) * sizeof(double));
+    detail::prepare_buffer(bigger.data(), static_cast<std::size_t>(cap * ncol_) * sizeof(double));
     for (Eigen::Index j = 0; j < ncol_; ++j)
       std::copy(m_.data() + j * cap_, m_.data() + j * cap_ + rows_, bigger.data() + j * cap);
     m_.swap(bigger);

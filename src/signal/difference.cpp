@@ -18,14 +18,22 @@ void check(Eigen::Index n, double T) {
         fmt::format("central_difference: signal length {} must be at least 3", n));
 }
 
+// d may equal x (in place): x[k-1] is kept in `prev` before d[k-1] overwrites it.
 void diff(const double* x, Eigen::Index n, double T, double* d) {
   const double h = 1.0 / (2.0 * T);
-  // eq. (33) in the interior: (x[k+1] - x[k-1]) / (2T).
-  for (Eigen::Index k = 1; k + 1 < n; ++k) d[k] = (x[k + 1] - x[k - 1]) * h;
   // Ends: second-order one-sided differences (not in the paper, which leaves the
   // first and last samples undefined); exact for quadratics like the interior.
-  d[0] = (-3.0 * x[0] + 4.0 * x[1] - x[2]) * h;
-  d[n - 1] = (3.0 * x[n - 1] - 4.0 * x[n - 2] + x[n - 3]) * h;
+  const double first = (-3.0 * x[0] + 4.0 * x[1] - x[2]) * h;
+  const double last = (3.0 * x[n - 1] - 4.0 * x[n - 2] + x[n - 3]) * h;
+  // eq. (33) in the interior: (x[k+1] - x[k-1]) / (2T).
+  double prev = x[0];
+  for (Eigen::Index k = 1; k + 1 < n; ++k) {
+    const double cur = x[k];
+    d[k] = (x[k + 1] - prev) * h;
+    prev = cur;
+  }
+  d[0] = first;
+  d[n - 1] = last;
 }
 
 }  // namespace
@@ -43,6 +51,11 @@ Eigen::MatrixXd central_difference(const Eigen::MatrixXd& columns, double T) {
   for (Eigen::Index j = 0; j < columns.cols(); ++j)
     diff(columns.col(j).data(), columns.rows(), T, d.col(j).data());
   return d;
+}
+
+void central_difference_inplace(double* x, Eigen::Index n, double T) {
+  check(n, T);
+  diff(x, n, T, x);
 }
 
 }  // namespace quadid::signal

@@ -150,6 +150,7 @@ void odd_extend(const double* x, Eigen::Index n, Eigen::Index pad, double* ext) 
   for (Eigen::Index j = 1; j <= pad; ++j) ext[pad + n - 1 + j] = 2.0 * xn - x[n - 1 - j];
 }
 
+// out may equal x (in place): x is read only before out is written.
 void filtfilt_column(const Normalized& f, const std::vector<double>& zi, const double* x,
                      Eigen::Index n, Eigen::Index pad, double* out, Work& w) {
   if (f.fir()) {
@@ -188,7 +189,7 @@ void filtfilt_column(const Normalized& f, const std::vector<double>& zi, const d
   const double x0 = x[0], xn = x[n - 1];
   for (Eigen::Index j = 1; j <= pad; ++j) pre[pad - j] = 2.0 * x0 - x[j];
   for (Eigen::Index j = 1; j <= pad; ++j) post[j - 1] = 2.0 * xn - x[n - 1 - j];
-  std::copy(x, x + n, out);
+  if (out != x) std::copy(x, x + n, out);  // out == x: filtering in place
 
   const auto set_state = [&](double v) {
     for (int k = 0; k < N; ++k) w.z[static_cast<std::size_t>(k)] = zi[static_cast<std::size_t>(k)] * v;
@@ -266,6 +267,28 @@ Eigen::VectorXd filtfilt(const std::vector<double>& fir_taps, const Eigen::Vecto
 
 Eigen::MatrixXd filtfilt(const std::vector<double>& fir_taps, const Eigen::MatrixXd& columns) {
   return filtfilt(TransferFunction{fir_taps, {1.0}}, columns);
+}
+
+struct ZeroPhaseFilter::Impl {
+  Normalized f;
+  std::vector<double> zi;
+  int pad = 0;
+  Work work;
+};
+
+ZeroPhaseFilter::ZeroPhaseFilter(const TransferFunction& tf) : impl_(std::make_unique<Impl>()) {
+  impl_->f = normalize(tf, "ZeroPhaseFilter");
+  impl_->pad = padlen_of(tf);
+  if (!impl_->f.fir()) impl_->zi = steady_state(impl_->f);
+}
+
+ZeroPhaseFilter::~ZeroPhaseFilter() = default;
+
+int ZeroPhaseFilter::padlen() const { return impl_->pad; }
+
+void ZeroPhaseFilter::apply(double* x, Eigen::Index n) {
+  check_length(n, impl_->pad);
+  filtfilt_column(impl_->f, impl_->zi, x, n, impl_->pad, x, impl_->work);
 }
 
 }  // namespace quadid::signal
