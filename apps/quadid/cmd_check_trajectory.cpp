@@ -1,6 +1,7 @@
 // quadid check-trajectory: limits of section III-B, start/end conditions and
 // cond(W) of eq. (20) for a trajectory file or a built-in one.
 #include "commands.hpp"
+#include "common.hpp"
 #include "quadid/design.hpp"
 #include "quadid/io.hpp"
 
@@ -20,7 +21,7 @@ struct CheckArgs {
   bool strict = false;
   CheckOptions opt;
   // People's units for the angle limits.
-  double psi_max_deg = 180.0, tilt_max_deg = 5.73, psidot_max_deg = 28.65;
+  LimitArgs limits;
 };
 
 }  // namespace
@@ -44,30 +45,15 @@ void register_check_trajectory(CLI::App& app) {
   sub->add_flag("--json", args->json, "print the report as JSON on stdout (SI units, radians)");
   sub->add_flag("--strict", args->strict, "exit with status 2 when a limit or start/end condition fails");
   auto& o = args->opt;
-  auto& L = o.limits;
   sub->add_option("--duration", o.duration, "seconds checked; 0 = one period")->capture_default_str();
   sub->add_option("--check-dt", o.constraint_dt, "grid of the limit check, s")->capture_default_str();
   sub->add_option("--cond-dt", o.cond_dt, "sampling period T of W (eq. 20), s")->capture_default_str();
   sub->add_option("--endpoint-tol", o.endpoint_tol, "tolerance of the start/end conditions, SI units")
       ->capture_default_str();
-  sub->add_option("--x-max", L.x_max, "|x| limit, m")->capture_default_str();
-  sub->add_option("--y-max", L.y_max, "|y| limit, m")->capture_default_str();
-  sub->add_option("--z-min", L.z_min, "lower z limit, m")->capture_default_str();
-  sub->add_option("--z-max", L.z_max, "upper z limit, m")->capture_default_str();
-  sub->add_option("--psi-max", args->psi_max_deg, "|psi| limit, deg")->capture_default_str();
-  sub->add_option("--tilt-max", args->tilt_max_deg, "|phi|, |theta| limit of eqs. (26)-(27), deg")
-      ->capture_default_str();
-  sub->add_option("--xdot-max", L.xdot_max, "|x_dot| limit, m/s")->capture_default_str();
-  sub->add_option("--ydot-max", L.ydot_max, "|y_dot| limit, m/s")->capture_default_str();
-  sub->add_option("--zdot-max", L.zdot_max, "|z_dot| limit, m/s")->capture_default_str();
-  sub->add_option("--psidot-max", args->psidot_max_deg, "|psi_dot| limit, deg/s")->capture_default_str();
-  sub->add_option("--zddot-min", L.zddot_min, "lower z_ddot limit, m/s^2")->capture_default_str();
-  sub->add_option("--z0", L.z0, "start/end height, m")->capture_default_str();
+  args->limits.add_to(sub);
   sub->callback([args] {
     CheckOptions opt = args->opt;
-    opt.limits.psi_max = args->psi_max_deg * kDeg;
-    opt.limits.tilt_max = args->tilt_max_deg * kDeg;
-    opt.limits.psidot_max = args->psidot_max_deg * kDeg;
+    opt.limits = args->limits.constraints();
     opt.validate();
     const auto traj = load_trajectory(args->trajectory);
     const CheckReport rep = check_trajectory(*traj, opt);

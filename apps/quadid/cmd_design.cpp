@@ -2,6 +2,7 @@
 // excitation criterion (cond(W) of eq. 20 by default) under the limits of
 // section III-B, with NLopt SLSQP from random starts.
 #include "commands.hpp"
+#include "common.hpp"
 #include "quadid/design.hpp"
 #include "quadid/io.hpp"
 
@@ -19,7 +20,8 @@ struct DesignArgs {
   std::string out, criterion = "cond", reference = "qball2-nominal";
   bool json = false, quiet = false;
   DesignOptions opt;
-  double wf_deg = 36.0, psi_max_deg = 180.0, tilt_max_deg = 5.73, psidot_max_deg = 28.65;
+  double wf_deg = 36.0;
+  LimitArgs limits;
 };
 
 }  // namespace
@@ -42,7 +44,6 @@ void register_design(CLI::App& app) {
       "  quadid design --seed 1 -o traj.json\n"
       "  quadid design --criterion dopt --starts 16 --json > traj.json");
   auto& o = args->opt;
-  auto& L = o.limits;
   sub->add_option("-o,--out", args->out, "write the trajectory JSON here (atomically)");
   sub->add_flag("--json", args->json, "print the trajectory JSON on stdout instead of the tables");
   sub->add_flag("-q,--quiet", args->quiet, "no progress on stderr");
@@ -62,25 +63,11 @@ void register_design(CLI::App& app) {
       ->capture_default_str();
   sub->add_option("--cond-dt", o.cond_dt, "sampling period T of W for the reported criteria (eq. 20), s")
       ->capture_default_str();
-  sub->add_option("--x-max", L.x_max, "|x| limit, m")->capture_default_str();
-  sub->add_option("--y-max", L.y_max, "|y| limit, m")->capture_default_str();
-  sub->add_option("--z-min", L.z_min, "lower z limit, m")->capture_default_str();
-  sub->add_option("--z-max", L.z_max, "upper z limit, m")->capture_default_str();
-  sub->add_option("--psi-max", args->psi_max_deg, "|psi| limit, deg")->capture_default_str();
-  sub->add_option("--tilt-max", args->tilt_max_deg, "|phi|, |theta| limit of eqs. (26)-(27), deg")
-      ->capture_default_str();
-  sub->add_option("--xdot-max", L.xdot_max, "|x_dot| limit, m/s")->capture_default_str();
-  sub->add_option("--ydot-max", L.ydot_max, "|y_dot| limit, m/s")->capture_default_str();
-  sub->add_option("--zdot-max", L.zdot_max, "|z_dot| limit, m/s")->capture_default_str();
-  sub->add_option("--psidot-max", args->psidot_max_deg, "|psi_dot| limit, deg/s")->capture_default_str();
-  sub->add_option("--zddot-min", L.zddot_min, "lower z_ddot limit, m/s^2")->capture_default_str();
-  sub->add_option("--z0", L.z0, "start/end height, m")->capture_default_str();
+  args->limits.add_to(sub);
   sub->callback([args] {
     DesignOptions opt = args->opt;
     opt.wf = args->wf_deg * kDeg;
-    opt.limits.psi_max = args->psi_max_deg * kDeg;
-    opt.limits.tilt_max = args->tilt_max_deg * kDeg;
-    opt.limits.psidot_max = args->psidot_max_deg * kDeg;
+    opt.limits = args->limits.constraints();
     opt.criterion = parse_criterion(args->criterion);
     opt.reference = load_params(args->reference);
     opt.validate();

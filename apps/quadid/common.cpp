@@ -56,4 +56,28 @@ CsvReadOptions ProcessingArgs::csv() const {
   return c;
 }
 
+void LimitArgs::add_to(CLI::App* sub) {
+  auto& L = limits;
+  sub->add_option("--x-max", L.x_max, "|x| limit, m")->capture_default_str();
+  sub->add_option("--y-max", L.y_max, "|y| limit, m")->capture_default_str();
+  sub->add_option("--z-min", L.z_min, "lower z limit, m")->capture_default_str();
+  sub->add_option("--z-max", L.z_max, "upper z limit, m")->capture_default_str();
+  sub->add_option("--psi-max", psi_max_deg, "|psi| limit, deg")->capture_default_str();
+  sub->add_option("--tilt-max", tilt_max_deg, "|phi|, |theta| limit of eqs. (26)-(27), deg")->capture_default_str();
+  sub->add_option("--xdot-max", L.xdot_max, "|x_dot| limit, m/s")->capture_default_str();
+  sub->add_option("--ydot-max", L.ydot_max, "|y_dot| limit, m/s")->capture_default_str();
+  sub->add_option("--zdot-max", L.zdot_max, "|z_dot| limit, m/s")->capture_default_str();
+  sub->add_option("--psidot-max", psidot_max_deg, "|psi_dot| limit, deg/s")->capture_default_str();
+  sub->add_option("--zddot-min", L.zddot_min, "lower z_ddot limit, m/s^2")->capture_default_str();
+  sub->add_option("--z0", L.z0, "start/end height, m")->capture_default_str();
+}
+
+Constraints LimitArgs::constraints() const {
+  Constraints c = limits;
+  c.psi_max = psi_max_deg * kDeg;
+  c.tilt_max = tilt_max_deg * kDeg;
+  c.psidot_max = psidot_max_deg * kDeg;
+  return c;
+}
+
 }  // namespace quadid::cli

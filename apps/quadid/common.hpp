@@ -2,6 +2,7 @@
 // and documents them the same way.
 #pragma once
 
+#include "quadid/design.hpp"
 #include "quadid/identification.hpp"
 
 #include <CLI/CLI.hpp>
@@ -30,6 +31,16 @@ struct ProcessingArgs {
   ProcessingOptions processing() const;
   signal::GdVariant gd_variant() const;
   CsvReadOptions csv() const;
+};
+
+/// The limits of section III-B (design, check-trajectory): --x-max ... --z0.
+/// Angles are given in degrees on the command line and converted here.
+struct LimitArgs {
+  Constraints limits;  // SI; the three angular limits below override theirs
+  double psi_max_deg = 180.0, tilt_max_deg = 5.73, psidot_max_deg = 28.65;
+
+  void add_to(CLI::App* sub);
+  Constraints constraints() const;
 };
 
 }  // namespace quadid::cli
