@@ -7,8 +7,10 @@ deps:
 	scripts/install-deps.sh
 build:
 	cmake --preset release -DQUADID_BUILD_BENCH=OFF
+	cmake --build build -j $(JOBS) --target quadid
+test:
+	cmake --preset release -DQUADID_BUILD_BENCH=OFF
 	cmake --build build -j $(JOBS)
-test: build
 	cd build && ctest --output-on-failure -j $(JOBS)
 reproduce: build
 	build/quadid reproduce --out $(OUT)
