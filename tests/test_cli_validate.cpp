@@ -98,3 +98,14 @@ TEST_F(CliReproduce, Table2RunWritesACompleteReport) {
     all_improve(c["filtered"], c["name"].get<std::string>());
   }
 }
+
+// Same seed, same options: the same report and data, byte for byte.
+TEST_F(CliReproduce, SameSeedSameBytes) {
+  for (const char* d : {"a", "b"}) {
+    const CliRun r = run(std::string("reproduce --trajectory table2 --duration 20 --seed 5 --out ") + path(d));
+    ASSERT_EQ(r.rc, 0) << r.err;
+  }
+  for (const char* f : {"report.html", "summary.json", "identification.json", "flight_identification.csv",
+                        "flight_circle2.csv", "simulation_FMGD.csv", "evolution.csv", "tables.md"})
+    EXPECT_EQ(quadid::read_file(path("a/") + f), quadid::read_file(path("b/") + f)) << f;
+}

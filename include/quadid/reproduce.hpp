@@ -46,7 +46,7 @@ struct Reproduction {
   IdentificationResult identification;
   SimulationComparison table4;         // with the simulated logs kept (reference first)
   std::vector<ValidationFlight> circles;
-  double seconds = 0.0;                // wall time
+  double seconds = 0.0;                // wall time (reported on stderr only, so that outputs are reproducible)
   std::vector<NamedParams> sets() const;  // LS, GD, FMLS, FMGD
 };
 
