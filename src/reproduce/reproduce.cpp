@@ -123,17 +123,17 @@ std::string format_reproduction_tables(const Reproduction& r) {
   const Theta truth = r.options.plant.theta();
   fmt::format_to(it, "Table 3. Estimated parameters of the virtual QBall 2 (window {}), with the true plant\n",
                  id.window.to_string());
-  fmt::format_to(it, "{:<10}{:<8}{:>12}", "Parameter", "Units", "true");
-  for (const auto& e : id.estimates) fmt::format_to(it, "{:>12}{:>9}", e.name, "err%");
-  fmt::format_to(it, "{:>12}\n", "nominal");
+  fmt::format_to(it, "{:<10}{:<8}{:>13}", "Parameter", "Units", "true");
+  for (const auto& e : id.estimates) fmt::format_to(it, "{:>13}{:>9}", e.name, "err%");
+  fmt::format_to(it, "{:>13}\n", "nominal");
   const Theta nom = r.options.nominal.theta();
   for (int j = 0; j < 7; ++j) {
-    fmt::format_to(it, "{:<10}{:<8}{:>12.6g}", kThetaNames[static_cast<size_t>(j)], j == 0 ? "kg" : "kg m^2", truth(j));
+    fmt::format_to(it, "{:<10}{:<8}{:>13.6g}", kThetaNames[static_cast<size_t>(j)], j == 0 ? "kg" : "kg m^2", truth(j));
     for (const auto& e : id.estimates) {
       const double err = (e.theta(j) - truth(j)) / std::abs(truth(j)) * 100.0;
-      fmt::format_to(it, "{:>12.6g}{:>9.2f}", e.theta(j), err);
+      fmt::format_to(it, "{:>13.6g}{:>9.2f}", e.theta(j), err);
     }
-    fmt::format_to(it, "{:>12.6g}\n", nom(j));
+    fmt::format_to(it, "{:>13.6g}\n", nom(j));
   }
   fmt::format_to(it, "(err% = (estimate - true) / |true| * 100; products of inertia are small, so their err% is large "
                      "for small absolute errors)\n\n");
