@@ -5,6 +5,8 @@
 
 #include <fmt/format.h>
 
+#include <cmath>
+
 namespace quadid {
 
 namespace {
@@ -45,6 +47,33 @@ Plot compare_plot(const Reproduction& r, std::string_view signal, const std::str
     if (l.rows() == 0) continue;
     p.series.push_back({sim_label(names[i]), col(l, "t"), col(l, signal, scale), report::color_for(names[i], i),
                         false, 1.2});
+  }
+  return p;
+}
+
+// Experiment minus each re-flight: at full scale the six curves of
+// compare_plot overlap within a line width; the differences show what Table 4 measures.
+Plot difference_plot(const Reproduction& r, std::string_view signal, const std::string& ylabel, double scale,
+                     std::string_view title, int width) {
+  Plot p;
+  p.title = std::string(title);
+  p.xlabel = "time (s)";
+  p.ylabel = ylabel;
+  p.height = 260;
+  p.width = width;
+  const auto t = col(r.flight.log, "t");
+  const auto exp = col(r.flight.log, signal, scale);
+  std::vector<std::string> names{r.table4.reference.name};
+  for (const auto& row : r.table4.rows) names.push_back(row.name);
+  for (size_t i = 0; i < r.table4.logs.size() && i < names.size(); ++i) {
+    const auto sim = col(r.table4.logs[i], signal, scale);
+    if (sim.size() != exp.size()) continue;  // a diverged re-flight
+    std::vector<double> d(exp.size());
+    for (size_t k = 0; k < d.size(); ++k) {
+      d[k] = exp[k] - sim[k];
+      if (signal == "psi") d[k] = std::remainder(d[k], 360.0);
+    }
+    p.series.push_back({"Exp − " + sim_label(names[i]), t, d, report::color_for(names[i], i), false, 1.2});
   }
   return p;
 }
@@ -173,7 +202,7 @@ Plot evolution_plot(const Reproduction& r, int param) {
   p.title = fmt::format("{} estimate over time", name);
   p.xlabel = "time (s)";
   p.ylabel = fmt::format("{} ({})", name, param == 0 ? "kg" : "kg m²");
-  p.width = 520;
+  p.width = 500;
   p.height = 260;
   std::vector<double> t(static_cast<size_t>(ev.data.rows()));
   for (Eigen::Index k = 0; k < ev.data.rows(); ++k) t[static_cast<size_t>(k)] = ev.data(k, 0);
@@ -264,17 +293,25 @@ std::string reproduction_html(const Reproduction& r) {
                                report::color_for(names[i], i), false, 1.2});
     d.figure(path, "Validation using the identification experiment: path drawn by the quadrotor (paper Fig. 6).");
   }
-  d.figure_row({compare_plot(r, "x", "x (m)", 1.0, "x", 520), compare_plot(r, "y", "y (m)", 1.0, "y", 520),
-                compare_plot(r, "z", "z (m)", 1.0, "z", 520)},
+  d.figure_row({compare_plot(r, "x", "x (m)", 1.0, "x", 500), compare_plot(r, "y", "y (m)", 1.0, "y", 500),
+                compare_plot(r, "z", "z (m)", 1.0, "z", 500)},
                "Position in experiment and simulations (paper Fig. 7).");
-  d.figure_row({compare_plot(r, "phi", "φ (deg)", kRad2Deg, "roll φ", 520),
-                compare_plot(r, "theta", "θ (deg)", kRad2Deg, "pitch θ", 520),
-                compare_plot(r, "psi", "ψ (deg)", kRad2Deg, "yaw ψ", 520)},
+  d.figure_row({difference_plot(r, "x", "Δx (m)", 1.0, "x: experiment − simulation", 500),
+                difference_plot(r, "y", "Δy (m)", 1.0, "y: experiment − simulation", 500),
+                difference_plot(r, "z", "Δz (m)", 1.0, "z: experiment − simulation", 500)},
+               "Position differences between the experiment and each simulation (what Table 4 summarizes).");
+  d.figure_row({compare_plot(r, "phi", "φ (deg)", kRad2Deg, "roll φ", 500),
+                compare_plot(r, "theta", "θ (deg)", kRad2Deg, "pitch θ", 500),
+                compare_plot(r, "psi", "ψ (deg)", kRad2Deg, "yaw ψ", 500)},
                "Orientation in experiment and simulations (paper Fig. 8).");
-  d.figure_row({compare_plot(r, "Fz", "F_z (N)", 1.0, "thrust F_z", 390),
-                compare_plot(r, "tau_phi", "τ_φ (N m)", 1.0, "torque τ_φ", 390),
-                compare_plot(r, "tau_theta", "τ_θ (N m)", 1.0, "torque τ_θ", 390),
-                compare_plot(r, "tau_psi", "τ_ψ (N m)", 1.0, "torque τ_ψ", 390)},
+  d.figure_row({difference_plot(r, "phi", "Δφ (deg)", kRad2Deg, "roll: experiment − simulation", 500),
+                difference_plot(r, "theta", "Δθ (deg)", kRad2Deg, "pitch: experiment − simulation", 500),
+                difference_plot(r, "psi", "Δψ (deg)", kRad2Deg, "yaw: experiment − simulation", 500)},
+               "Orientation differences between the experiment and each simulation (what Table 4 summarizes).");
+  d.figure_row({compare_plot(r, "Fz", "F_z (N)", 1.0, "thrust F_z", 372),
+                compare_plot(r, "tau_phi", "τ_φ (N m)", 1.0, "torque τ_φ", 372),
+                compare_plot(r, "tau_theta", "τ_θ (N m)", 1.0, "torque τ_θ", 372),
+                compare_plot(r, "tau_psi", "τ_ψ (N m)", 1.0, "torque τ_ψ", 372)},
                "Control inputs in experiment and simulations (paper Fig. 9).");
   d.table(prediction_table(select_rows(r.identification.errors_standard, {"LS", "GD"}),
                            "Table 5. Identification experiment"));
