@@ -2,6 +2,7 @@
 #include "quadid/model.hpp"
 #include "quadid/regressor.hpp"
 #include "quadid/trajectory.hpp"
+#include "random_model.hpp"
 
 #include <gtest/gtest.h>
 
@@ -9,34 +10,8 @@
 
 using namespace quadid;
 
-namespace {
-
-// A random symmetric positive-definite, non-diagonal inertia tensor: Q D Q^T.
-Params random_params(std::mt19937& rng) {
-  std::uniform_real_distribution<double> U(-1.0, 1.0);
-  Eigen::Matrix3d A;
-  for (int i = 0; i < 9; ++i) A(i) = U(rng);
-  Eigen::HouseholderQR<Eigen::Matrix3d> qr(A);
-  const Eigen::Matrix3d Q = qr.householderQ();
-  const Eigen::Vector3d d(0.01 + 0.05 * (U(rng) + 1), 0.01 + 0.05 * (U(rng) + 1), 0.02 + 0.05 * (U(rng) + 1));
-  Params P;
-  P.m = 0.5 + 2.0 * (U(rng) + 1);
-  P.I = Q * d.asDiagonal() * Q.transpose();
-  P.I = 0.5 * (P.I + P.I.transpose()).eval();
-  return P;
-}
-
-State random_state(std::mt19937& rng) {
-  std::uniform_real_distribution<double> U(-1.0, 1.0);
-  State x;
-  x.p = Vec3(U(rng), U(rng), 1 + U(rng));
-  x.v = 2.0 * Vec3(U(rng), U(rng), U(rng));
-  x.eta = Vec3(0.6 * U(rng), 0.6 * U(rng), 3.0 * U(rng));
-  x.omega = 3.0 * Vec3(U(rng), U(rng), U(rng));
-  return x;
-}
-
-}  // namespace
+using quadid::testing::random_params;
+using quadid::testing::random_state;
 
 TEST(Model, RotationIsOrthonormalAndZYX) {
   const Vec3 eta(0.3, -0.2, 1.1);

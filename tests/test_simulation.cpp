@@ -1,5 +1,6 @@
 // Closed-loop simulator: plant physics, sensors, determinism, divergence, log metadata.
 #include "quadid/simulation.hpp"
+#include "random_model.hpp"
 
 #include <gtest/gtest.h>
 
@@ -41,11 +42,7 @@ TEST(Simulation, PlantDerivativeEqualsModelDynamics) {
   for (const Params& P : {Params::qball2_virtual(), Params::qball2_nominal()}) {
     const Plant plant(P, 9.81);
     for (int i = 0; i < 50; ++i) {
-      State x;
-      x.p = Vec3(U(rng), U(rng), 1 + U(rng));
-      x.v = 2.0 * Vec3(U(rng), U(rng), U(rng));
-      x.eta = Vec3(0.6 * U(rng), 0.6 * U(rng), 3.0 * U(rng));
-      x.omega = 3.0 * Vec3(U(rng), U(rng), U(rng));
+      const State x = quadid::testing::random_state(rng);
       Input u;
       u.Fz = 18.0 + 5.0 * U(rng);
       u.tau = Vec3(U(rng), U(rng), U(rng));
