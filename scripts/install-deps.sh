@@ -2,7 +2,9 @@
 # Installs what quadid needs to build and test on Debian 12. Idempotent.
 set -euo pipefail
 PKGS=(g++ cmake make libeigen3-dev libnlopt-cxx-dev libnlopt-dev libcli11-dev nlohmann-json3-dev
-      libfmt-dev libgtest-dev libgmock-dev libbenchmark-dev)
+      libfmt-dev libgtest-dev libgmock-dev libbenchmark-dev libtomlplusplus-dev
+      clang libclang-rt-dev
+      pybind11-dev python3-dev python3-numpy python3-pytest python3-distributed)
 missing=()
 for p in "${PKGS[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
