@@ -3,6 +3,7 @@
 #include "common.hpp"
 #include "quadid/identification.hpp"
 #include "quadid/io.hpp"
+#include "quadid/logs.hpp"
 
 #include <fmt/format.h>
 
@@ -51,7 +52,9 @@ void run(const IdentifyArgs& a) {
 
   CsvReadOptions csv = a.proc.csv();
   csv.keep_extra_columns = false;  // only the 14 standard columns are used
-  const FlightLog log = read_flight_log(a.log, csv);
+  logs::LoadOptions load;
+  load.csv = csv;
+  const FlightLog log = logs::load_any_log(a.log, load);  // CSV, or an autopilot log imported
 
   IdentificationResult res;
   try {

@@ -2,6 +2,7 @@
 // against the log) and Tables 5-12 (output prediction error) for parameter sets.
 #include "commands.hpp"
 #include "common.hpp"
+#include "quadid/logs.hpp"
 #include "quadid/validation.hpp"
 
 #include <fmt/format.h>
@@ -51,7 +52,9 @@ void run(const ValidateArgs& a) {
   popt.validate();
   sopt.validate();
 
-  const FlightLog log = read_flight_log(a.log, a.proc.csv());
+  logs::LoadOptions load;
+  load.csv = a.proc.csv();
+  const FlightLog log = logs::load_any_log(a.log, load);  // CSV, or an autopilot log imported
 
   // Table 4 needs the reference the log was flown with and the controller: a
   // simulated log carries both; for another log, --trajectory and defaults.

@@ -12,5 +12,7 @@ void register_simulate(CLI::App& app);
 void register_identify(CLI::App& app);
 void register_validate(CLI::App& app);
 void register_reproduce(CLI::App& app);
+void register_log_info(CLI::App& app);
+void register_import(CLI::App& app);
 
 }  // namespace quadid::cli

@@ -19,7 +19,9 @@ int main(int argc, char** argv) {
       "  quadid simulate --trajectory traj.json -o log.csv   fly it (virtual QBall 2)\n"
       "  quadid identify log.csv                    estimate m and I (LS, GD, FMLS, FMGD)\n"
       "  quadid validate --log log.csv --params result.json\n"
-      "  quadid reproduce --out report/             the whole paper, one command\n",
+      "  quadid reproduce --out report/             the whole paper, one command\n"
+      "  quadid log-info flight.ulg                 what a PX4 ULog or Crazyflie uSD log holds\n"
+      "  quadid import flight.ulg -o log.csv        an autopilot log -> flight log CSV\n",
       "quadid"};
   app.require_subcommand(1);
   app.set_version_flag("--version", QUADID_VERSION);
@@ -29,6 +31,8 @@ int main(int argc, char** argv) {
   quadid::cli::register_identify(app);
   quadid::cli::register_validate(app);
   quadid::cli::register_reproduce(app);
+  quadid::cli::register_import(app);
+  quadid::cli::register_log_info(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

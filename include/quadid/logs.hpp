@@ -1,0 +1,364 @@
+// quadid::logs — autopilot logs read natively: PX4 ULog (.ulg) and the
+// Crazyflie uSD-card deck's event-based binary log; import of either into a
+// flight log (DESIGN.md, "Autopilot logs"): frame conversion, resampling onto
+// one uniform grid with an anti-aliasing filter, gaps reported. See
+// docs/log-info.md, docs/import.md and docs/file-formats.md.
+//
+// Robustness: every reader checks every length against the bytes left; a
+// truncated or corrupt file ends in an InputError that names the file, the
+// byte offset and what was expected there. Nothing is read past the buffer.
+#pragma once
+
+#include "quadid/io.hpp"
+
+#include <Eigen/Dense>
+
+#include <array>
+#include <cstdint>
+#include <filesystem>
+#include <map>
+#include <optional>
+#include <span>
+#include <string>
+#include <string_view>
+#include <type_traits>
+#include <vector>
+
+namespace quadid::logs {
+
+// ============================================================================
+// PX4 ULog (PX4 user guide, "ULog File Format"), little endian.
+// ============================================================================
+
+/// The basic field types of a ULog format definition.
+enum class ULogType : std::uint8_t { Int8, UInt8, Int16, UInt16, Int32, UInt32, Int64, UInt64, Float, Double, Bool, Char };
+/// Size in bytes of a basic type.
+int ulog_type_size(ULogType t);
+/// "int8_t" ... "char" -> type; nullopt for other names (nested types).
+std::optional<ULogType> ulog_type_from_name(std::string_view name);
+
+/// A typed value of an info, multi-info or parameter message: the type as
+/// written in the file ("int32_t", "float", "char[12]", ...) and the raw bytes.
+struct ULogValue {
+  std::string type;
+  std::string bytes;
+
+  bool is_string() const { return type.rfind("char[", 0) == 0; }
+  /// A number (int, float, bool); nullopt for strings, arrays and short values.
+  std::optional<double> number() const;
+  /// As pyulog prints it: strings as text, integers in decimal, floats as
+  /// Python's repr of the value, bool True/False, other types as Python bytes.
+  std::string to_string() const;
+};
+
+/// One field of a format definition, as written ("float[4] q").
+struct ULogFormatField {
+  std::string type;    // basic type or name of a nested format
+  int array_size = 0;  // 0: scalar
+  std::string name;
+};
+struct ULogFormat {
+  std::string name;
+  std::vector<ULogFormatField> fields;
+};
+
+/// A flattened basic field of a logged topic: nested names joined with '.',
+/// arrays as name[i] (e.g. "esc[0].esc_rpm"); padding fields are kept inside
+/// the layout but marked, trailing padding is not part of the message.
+struct ULogField {
+  std::string name;
+  ULogType type = ULogType::UInt8;
+  std::size_t offset = 0;
+  bool padding = false;
+};
+
+/// One subscription (add_logged message) and all its data messages.
+struct ULogTopic {
+  std::string name;
+  std::uint8_t multi_id = 0;
+  std::uint16_t msg_id = 0;
+  std::vector<ULogField> fields;  // flattened, in layout order
+  std::size_t size = 0;           // bytes per message without trailing padding
+  std::size_t timestamp_offset = 0;
+  std::vector<std::uint8_t> data;  // count() messages of `size` bytes each
+
+  std::size_t count() const { return size ? data.size() / size : 0; }
+  const ULogField* find(std::string_view field) const;
+  /// Timestamps of all messages, microseconds (the topic's `timestamp` field).
+  std::vector<std::uint64_t> timestamps() const;
+  /// A field of all messages, converted to double; InputError naming the
+  /// topic and field when absent.
+  Eigen::VectorXd column(std::string_view field) const;
+};
+
+struct ULogLoggedMessage {
+  char level = '6';                  // '0' emergency .. '7' debug
+  std::optional<std::uint16_t> tag;  // tagged logged string ('C')
+  std::uint64_t timestamp = 0;       // microseconds
+  std::string message;
+  /// EMERGENCY ALERT CRITICAL ERROR WARNING NOTICE INFO DEBUG (or UNKNOWN).
+  std::string level_name() const;
+};
+
+struct ULogDropout {
+  std::uint64_t timestamp = 0;  // the last data timestamp before it, microseconds
+  std::uint16_t duration_ms = 0;
+};
+
+struct ULogParameterChange {
+  std::uint64_t timestamp = 0;  // the last data timestamp before it, microseconds
+  std::string name;
+  ULogValue value;
+};
+
+struct ULog {
+  std::uint8_t version = 1;
+  std::uint64_t start_timestamp = 0;  // header, microseconds
+  std::uint64_t last_timestamp = 0;   // largest data timestamp (the header's when none)
+  std::array<std::uint8_t, 8> compat_flags{}, incompat_flags{};
+  std::vector<std::uint64_t> appended_offsets;  // non-zero ones
+  std::map<std::string, ULogFormat> formats;
+  std::map<std::string, ULogValue> info;
+  /// key -> list of messages, each a list of its continued parts.
+  std::map<std::string, std::vector<std::vector<ULogValue>>> info_multiple;
+  std::map<std::string, ULogValue> parameters;  // initial values
+  std::vector<ULogParameterChange> changed_parameters;
+  std::map<std::string, ULogValue> default_parameters_system;  // default_types bit 0
+  std::map<std::string, ULogValue> default_parameters_config;  // default_types bit 1
+  std::vector<ULogLoggedMessage> logged;  // plain and tagged, in file order
+  std::vector<ULogDropout> dropouts;
+  std::size_t sync_count = 0;
+  std::size_t unknown_messages = 0;  // messages of unknown type, skipped
+  std::vector<ULogTopic> topics;     // sorted by name + multi id (pyulog's order)
+
+  const ULogTopic* find_topic(std::string_view name, int multi_id = 0) const;
+  /// The current value of a parameter: the last change, else the initial value.
+  std::optional<double> parameter(std::string_view name) const;
+};
+
+struct ULogReadOptions {
+  /// Accept a file whose last message is cut short (the logger stopped by a
+  /// power loss): the messages before it are kept. Default: an InputError.
+  bool allow_truncated = false;
+};
+
+/// True when the bytes start with the ULog magic "ULog\x01\x12\x35".
+bool is_ulog(std::span<const std::uint8_t> head);
+/// Parses a ULog held in memory; `source` names it in messages.
+ULog parse_ulog(std::span<const std::uint8_t> bytes, const std::string& source, const ULogReadOptions& opt = {});
+/// Reads and parses a ULog file (the whole file at once).
+ULog read_ulog(const std::filesystem::path& path, const ULogReadOptions& opt = {});
+
+/// Builds a ULog file in memory, for tests and simulated flights. Definitions
+/// (formats, initial info and parameters) must come before the first
+/// subscription; info, parameters, data, strings, dropouts and syncs after.
+class ULogWriter {
+ public:
+  explicit ULogWriter(std::uint64_t start_timestamp_us = 0);
+  /// A format definition "name:type field;type field;..." (ULog syntax).
+  void format(std::string_view definition);
+  void info(std::string_view key, std::string_view text);  // char[N] key
+  void info(std::string_view key, std::int32_t value);     // int32_t key
+  void info(std::string_view key, std::uint32_t value);    // uint32_t key
+  void info_multiple(std::string_view key, std::string_view text, bool continued);
+  void parameter(std::string_view name, float value);
+  void parameter(std::string_view name, std::int32_t value);
+  /// default_types: bit 0 system default, bit 1 current configuration default.
+  void default_parameter(std::uint8_t default_types, std::string_view name, float value);
+  /// Subscribes a defined format; returns its msg_id.
+  std::uint16_t subscribe(std::string_view format_name, std::uint8_t multi_id = 0);
+  /// A data message: payload = the fields in layout order (trailing padding may be left out).
+  void data(std::uint16_t msg_id, std::string_view payload);
+  void logged(char level, std::uint64_t timestamp_us, std::string_view message);
+  void logged_tagged(char level, std::uint16_t tag, std::uint64_t timestamp_us, std::string_view message);
+  void dropout(std::uint16_t duration_ms);
+  void sync();
+  /// A message of any type with a raw payload (for tests of unknown types).
+  void raw(char type, std::string_view payload);
+  const std::string& bytes() const { return out_; }
+  /// Writes the file atomically.
+  void write(const std::filesystem::path& path) const;
+
+ private:
+  void message(char type, std::string_view payload);
+  void key_value(char type, std::string_view prefix, std::string_view type_key, std::string_view value);
+  std::string out_;
+  std::map<std::string, bool> formats_;
+  std::uint16_t next_msg_id_ = 0;
+  bool data_section_ = false;
+};
+
+/// Little-endian payload builder for ULogWriter::data.
+class ULogPayload {
+ public:
+  template <class T>
+  ULogPayload& put(T v) {
+    static_assert(std::is_arithmetic_v<T>);
+    const auto* p = reinterpret_cast<const char*>(&v);
+    bytes_.append(p, sizeof(T));  // little-endian host (checked in ulog.cpp)
+    return *this;
+  }
+  ULogPayload& pad(std::size_t n) {
+    bytes_.append(n, '\0');
+    return *this;
+  }
+  const std::string& str() const { return bytes_; }
+
+ private:
+  std::string bytes_;
+};
+
+/// The multicopter geometry from PX4's control-allocation parameters
+/// CA_ROTOR_COUNT, CA_ROTORn_PX/PY/PZ (m, body FRD), CA_ROTORn_AX/AY/AZ (thrust
+/// axis, default (0,0,-1) FRD), CA_ROTORn_CT (thrust coefficient, N at full
+/// command: T = CT u^2 per PX4's model) and CA_ROTORn_KM (moment ratio, m;
+/// positive = counter-clockwise seen from above), converted to body FLU.
+struct RotorGeometry {
+  int count = 0;
+  std::vector<Eigen::Vector3d> position;  // m, body FLU (x, -y, -z of FRD)
+  std::vector<Eigen::Vector3d> axis;      // unit thrust direction, body FLU
+  std::vector<double> ct;                 // CA_ROTORn_CT
+  std::vector<double> km;                 // |CA_ROTORn_KM|, m
+  std::vector<std::string> spin;          // "ccw" (KM > 0) or "cw" (KM < 0), seen from above
+};
+/// InputError naming the parameter when CA_ROTOR_COUNT or a rotor's PX/PY is absent.
+RotorGeometry px4_rotor_geometry(const ULog& log);
+
+// ============================================================================
+// Crazyflie uSD-card deck, event-based logging (../shared/data/crazyflie-usd/README.md)
+// ============================================================================
+
+struct UsdVariable {
+  std::string name;  // e.g. "stateEstimate.x"
+  char type = 'f';   // struct letter: f i I h H b B
+};
+
+struct UsdEvent {
+  std::uint16_t id = 0;
+  std::string name;
+  std::vector<UsdVariable> variables;
+  std::vector<std::uint64_t> timestamps_us;  // per record (version 1: ms * 1000)
+  std::vector<double> values;                // count() x variables.size(), row-major
+
+  std::size_t count() const { return timestamps_us.size(); }
+  int find(std::string_view variable) const;
+  Eigen::VectorXd column(std::string_view variable) const;  // InputError when absent
+  Eigen::VectorXd times() const;                            // seconds
+};
+
+struct UsdLog {
+  int version = 2;
+  std::vector<UsdEvent> events;
+  std::uint32_t crc = 0;  // stored = computed (checked)
+
+  const UsdEvent* find_event(std::string_view name) const;
+};
+
+/// CRC-32 as zlib's crc32 (polynomial 0xEDB88320, reflected, init and final xor ~0).
+std::uint32_t crc32(std::span<const std::uint8_t> bytes, std::uint32_t crc = 0);
+bool is_usd(std::span<const std::uint8_t> head);  // first byte 0xBC
+UsdLog parse_usd(std::span<const std::uint8_t> bytes, const std::string& source);
+UsdLog read_usd(const std::filesystem::path& path);
+
+// ============================================================================
+// What a log holds (quadid log-info)
+// ============================================================================
+
+/// Gaps in a time series: intervals longer than `factor` x its median period.
+struct TimeGap {
+  double t = 0.0;         // s, log clock, the last sample before the gap
+  double duration = 0.0;  // s
+};
+std::vector<TimeGap> find_gaps(const std::vector<double>& t, double factor);
+
+/// The ULog listing in pyulog's layout (ulog_info, then parameters, then
+/// ulog_messages): `verbose` as ulog_info -v (perf_ info, multi-info values).
+std::string format_ulog_info(const ULog& log, bool verbose);
+nlohmann::json ulog_info_json(const ULog& log);
+/// Events with their variables, record counts, mean rates and gaps.
+std::string format_usd_info(const UsdLog& log);
+nlohmann::json usd_info_json(const UsdLog& log);
+
+// ============================================================================
+// Import: autopilot log -> flight log (DESIGN.md columns t x y z phi theta psi p q r
+// plus the per-rotor signals under the log's own names; no wrench columns).
+// ============================================================================
+
+enum class GapPolicy { Longest, Refuse };
+
+struct ImportOptions {
+  /// Output grid rate. 250 Hz: well above the identification's band (its
+  /// pre-filter is 4 Hz, motor lags are >= 5 ms, i.e. <= 32 Hz), with room
+  /// for the anti-aliasing filter's transition below Nyquist (125 Hz); both
+  /// the uSD's ~507 Hz records and PX4's 100-400 Hz topics map onto it.
+  double rate_hz = 250.0;
+  /// Anti-aliasing: zero-phase Butterworth of this order at
+  /// aa_fraction x rate_hz, applied to a topic that is faster than the grid.
+  int aa_order = 4;
+  double aa_fraction = 0.4;
+  /// A topic gap up to this is bridged by linear interpolation; a longer one
+  /// splits the log. 0.25 s: PX4 dropouts (tens of ms), the uSD records' one
+  /// gap (10-80 ms) and the motion-capture stream's irregular gaps (up to
+  /// ~0.21 s in the sample logs) are bridged; a straight line over a gap D
+  /// misses a motion of acceleration a by at most a D^2 / 8 (1.6 cm for
+  /// 2 m/s^2 and 0.25 s), and the gap is 1/4 of a period of the
+  /// identification's 4 Hz pre-filter cutoff.
+  double max_bridge_s = 0.25;
+  /// A gap is an interval longer than this factor x the topic's median period.
+  double gap_factor = 3.0;
+  /// On a longer gap: keep the longest gap-free part, or refuse (InputError).
+  GapPolicy on_gap = GapPolicy::Longest;
+  // PX4 topics (multi id 0). Rates fall back to vehicle_attitude's
+  // rollspeed/pitchspeed/yawspeed on old logs; motors: "auto" = actuator_motors,
+  // else esc_status, else actuator_outputs; "none" = no rotor columns.
+  std::string position_topic = "vehicle_local_position";
+  std::string attitude_topic = "vehicle_attitude";
+  std::string rates_topic = "vehicle_angular_velocity";
+  std::string motors_topic = "auto";
+  /// Crazyflie pose: "auto" (motion capture locSrv.* when logged, else the
+  /// onboard estimate), "mocap" or "estimate".
+  std::string crazyflie_pose = "auto";
+  double g = 9.81;  // m/s^2, converts the uSD accelerometer (g) to m/s^2
+
+  /// std::invalid_argument naming the option (CLI spelling) when bad.
+  void validate() const;
+};
+
+struct ImportReport {
+  std::string kind;                 // "ulog" or "usd"
+  std::vector<std::string> sources; // "column <- topic.field (rate Hz)"
+  double rate_hz = 0.0;
+  double t0 = 0.0;                  // s, log clock of the first row (t = 0)
+  double duration = 0.0;            // s, of the kept part
+  std::vector<TimeGap> dropouts;    // ULog dropout messages
+  struct Gap {
+    std::string topic;
+    TimeGap gap;
+    bool bridged = true;
+  };
+  std::vector<Gap> gaps;
+  std::vector<std::string> warnings;
+  std::string summary() const;  // human-readable, one line per item
+};
+
+FlightLog import_ulog(const ULog& log, const ImportOptions& opt = {}, ImportReport* report = nullptr);
+FlightLog import_usd(const UsdLog& log, const ImportOptions& opt = {}, ImportReport* report = nullptr);
+
+enum class LogKind { Ulog, Usd, Csv };
+/// The kind from the first bytes: ULog magic, 0xBC, else CSV.
+LogKind detect_log_kind(const std::filesystem::path& path);
+
+struct LoadOptions {
+  CsvReadOptions csv;      // for a CSV log
+  ImportOptions import;    // for an autopilot log
+  ULogReadOptions ulog;
+  /// Imported logs: InputError naming the missing `csv.required` columns
+  /// (an import has no wrench columns; a rotor model adds them).
+  bool check_required = true;
+};
+/// Any flight log: ULog and uSD are imported (ImportReport in *report), CSV is
+/// read with read_flight_log. The kind is recognised by the first bytes.
+FlightLog load_any_log(const std::filesystem::path& path, const LoadOptions& opt = {},
+                       ImportReport* report = nullptr);
+
+}  // namespace quadid::logs

@@ -1,0 +1,475 @@
+// Import of an autopilot log into a flight log (DESIGN.md, "Autopilot logs"):
+// topics -> time series (log clock, s) -> frame conversion -> one uniform
+// grid. A series faster than the grid is low-passed first (zero-phase
+// Butterworth, anti-aliasing) on a uniform grid at its own rate, then
+// interpolated; a slower one is interpolated linearly. Gaps up to
+// max_bridge_s are bridged by that interpolation; a longer one splits the
+// log (the longest part is kept, or the import is refused).
+#include "quadid/logs.hpp"
+
+#include "quadid/signal.hpp"
+
+#include "bytes.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <numbers>
+#include <stdexcept>
+
+namespace quadid::logs {
+namespace {
+
+// One time series: columns sampled at t (s, log clock, strictly increasing).
+struct Series {
+  std::string source;  // e.g. "vehicle_attitude"
+  std::vector<double> t;
+  std::vector<std::string> names;  // output column names
+  Eigen::MatrixXd x;               // t.size() x names.size()
+  bool quaternion = false;         // 4 columns q0..q3 (scalar first)
+};
+
+double median_period(const std::vector<double>& t) {
+  std::vector<double> d(t.size() - 1);
+  for (std::size_t i = 1; i < t.size(); ++i) d[i - 1] = t[i] - t[i - 1];
+  std::nth_element(d.begin(), d.begin() + static_cast<long>(d.size() / 2), d.end());
+  return d[d.size() / 2];
+}
+
+// Keeps strictly increasing times (a repeated or backward time stamp is
+// dropped); NaN values become 0 and are counted.
+void clean(Series& s, std::vector<std::string>& warnings) {
+  std::vector<Eigen::Index> keep;
+  double last = -INFINITY;
+  for (std::size_t i = 0; i < s.t.size(); ++i)
+    if (s.t[i] > last) {
+      keep.push_back(static_cast<Eigen::Index>(i));
+      last = s.t[i];
+    }
+  if (keep.size() != s.t.size()) {
+    warnings.push_back(fmt::format("{}: {} samples with a repeated or decreasing time stamp dropped", s.source,
+                                   s.t.size() - keep.size()));
+    std::vector<double> t(keep.size());
+    Eigen::MatrixXd x(static_cast<Eigen::Index>(keep.size()), s.x.cols());
+    for (std::size_t k = 0; k < keep.size(); ++k) {
+      t[k] = s.t[static_cast<std::size_t>(keep[k])];
+      x.row(static_cast<Eigen::Index>(k)) = s.x.row(keep[k]);
+    }
+    s.t = std::move(t);
+    s.x = std::move(x);
+  }
+  for (Eigen::Index j = 0; j < s.x.cols(); ++j) {
+    Eigen::Index nans = 0;
+    for (Eigen::Index i = 0; i < s.x.rows(); ++i)
+      if (!std::isfinite(s.x(i, j))) {
+        s.x(i, j) = 0.0;
+        ++nans;
+      }
+    if (nans)
+      warnings.push_back(fmt::format("{}: {} non-finite values set to 0 (PX4 writes NaN for a stopped motor)",
+                                     s.names[static_cast<std::size_t>(j)], nans));
+  }
+}
+
+// Linear interpolation of x(t) at tq (both increasing); held at the ends.
+Eigen::MatrixXd interp(const std::vector<double>& t, const Eigen::MatrixXd& x, const Eigen::VectorXd& tq) {
+  Eigen::MatrixXd y(tq.size(), x.cols());
+  std::size_t k = 0;
+  const std::size_t n = t.size();
+  for (Eigen::Index i = 0; i < tq.size(); ++i) {
+    const double q = tq[i];
+    while (k + 2 < n && t[k + 1] < q) ++k;
+    if (q <= t[0]) y.row(i) = x.row(0);
+    else if (q >= t[n - 1]) y.row(i) = x.row(static_cast<Eigen::Index>(n - 1));
+    else {
+      const double w = (q - t[k]) / (t[k + 1] - t[k]);
+      y.row(i) = (1.0 - w) * x.row(static_cast<Eigen::Index>(k)) + w * x.row(static_cast<Eigen::Index>(k + 1));
+    }
+  }
+  return y;
+}
+
+// Onto the grid; anti-aliasing low-pass first when the series is faster.
+Eigen::MatrixXd resample(const Series& s, const Eigen::VectorXd& grid, const ImportOptions& opt, std::string& how) {
+  const double fs = 1.0 / median_period(s.t);
+  if (fs <= opt.rate_hz * 1.01) {
+    how = fmt::format("{:.1f} Hz, linear interpolation", fs);
+    return interp(s.t, s.x, grid);
+  }
+  const double fc = opt.aa_fraction * opt.rate_hz;
+  // A uniform grid at the series' own rate, a margin beyond the output's
+  // ends so that the filter's end effects fall outside.
+  const double margin = 20.0 / fc;
+  const double a = std::max(s.t.front(), grid[0] - margin);
+  const double b = std::min(s.t.back(), grid[grid.size() - 1] + margin);
+  const auto n = static_cast<Eigen::Index>(std::floor((b - a) * fs)) + 1;
+  Eigen::VectorXd u = Eigen::VectorXd::LinSpaced(n, a, a + static_cast<double>(n - 1) / fs);
+  Eigen::MatrixXd X = interp(s.t, s.x, u);
+  const auto tf = signal::butter_lowpass(opt.aa_order, fc, fs);
+  if (X.rows() > 3 * static_cast<Eigen::Index>(tf.a.size()) + 1) X = signal::filtfilt(tf, X);
+  how = fmt::format("{:.1f} Hz, zero-phase Butterworth order {} at {:g} Hz, then linear interpolation", fs,
+                    opt.aa_order, fc);
+  std::vector<double> uv(u.data(), u.data() + u.size());
+  return interp(uv, X, grid);
+}
+
+// Quaternion (q0 scalar, body -> world) to ZYX Euler angles phi, theta, psi.
+Eigen::Vector3d euler_zyx(double q0, double q1, double q2, double q3) {
+  const double phi = std::atan2(2.0 * (q0 * q1 + q2 * q3), 1.0 - 2.0 * (q1 * q1 + q2 * q2));
+  const double theta = std::asin(std::clamp(2.0 * (q0 * q2 - q3 * q1), -1.0, 1.0));
+  const double psi = std::atan2(2.0 * (q0 * q3 + q1 * q2), 1.0 - 2.0 * (q2 * q2 + q3 * q3));
+  return {phi, theta, psi};
+}
+
+Series from_topic(const ULog& log, const std::string& topic, const std::vector<std::string>& fields,
+                  const std::vector<std::string>& names, const std::vector<double>& sign) {
+  const ULogTopic* t = log.find_topic(topic);
+  if (!t) throw InputError(fmt::format("the ULog has no topic '{}' (multi id 0)", topic));
+  Series s;
+  s.source = topic;
+  const auto ts = t->timestamps();
+  s.t.resize(ts.size());
+  for (std::size_t i = 0; i < ts.size(); ++i) s.t[i] = static_cast<double>(ts[i]) * 1e-6;
+  s.names = names;
+  s.x.resize(static_cast<Eigen::Index>(ts.size()), static_cast<Eigen::Index>(fields.size()));
+  for (std::size_t j = 0; j < fields.size(); ++j) s.x.col(static_cast<Eigen::Index>(j)) = sign[j] * t->column(fields[j]);
+  return s;
+}
+
+FlightLog assemble(std::vector<Series> series, const ImportOptions& opt, ImportReport& rep,
+                   const std::string& kind) {
+  rep.kind = kind;
+  rep.rate_hz = opt.rate_hz;
+  for (auto& s : series) {
+    if (s.t.size() < 2) throw InputError(fmt::format("{}: {} samples, too few to import", s.source, s.t.size()));
+    clean(s, rep.warnings);
+    if (s.t.size() < 2) throw InputError(fmt::format("{}: too few increasing time stamps to import", s.source));
+  }
+  // Common span, and the long gaps that split it.
+  double t_start = -INFINITY, t_end = INFINITY;
+  for (const auto& s : series) {
+    t_start = std::max(t_start, s.t.front());
+    t_end = std::min(t_end, s.t.back());
+  }
+  if (!(t_end > t_start)) throw InputError("the topics of the import do not overlap in time");
+  std::vector<std::pair<double, double>> cuts;
+  std::vector<std::string> scanned;  // several series may come from one topic
+  for (const auto& s : series) {
+    if (std::find(scanned.begin(), scanned.end(), s.source) != scanned.end()) continue;
+    scanned.push_back(s.source);
+    for (const auto& g : find_gaps(s.t, opt.gap_factor)) {
+      const bool bridged = g.duration <= opt.max_bridge_s;
+      rep.gaps.push_back({s.source, g, bridged});
+      if (!bridged && g.t + g.duration > t_start && g.t < t_end) cuts.emplace_back(g.t, g.t + g.duration);
+    }
+  }
+  if (!cuts.empty() && opt.on_gap == GapPolicy::Refuse) {
+    std::string list;
+    for (const auto& g : rep.gaps)
+      if (!g.bridged) list += fmt::format(" {} at {:.3f} s for {:.3f} s;", g.topic, g.gap.t, g.gap.duration);
+    throw InputError(fmt::format("gaps longer than {:g} s (--max-bridge):{} refused (--on-gap refuse)",
+                                 opt.max_bridge_s, list));
+  }
+  std::sort(cuts.begin(), cuts.end());
+  double best_a = t_start, best_b = t_start, a = t_start;
+  for (const auto& [c0, c1] : cuts) {
+    const double b = std::min(c0, t_end);
+    if (b - a > best_b - best_a) best_a = a, best_b = b;
+    a = std::max(a, c1);
+  }
+  if (t_end - a > best_b - best_a) best_a = a, best_b = t_end;
+  if (!cuts.empty())
+    rep.warnings.push_back(fmt::format("long gaps split the log: kept the longest part, {:.3f}..{:.3f} s (log clock)",
+                                       best_a, best_b));
+  const auto rows = static_cast<Eigen::Index>(std::floor((best_b - best_a) * opt.rate_hz + 1e-9)) + 1;
+  if (rows < 10)
+    throw InputError(fmt::format("only {} samples at {:g} Hz between the gaps ({:.3f}..{:.3f} s)", rows, opt.rate_hz,
+                                 best_a, best_b));
+  Eigen::VectorXd grid(rows);
+  for (Eigen::Index i = 0; i < rows; ++i) grid[i] = best_a + static_cast<double>(i) / opt.rate_hz;
+  rep.t0 = best_a;
+  rep.duration = static_cast<double>(rows - 1) / opt.rate_hz;
+
+  FlightLog out;
+  out.columns = {"t"};
+  std::vector<Eigen::MatrixXd> blocks = {grid.array() - best_a};
+  for (auto& s : series) {
+    if (s.quaternion) {
+      // q and -q are the same attitude: make the sign continuous first.
+      for (Eigen::Index i = 1; i < s.x.rows(); ++i)
+        if (s.x.row(i).dot(s.x.row(i - 1)) < 0) s.x.row(i) *= -1.0;
+    }
+    std::string how;
+    Eigen::MatrixXd y = resample(s, grid, opt, how);
+    if (s.quaternion) {
+      Eigen::MatrixXd e(rows, 3);
+      for (Eigen::Index i = 0; i < rows; ++i) {
+        Eigen::Vector4d q = y.row(i).transpose();
+        q /= q.norm();
+        e.row(i) = euler_zyx(q[0], q[1], q[2], q[3]).transpose();
+        // psi unwrapped: continuous past +-pi
+        if (i > 0) e(i, 2) = e(i - 1, 2) + std::remainder(e(i, 2) - e(i - 1, 2), 2.0 * std::numbers::pi);
+      }
+      y = e;
+      out.columns.insert(out.columns.end(), {"phi", "theta", "psi"});
+      rep.sources.push_back(fmt::format("phi theta psi <- {} ({})", s.source, how));
+    } else {
+      out.columns.insert(out.columns.end(), s.names.begin(), s.names.end());
+      rep.sources.push_back(fmt::format("{} <- {} ({})", fmt::join(s.names, " "), s.source, how));
+    }
+    blocks.push_back(std::move(y));
+  }
+  Eigen::Index cols = 0;
+  for (const auto& b : blocks) cols += b.cols();
+  out.data.resize(rows, cols);
+  Eigen::Index c = 0;
+  for (const auto& b : blocks) {
+    out.data.middleCols(c, b.cols()) = b;
+    c += b.cols();
+  }
+  // Canonical order first: t x y z phi theta psi p q r, then the rest.
+  std::vector<std::string> order = {"t", "x", "y", "z", "phi", "theta", "psi", "p", "q", "r"};
+  for (const auto& n : out.columns)
+    if (std::find(order.begin(), order.end(), n) == order.end()) order.push_back(n);
+  Eigen::MatrixXd sorted(rows, cols);
+  for (std::size_t j = 0; j < order.size(); ++j) {
+    const int k = out.find(order[j]);
+    if (k < 0) throw std::logic_error("import: column " + order[j] + " missing");
+    sorted.col(static_cast<Eigen::Index>(j)) = out.data.col(k);
+  }
+  out.columns = order;
+  out.data = std::move(sorted);
+  return out;
+}
+
+// Gaps in a few lines: those that split the log one by one, the bridged ones
+// per topic as a count and the longest.
+std::vector<std::string> gap_lines(const ImportReport& rep) {
+  std::vector<std::string> lines;
+  std::vector<std::string> topics;
+  for (const auto& g : rep.gaps)
+    if (std::find(topics.begin(), topics.end(), g.topic) == topics.end()) topics.push_back(g.topic);
+  for (const auto& t : topics) {
+    std::size_t n = 0;
+    TimeGap longest;
+    for (const auto& g : rep.gaps) {
+      if (g.topic != t) continue;
+      if (!g.bridged) {
+        lines.push_back(fmt::format("gap in {} at {:.3f} s: {:.1f} ms, split the log", t, g.gap.t, g.gap.duration * 1e3));
+        continue;
+      }
+      ++n;
+      if (g.gap.duration > longest.duration) longest = g.gap;
+    }
+    if (n)
+      lines.push_back(fmt::format("{} gap{} in {} bridged, the longest {:.1f} ms at {:.3f} s", n, n > 1 ? "s" : "", t,
+                                  longest.duration * 1e3, longest.t));
+  }
+  return lines;
+}
+
+void comments(FlightLog& log, const ImportReport& rep, const std::string& what) {
+  log.comments.push_back(fmt::format(" imported by quadid from {} ({}); t = 0 at {:.6f} s of the log clock", what,
+                                     rep.kind, rep.t0));
+  log.comments.push_back(fmt::format(" grid {:g} Hz; no wrench columns (Fz tau_*): computed from the rotor signals "
+                                     "by a vehicle's rotor model",
+                                     rep.rate_hz));
+  for (const auto& s : rep.sources) log.comments.push_back(" " + s);
+  for (const auto& l : gap_lines(rep)) log.comments.push_back(" " + l);
+  for (const auto& w : rep.warnings) log.comments.push_back(" warning: " + w);
+}
+
+}  // namespace
+
+void ImportOptions::validate() const {
+  if (!(rate_hz > 0.0 && rate_hz <= 10000.0))
+    throw std::invalid_argument(fmt::format("--rate {}: expected a grid rate in (0, 10000] Hz", rate_hz));
+  if (aa_order < 1 || aa_order > 8) throw std::invalid_argument(fmt::format("--aa-order {}: expected 1..8", aa_order));
+  if (!(aa_fraction > 0.0 && aa_fraction < 0.5))
+    throw std::invalid_argument(fmt::format("--aa-fraction {}: expected a fraction of the grid rate in (0, 0.5)", aa_fraction));
+  if (!(max_bridge_s >= 0.0)) throw std::invalid_argument(fmt::format("--max-bridge {}: expected >= 0 s", max_bridge_s));
+  if (!(gap_factor > 1.0)) throw std::invalid_argument(fmt::format("--gap-factor {}: expected > 1", gap_factor));
+  if (crazyflie_pose != "auto" && crazyflie_pose != "mocap" && crazyflie_pose != "estimate")
+    throw std::invalid_argument(fmt::format("--pose {}: expected auto, mocap or estimate", crazyflie_pose));
+  if (!(g > 0.0)) throw std::invalid_argument(fmt::format("--g {}: expected > 0", g));
+}
+
+std::string ImportReport::summary() const {
+  std::string s = fmt::format("{} import: {:.3f} s at {:g} Hz from {:.3f} s of the log clock\n", kind, duration,
+                              rate_hz, t0);
+  for (const auto& x : sources) s += "  " + x + "\n";
+  for (const auto& d : dropouts) s += fmt::format("  dropout at {:.3f} s: {:.0f} ms\n", d.t, d.duration * 1e3);
+  for (const auto& l : gap_lines(*this)) s += "  " + l + "\n";
+  for (const auto& w : warnings) s += "  warning: " + w + "\n";
+  return s;
+}
+
+FlightLog import_ulog(const ULog& log, const ImportOptions& opt, ImportReport* report) {
+  opt.validate();
+  ImportReport rep;
+  for (const auto& d : log.dropouts)
+    rep.dropouts.push_back({static_cast<double>(d.timestamp) * 1e-6, d.duration_ms * 1e-3});
+  std::vector<Series> series;
+  // NED -> z up: positions (x, -y, -z) (DESIGN.md, "Autopilot logs").
+  series.push_back(from_topic(log, opt.position_topic, {"x", "y", "z"}, {"x", "y", "z"}, {1, -1, -1}));
+  // Quaternion FRD->NED to FLU->ENU-like z-up: (q0, q1, -q2, -q3).
+  Series q = from_topic(log, opt.attitude_topic, {"q[0]", "q[1]", "q[2]", "q[3]"}, {"q0", "q1", "q2", "q3"},
+                        {1, 1, -1, -1});
+  q.quaternion = true;
+  series.push_back(std::move(q));
+  // Body rates FRD -> FLU: (x, -y, -z).
+  if (log.find_topic(opt.rates_topic)) {
+    series.push_back(from_topic(log, opt.rates_topic, {"xyz[0]", "xyz[1]", "xyz[2]"}, {"p", "q", "r"}, {1, -1, -1}));
+  } else {
+    const ULogTopic* att = log.find_topic(opt.attitude_topic);
+    if (!att || !att->find("rollspeed"))
+      throw InputError(fmt::format("the ULog has no topic '{}' and '{}' has no rollspeed: no body rates",
+                                   opt.rates_topic, opt.attitude_topic));
+    rep.warnings.push_back(fmt::format("no '{}': body rates from {}.rollspeed/pitchspeed/yawspeed", opt.rates_topic,
+                                       opt.attitude_topic));
+    series.push_back(from_topic(log, opt.attitude_topic, {"rollspeed", "pitchspeed", "yawspeed"}, {"p", "q", "r"},
+                                {1, -1, -1}));
+  }
+  // Rotor signals under the log's own names.
+  std::string motors = opt.motors_topic;
+  if (motors == "auto") {
+    motors.clear();
+    for (const char* cand : {"actuator_motors", "esc_status", "actuator_outputs"})
+      if (log.find_topic(cand)) {
+        motors = cand;
+        break;
+      }
+    if (motors.empty()) rep.warnings.push_back("no actuator_motors, esc_status or actuator_outputs: no rotor columns");
+  } else if (motors == "none") {
+    motors.clear();
+  }
+  if (!motors.empty()) {
+    const ULogTopic* t = log.find_topic(motors);
+    if (!t) throw InputError(fmt::format("the ULog has no topic '{}' (--motors)", motors));
+    int n = 0;
+    if (auto c = log.parameter("CA_ROTOR_COUNT")) n = static_cast<int>(*c);
+    std::vector<std::string> fields;
+    auto field_of = [&](int i) {
+      if (motors == "actuator_motors") return fmt::format("control[{}]", i);
+      if (motors == "esc_status") return fmt::format("esc[{}].esc_rpm", i);
+      if (motors == "actuator_outputs") return fmt::format("output[{}]", i);
+      return fmt::format("{}", i);
+    };
+    if (n <= 0) {
+      // Without CA_ROTOR_COUNT: the fields that are not NaN everywhere (at most 8).
+      for (int i = 0; i < 8 && t->find(field_of(i)); ++i) {
+        const auto v = t->column(field_of(i));
+        if (v.array().isFinite().any() && (v.array() != 0).any()) n = i + 1;
+      }
+      if (motors == "esc_status" && t->find("esc_count")) n = static_cast<int>(t->column("esc_count").maxCoeff());
+    }
+    for (int i = 0; i < n; ++i)
+      if (t->find(field_of(i))) fields.push_back(field_of(i));
+    if (!fields.empty()) {
+      std::vector<std::string> names;
+      for (const auto& f : fields) names.push_back(motors + "." + f);
+      series.push_back(from_topic(log, motors, fields, names, std::vector<double>(fields.size(), 1.0)));
+    }
+  }
+  FlightLog out = assemble(std::move(series), opt, rep, "ulog");
+  comments(out, rep, "a PX4 ULog");
+  if (report) *report = rep;
+  return out;
+}
+
+FlightLog import_usd(const UsdLog& log, const ImportOptions& opt, ImportReport* report) {
+  opt.validate();
+  ImportReport rep;
+  const UsdEvent* fixed = nullptr;
+  for (const auto& e : log.events)
+    if (e.find("gyro.x") >= 0 && e.count() > 0) fixed = &e;
+  if (!fixed) throw InputError("the uSD log has no event with gyro.x (the fixedFrequency event of the deck's config)");
+  const UsdEvent* pose = nullptr;
+  for (const auto& e : log.events)
+    if (e.find("locSrv.x") >= 0 && e.count() > 1) pose = &e;
+  std::string prefix;
+  if (opt.crazyflie_pose == "mocap" || (opt.crazyflie_pose == "auto" && pose)) {
+    if (!pose) throw InputError("--pose mocap: the uSD log has no locSrv.* (motion-capture) records");
+    prefix = "locSrv.";
+  } else {
+    pose = nullptr;
+    for (const auto& e : log.events)
+      if (e.find("stateEstimate.x") >= 0 && e.count() > 1) pose = &e;
+    if (!pose) throw InputError("the uSD log has neither locSrv.* nor stateEstimate.* poses");
+    prefix = "stateEstimate.";
+  }
+  auto series_of = [&](const UsdEvent& e, const std::vector<std::string>& vars, const std::vector<std::string>& names,
+                       double scale) {
+    Series s;
+    s.source = e.name;
+    const auto t = e.times();
+    s.t.assign(t.data(), t.data() + t.size());
+    s.names = names;
+    s.x.resize(t.size(), static_cast<Eigen::Index>(vars.size()));
+    for (std::size_t j = 0; j < vars.size(); ++j) s.x.col(static_cast<Eigen::Index>(j)) = scale * e.column(vars[j]);
+    return s;
+  };
+  std::vector<Series> series;
+  // World z up, body FLU already (README); quaternion scalar last.
+  series.push_back(series_of(*pose, {prefix + "x", prefix + "y", prefix + "z"}, {"x", "y", "z"}, 1.0));
+  Series q = series_of(*pose, {prefix + "qw", prefix + "qx", prefix + "qy", prefix + "qz"}, {"q0", "q1", "q2", "q3"}, 1.0);
+  q.quaternion = true;
+  series.push_back(std::move(q));
+  series.push_back(series_of(*fixed, {"gyro.x", "gyro.y", "gyro.z"}, {"p", "q", "r"}, std::numbers::pi / 180.0));  // deg/s -> rad/s
+  std::vector<std::string> rpm;
+  for (int i = 1; i <= 8; ++i)
+    if (fixed->find(fmt::format("rpm.m{}", i)) >= 0) rpm.push_back(fmt::format("rpm.m{}", i));
+  if (!rpm.empty()) series.push_back(series_of(*fixed, rpm, rpm, 1.0));
+  if (fixed->find("acc.x") >= 0)  // specific force, g -> m/s^2
+    series.push_back(series_of(*fixed, {"acc.x", "acc.y", "acc.z"}, {"ax_b", "ay_b", "az_b"}, opt.g));
+  FlightLog out = assemble(std::move(series), opt, rep, "usd");
+  comments(out, rep, "a Crazyflie uSD log");
+  if (report) *report = rep;
+  return out;
+}
+
+LogKind detect_log_kind(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(fmt::format("{}: cannot open file for reading", path.string()));
+  std::uint8_t head[7] = {};
+  in.read(reinterpret_cast<char*>(head), 7);
+  const auto n = static_cast<std::size_t>(in.gcount());
+  const std::span<const std::uint8_t> s(head, n);
+  if (is_ulog(s)) return LogKind::Ulog;
+  if (is_usd(s)) return LogKind::Usd;
+  return LogKind::Csv;
+}
+
+FlightLog load_any_log(const std::filesystem::path& path, const LoadOptions& opt, ImportReport* report) {
+  const LogKind kind = detect_log_kind(path);
+  if (kind == LogKind::Csv) return read_flight_log(path, opt.csv);
+  FlightLog log;
+  try {
+    log = kind == LogKind::Ulog ? import_ulog(read_ulog(path, opt.ulog), opt.import, report)
+                                : import_usd(read_usd(path), opt.import, report);
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    if (what.rfind(path.string(), 0) == 0) throw;
+    throw InputError(fmt::format("{}: {}", path.string(), what));
+  }
+  // --map canonical=name: the log's column `name` serves as `canonical`.
+  for (const auto& [canon, name] : opt.csv.map) {
+    const int k = log.find(name);
+    if (k >= 0 && !log.has(canon)) log.columns[static_cast<std::size_t>(k)] = canon;
+  }
+  if (opt.check_required) {
+    std::vector<std::string> missing;
+    for (const auto& r : opt.csv.required)
+      if (!log.has(r)) missing.push_back(r);
+    if (!missing.empty())
+      throw InputError(fmt::format(
+          "{}: the imported log has no column {} (an autopilot log holds rotor signals, not the wrench: it is "
+          "computed by a vehicle's rotor model; `quadid import` shows the columns there are)",
+          path.string(), fmt::join(missing, ", ")));
+  }
+  return log;
+}
+
+}  // namespace quadid::logs

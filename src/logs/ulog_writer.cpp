@@ -1,0 +1,129 @@
+// A small ULog writer (same format description as ulog.cpp): tests build
+// files from data with it, and simulated flights can be written as PX4 logs.
+#include "quadid/logs.hpp"
+
+#include <fmt/format.h>
+
+#include <cstring>
+#include <limits>
+#include <stdexcept>
+
+namespace quadid::logs {
+namespace {
+template <class T>
+void put(std::string& s, T v) {
+  char b[sizeof(T)];
+  std::memcpy(b, &v, sizeof(T));
+  s.append(b, sizeof(T));
+}
+}  // namespace
+
+ULogWriter::ULogWriter(std::uint64_t start_timestamp_us) {
+  out_.append("ULog\x01\x12\x35", 7);
+  out_.push_back('\x01');  // version
+  put(out_, start_timestamp_us);
+  // Flag bits: no compat/incompat flags, no appended data.
+  message('B', std::string(40, '\0'));
+}
+
+void ULogWriter::message(char type, std::string_view payload) {
+  if (payload.size() > std::numeric_limits<std::uint16_t>::max())
+    throw std::invalid_argument(fmt::format("ULog message '{}' of {} bytes: at most 65535", type, payload.size()));
+  put(out_, static_cast<std::uint16_t>(payload.size()));
+  out_.push_back(type);
+  out_.append(payload);
+}
+
+void ULogWriter::raw(char type, std::string_view payload) { message(type, payload); }
+
+void ULogWriter::format(std::string_view definition) {
+  if (data_section_) throw std::logic_error("ULogWriter: formats must come before the first subscription");
+  const auto colon = definition.find(':');
+  if (colon == std::string_view::npos || colon == 0)
+    throw std::invalid_argument(fmt::format("ULog format '{}': expected name:type field;...", definition));
+  formats_[std::string(definition.substr(0, colon))] = true;
+  message('F', definition);
+}
+
+void ULogWriter::key_value(char type, std::string_view prefix, std::string_view type_key, std::string_view value) {
+  if (type_key.size() > 255) throw std::invalid_argument(fmt::format("ULog key '{}' longer than 255 bytes", type_key));
+  std::string p(prefix);
+  p.push_back(static_cast<char>(type_key.size()));
+  p.append(type_key);
+  p.append(value);
+  message(type, p);
+}
+
+void ULogWriter::info(std::string_view key, std::string_view text) {
+  key_value('I', "", fmt::format("char[{}] {}", text.size(), key), text);
+}
+void ULogWriter::info(std::string_view key, std::int32_t value) {
+  key_value('I', "", fmt::format("int32_t {}", key), ULogPayload().put(value).str());
+}
+void ULogWriter::info(std::string_view key, std::uint32_t value) {
+  key_value('I', "", fmt::format("uint32_t {}", key), ULogPayload().put(value).str());
+}
+void ULogWriter::info_multiple(std::string_view key, std::string_view text, bool continued) {
+  key_value('M', std::string(1, continued ? '\1' : '\0'), fmt::format("char[{}] {}", text.size(), key), text);
+}
+void ULogWriter::parameter(std::string_view name, float value) {
+  key_value('P', "", fmt::format("float {}", name), ULogPayload().put(value).str());
+}
+void ULogWriter::parameter(std::string_view name, std::int32_t value) {
+  key_value('P', "", fmt::format("int32_t {}", name), ULogPayload().put(value).str());
+}
+void ULogWriter::default_parameter(std::uint8_t default_types, std::string_view name, float value) {
+  key_value('Q', std::string(1, static_cast<char>(default_types)), fmt::format("float {}", name),
+            ULogPayload().put(value).str());
+}
+
+std::uint16_t ULogWriter::subscribe(std::string_view format_name, std::uint8_t multi_id) {
+  if (!formats_.count(std::string(format_name)))
+    throw std::logic_error(fmt::format("ULogWriter: no format '{}' defined", format_name));
+  data_section_ = true;
+  const std::uint16_t id = next_msg_id_++;
+  std::string p(1, static_cast<char>(multi_id));
+  put(p, id);
+  p.append(format_name);
+  message('A', p);
+  return id;
+}
+
+void ULogWriter::data(std::uint16_t msg_id, std::string_view payload) {
+  if (msg_id >= next_msg_id_) throw std::logic_error(fmt::format("ULogWriter: msg id {} not subscribed", msg_id));
+  std::string p;
+  put(p, msg_id);
+  p.append(payload);
+  message('D', p);
+}
+
+void ULogWriter::logged(char level, std::uint64_t timestamp_us, std::string_view msg) {
+  data_section_ = true;
+  std::string p(1, level);
+  put(p, timestamp_us);
+  p.append(msg);
+  message('L', p);
+}
+
+void ULogWriter::logged_tagged(char level, std::uint16_t tag, std::uint64_t timestamp_us, std::string_view msg) {
+  data_section_ = true;
+  std::string p(1, level);
+  put(p, tag);
+  put(p, timestamp_us);
+  p.append(msg);
+  message('C', p);
+}
+
+void ULogWriter::dropout(std::uint16_t duration_ms) {
+  data_section_ = true;
+  message('O', ULogPayload().put(duration_ms).str());
+}
+
+void ULogWriter::sync() {
+  data_section_ = true;
+  message('S', std::string("\x2F\x73\x13\x20\x25\x0C\xBB\x12", 8));
+}
+
+void ULogWriter::write(const std::filesystem::path& path) const { write_file_atomic(path, out_); }
+
+}  // namespace quadid::logs
