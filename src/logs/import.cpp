@@ -145,6 +145,22 @@ FlightLog assemble(std::vector<Series> series, const ImportOptions& opt, ImportR
   for (auto& s : series) {
     if (s.t.size() < 2) throw InputError(fmt::format("{}: {} samples, too few to import", s.source, s.t.size()));
     clean(s, rep.warnings);
+    if (s.quaternion) {  // PX4 writes a zero quaternion before its estimator runs
+      std::vector<Eigen::Index> keep;
+      for (Eigen::Index i = 0; i < s.x.rows(); ++i)
+        if (std::abs(s.x.row(i).norm() - 1.0) < 0.1) keep.push_back(i);
+      if (keep.size() != s.t.size()) {
+        rep.warnings.push_back(fmt::format("{}: {} quaternions of norm far from 1 dropped", s.source, s.t.size() - keep.size()));
+        std::vector<double> t;
+        Eigen::MatrixXd x(static_cast<Eigen::Index>(keep.size()), 4);
+        for (std::size_t k = 0; k < keep.size(); ++k) {
+          t.push_back(s.t[static_cast<std::size_t>(keep[k])]);
+          x.row(static_cast<Eigen::Index>(k)) = s.x.row(keep[k]);
+        }
+        s.t = std::move(t);
+        s.x = std::move(x);
+      }
+    }
     if (s.t.size() < 2) throw InputError(fmt::format("{}: too few increasing time stamps to import", s.source));
   }
   // Common span, and the long gaps that split it.
@@ -195,6 +211,9 @@ FlightLog assemble(std::vector<Series> series, const ImportOptions& opt, ImportR
   FlightLog out;
   out.columns = {"t"};
   std::vector<Eigen::MatrixXd> blocks = {grid.array() - best_a};
+  if (rows > 100'000'000)
+    throw InputError(fmt::format("the topics span {:.0f} s: more than 10^8 samples at {:g} Hz (corrupt time stamps?)",
+                                 best_b - best_a, opt.rate_hz));
   for (auto& s : series) {
     if (s.quaternion) {
       // q and -q are the same attitude: make the sign continuous first.
@@ -223,6 +242,10 @@ FlightLog assemble(std::vector<Series> series, const ImportOptions& opt, ImportR
   }
   Eigen::Index cols = 0;
   for (const auto& b : blocks) cols += b.cols();
+  for (std::size_t k = 0; k < blocks.size(); ++k)
+    if (!blocks[k].allFinite())
+      throw InputError(fmt::format("non-finite values after resampling {} (values out of range in the log)",
+                                   k == 0 ? std::string("t") : series[k - 1].source));
   out.data.resize(rows, cols);
   Eigen::Index c = 0;
   for (const auto& b : blocks) {
