@@ -292,6 +292,28 @@ TEST(ULogSamples, TaggedLogHasDefaultParametersAndRotorGeometry) {
   EXPECT_EQ(tagged, 3u);  // the three "tagged message test" strings
 }
 
+TEST(ULogSamples, ImportOfTheSitlFlightClimbsUp) {
+  // sample_px4_events: take-off to 2.5 m ("Using default takeoff altitude:
+  // 2.50 m" in its messages) and landing, jMAVSim. With NED -> z up, z starts
+  // near 0 on the ground and rises by more than 2 m; motors from actuator_motors.
+  const fs::path f = kShared / "px4-ulog" / "sample_px4_events.ulg";
+  if (!fs::exists(f)) GTEST_SKIP() << f << " absent";
+  ImportReport rep;
+  const FlightLog log = import_ulog(read_ulog(f), {}, &rep);
+  const auto z = log.column("z");
+  EXPECT_LT(std::abs(z[0]), 0.2);
+  EXPECT_GT(z.maxCoeff(), 2.0);
+  EXPECT_LT(z.maxCoeff(), 3.0);
+  EXPECT_TRUE(log.has("actuator_motors.control[3]"));
+  EXPECT_FALSE(log.has("actuator_motors.control[4]"));
+  EXPECT_LE(log.column("actuator_motors.control[0]").maxCoeff(), 1.0);
+  // The other samples import too (old logs: rates from vehicle_attitude).
+  for (const char* name : {"sample.ulg", "sample_log_small.ulg"}) {
+    const FlightLog g = import_ulog(read_ulog(kShared / "px4-ulog" / name));
+    EXPECT_GT(g.rows(), 1000) << name;
+  }
+}
+
 // --- Rotor geometry from CA_ROTOR* ---------------------------------------------
 
 TEST(ULog, RotorGeometryFromControlAllocationParameters) {
