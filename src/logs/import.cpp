@@ -211,8 +211,8 @@ FlightLog assemble(std::vector<Series> series, const ImportOptions& opt, ImportR
   FlightLog out;
   out.columns = {"t"};
   std::vector<Eigen::MatrixXd> blocks = {grid.array() - best_a};
-  if (rows > 100'000'000)
-    throw InputError(fmt::format("the topics span {:.0f} s: more than 10^8 samples at {:g} Hz (corrupt time stamps?)",
+  if (rows > 10'000'000)
+    throw InputError(fmt::format("the topics span {:.0f} s: more than 10^7 samples at {:g} Hz (corrupt time stamps?)",
                                  best_b - best_a, opt.rate_hz));
   for (auto& s : series) {
     if (s.quaternion) {
