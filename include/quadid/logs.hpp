@@ -224,6 +224,20 @@ struct RotorGeometry {
 /// InputError naming the parameter when CA_ROTOR_COUNT or a rotor's PX/PY is absent.
 RotorGeometry px4_rotor_geometry(const ULog& log);
 
+/// A flight log (DESIGN.md columns, z up / FLU) as a PX4 ULog in PX4's topics
+/// and frames: vehicle_local_position (NED: x, -y, -z), vehicle_attitude
+/// (quaternion FRD->NED: q0, q1, -q2, -q3 of the ZYX Euler angles),
+/// vehicle_angular_velocity (FRD: p, -q, -r) and, when `motor_columns` are
+/// given, actuator_motors.control[i] (unused entries NaN, as PX4 writes them),
+/// all at the log's samples; `geometry` (FLU) becomes the CA_ROTOR*
+/// parameters. For simulated PX4 flights and tests of the import.
+struct Px4UlogWriteOptions {
+  std::vector<std::string> motor_columns;  // log columns, in PX4's motor order
+  RotorGeometry geometry;                  // count 0: no CA_ROTOR* parameters
+  std::uint64_t start_timestamp_us = 1'000'000;  // log clock of the first row
+};
+std::string px4_ulog_from_flight_log(const FlightLog& log, const Px4UlogWriteOptions& opt = {});
+
 // ============================================================================
 // Crazyflie uSD-card deck, event-based logging (../shared/data/crazyflie-usd/README.md)
 // ============================================================================

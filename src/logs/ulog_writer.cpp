@@ -4,6 +4,7 @@
 
 #include <fmt/format.h>
 
+#include <cmath>
 #include <cstring>
 #include <limits>
 #include <stdexcept>
@@ -125,5 +126,64 @@ void ULogWriter::sync() {
 }
 
 void ULogWriter::write(const std::filesystem::path& path) const { write_file_atomic(path, out_); }
+
+}  // namespace quadid::logs
+
+namespace quadid::logs {
+
+std::string px4_ulog_from_flight_log(const FlightLog& log, const Px4UlogWriteOptions& opt) {
+  for (const char* c : {"t", "x", "y", "z", "phi", "theta", "psi", "p", "q", "r"})
+    if (!log.has(c)) throw InputError(fmt::format("px4_ulog_from_flight_log: the flight log has no column '{}'", c));
+  if (opt.motor_columns.size() > 12)
+    throw std::invalid_argument(fmt::format("{} motor columns: actuator_motors holds at most 12", opt.motor_columns.size()));
+  ULogWriter w(opt.start_timestamp_us);
+  w.info("sys_name", "PX4");
+  w.info("ver_hw", "QUADID_SIM");
+  w.format("vehicle_local_position:uint64_t timestamp;float x;float y;float z;");
+  w.format("vehicle_attitude:uint64_t timestamp;float[4] q;");
+  w.format("vehicle_angular_velocity:uint64_t timestamp;float[3] xyz;uint8_t[4] _padding0;");
+  w.format("actuator_motors:uint64_t timestamp;float[12] control;");
+  const RotorGeometry& g = opt.geometry;
+  if (g.count > 0) {
+    w.parameter("CA_ROTOR_COUNT", std::int32_t{g.count});
+    for (int i = 0; i < g.count; ++i) {
+      const auto k = static_cast<std::size_t>(i);
+      // FLU -> FRD: y and z change sign; KM > 0 for a counter-clockwise rotor.
+      w.parameter(fmt::format("CA_ROTOR{}_PX", i), static_cast<float>(g.position[k].x()));
+      w.parameter(fmt::format("CA_ROTOR{}_PY", i), static_cast<float>(-g.position[k].y()));
+      w.parameter(fmt::format("CA_ROTOR{}_PZ", i), static_cast<float>(-g.position[k].z()));
+      if (k < g.ct.size()) w.parameter(fmt::format("CA_ROTOR{}_CT", i), static_cast<float>(g.ct[k]));
+      if (k < g.km.size() && k < g.spin.size())
+        w.parameter(fmt::format("CA_ROTOR{}_KM", i), static_cast<float>(g.spin[k] == "cw" ? -g.km[k] : g.km[k]));
+    }
+  }
+  const auto pos = w.subscribe("vehicle_local_position");
+  const auto att = w.subscribe("vehicle_attitude");
+  const auto rat = w.subscribe("vehicle_angular_velocity");
+  const std::uint16_t mot = opt.motor_columns.empty() ? 0 : w.subscribe("actuator_motors");
+  const auto col = [&log](std::string_view c) { return log.column(c); };
+  const Eigen::VectorXd t = col("t"), x = col("x"), y = col("y"), z = col("z"), phi = col("phi"),
+                        theta = col("theta"), psi = col("psi"), p = col("p"), q = col("q"), r = col("r");
+  std::vector<Eigen::VectorXd> motors;
+  for (const auto& c : opt.motor_columns) motors.push_back(col(c));
+  for (Eigen::Index i = 0; i < t.size(); ++i) {
+    const auto ts = opt.start_timestamp_us + static_cast<std::uint64_t>(std::llround((t[i] - t[0]) * 1e6));
+    w.data(pos, ULogPayload().put(ts).put(float(x[i])).put(float(-y[i])).put(float(-z[i])).str());
+    // ZYX Euler -> quaternion (body FLU -> world z up), then (q0, q1, -q2, -q3).
+    const double cr = std::cos(phi[i] / 2), sr = std::sin(phi[i] / 2), cp = std::cos(theta[i] / 2),
+                 sp = std::sin(theta[i] / 2), cy = std::cos(psi[i] / 2), sy = std::sin(psi[i] / 2);
+    const double q0 = cr * cp * cy + sr * sp * sy, q1 = sr * cp * cy - cr * sp * sy,
+                 q2 = cr * sp * cy + sr * cp * sy, q3 = cr * cp * sy - sr * sp * cy;
+    w.data(att, ULogPayload().put(ts).put(float(q0)).put(float(q1)).put(float(-q2)).put(float(-q3)).str());
+    w.data(rat, ULogPayload().put(ts).put(float(p[i])).put(float(-q[i])).put(float(-r[i])).str());
+    if (!motors.empty()) {
+      ULogPayload m;
+      m.put(ts);
+      for (std::size_t k = 0; k < 12; ++k) m.put(k < motors.size() ? float(motors[k][i]) : NAN);
+      w.data(mot, m.str());
+    }
+  }
+  return w.bytes();
+}
 
 }  // namespace quadid::logs
