@@ -800,6 +800,10 @@ TEST_F(LogsCli, LogInfoAndImport) {
   CsvReadOptions ro;
   ro.required = {"t", "x", "y", "z", "phi", "theta", "psi", "p", "q", "r"};
   EXPECT_EQ(read_flight_log(path("log.csv"), ro).rows(), 1001);  // 4 s at 250 Hz
+  // identify reads the ULog directly; without a rotor model it names the missing wrench.
+  r = run("identify " + path("f.ulg"));
+  EXPECT_EQ(r.rc, 1);
+  EXPECT_NE(r.err.find("the imported log has no column Fz"), std::string::npos) << r.err;
   const std::string good = px4_flight({});
   write("bad.ulg", good.substr(0, good.size() - 5));
   r = run("log-info " + path("bad.ulg"));
