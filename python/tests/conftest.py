@@ -55,3 +55,13 @@ def assert_same(a, b, rel=1e-9, where="result"):
         assert a == pytest.approx(b, rel=rel, abs=0.0), f"{where}: {a!r} != {b!r}"
     else:
         assert a == b, f"{where}: {a!r} != {b!r}"
+
+
+def load_csv(path) -> dict:
+    """An independent CSV reader (plain Python float()): {column: array}, '#' lines skipped."""
+    import numpy as np
+
+    lines = [l for l in Path(path).read_text().splitlines() if l and not l.startswith("#")]
+    names = lines[0].split(",")
+    data = np.array([[float(x) for x in l.split(",")] for l in lines[1:]])
+    return {n: data[:, i] for i, n in enumerate(names)}

@@ -11,8 +11,8 @@ from conftest import WINDOW, assert_same, cli_json
 def fleet(logs, tmp_path):
     """The three logs with a corrupt one (a truncated copy) in the middle, and the CLI's results."""
     corrupt = tmp_path / "corrupt.csv"
-    text = logs[0].read_text()
-    corrupt.write_text(text[: len(text) // 3] + "1.0,2.0\n")  # a short last row
+    lines = logs[0].read_text().splitlines(keepends=True)
+    corrupt.write_text("".join(lines[: len(lines) // 3]) + "1.0,2.0\n")  # a short last row
     paths = [logs[0], corrupt, logs[1], logs[2]]
     expected = {str(p): cli_json("identify", str(p), "--window", WINDOW) for p in logs}
     return paths, expected

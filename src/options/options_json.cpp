@@ -265,6 +265,14 @@ class Reader {
 
   const std::string& command() const { return command_; }
 
+  /// Every given option must have been read: a declared option the code forgets
+  /// would otherwise be silently ignored (tests give each option once).
+  void finish() const {
+    for (const auto& [name, as_given] : given_)
+      if (!read_.count(name))
+        throw std::logic_error(fmt::format("{}: option --{} is declared but not read", command_, name));
+  }
+
  private:
   const OptionSpec* spec(const std::string& name) const {
     for (const auto& s : specs_)
@@ -277,6 +285,7 @@ class Reader {
     if (!s || s->kind != kind)
       throw std::logic_error(fmt::format("{}: option --{} is read as {} but declared otherwise", command_, name,
                                          kind_name(kind)));
+    read_.insert(name);
     const auto it = values_.find(name);
     return it == values_.end() ? nullptr : &it->second;
   }
@@ -294,6 +303,7 @@ class Reader {
   const std::vector<OptionSpec>& specs_;
   std::map<std::string, json> values_;
   std::map<std::string, std::string> given_;  // normalized name -> key as given
+  std::set<std::string> read_;
 };
 
 /// The processing group (ProcessingArgs of the CLI).
@@ -402,6 +412,7 @@ IdentifyRequest identify_options_from_json(const nlohmann::json& j) {
   opt.gd_variant = p.gd_variant;
   req.csv = std::move(p.csv);
   req.csv.keep_extra_columns = false;  // identification uses the 14 standard columns only
+  r.finish();
   validate_as("identify", [&] { opt.validate(); });
   return req;
 }
@@ -453,6 +464,7 @@ SimulateRequest simulate_options_from_json(const nlohmann::json& j) {
   o.controller.g = o.g;  // as the CLI: one gravity for plant and controller
   o.summary_from = r.number("summary-from").value_or(o.summary_from);
   o.record_truth = false;
+  r.finish();
   validate_as("simulate", [&] { o.validate(); });
   return req;
 }
@@ -473,6 +485,7 @@ DesignOptions design_options_from_json(const nlohmann::json& j) {
   o.check_dt = r.number("check-dt").value_or(o.check_dt);
   o.cond_dt = r.number("cond-dt").value_or(o.cond_dt);
   o.limits = read_limits(r);
+  r.finish();
   validate_as("design", [&] { o.validate(); });
   return o;
 }
@@ -485,6 +498,7 @@ CheckOptions check_options_from_json(const nlohmann::json& j) {
   o.cond_dt = r.number("cond-dt").value_or(o.cond_dt);
   o.endpoint_tol = r.number("endpoint-tol").value_or(o.endpoint_tol);
   o.limits = read_limits(r);
+  r.finish();
   validate_as("check-trajectory", [&] { o.validate(); });
   return o;
 }
@@ -506,6 +520,7 @@ ValidateRequest validate_options_from_json(const nlohmann::json& j) {
   req.prediction.lambda = p.lambda;
   req.prediction.gd_variant = p.gd_variant;
   req.csv = std::move(p.csv);
+  r.finish();
   validate_as("validate", [&] {
     req.prediction.validate();
     req.simulation.validate();
