@@ -23,6 +23,7 @@
 
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -85,12 +86,22 @@ struct ValidateRequest {
 };
 ValidateRequest validate_options_from_json(const nlohmann::json& j);
 
-/// `quadid validate --json` on a log already read (`log_name` is what the JSON
-/// calls it): Table 4 (re-flight with each set; needs the log's quadid-simulate
-/// metadata or req.trajectory, skipped otherwise with a note) and Tables 5-12.
-/// `note` receives the messages the CLI prints on stderr (warnings, progress).
-/// Throws std::invalid_argument when req.params is empty.
-nlohmann::json validate_log(const FlightLog& log, const std::string& log_name, const ValidateRequest& req,
-                            const std::function<void(const std::string&)>& note = {});
+/// What `quadid validate` computes on one log.
+struct LogValidation {
+  std::vector<NamedParams> sets;                 // from req.params, in order
+  NamedParams reference;                         // from req.reference, named "nom"
+  std::optional<SimulationComparison> simulation;  // Table 4 (absent: no_simulation or no reference to re-fly)
+  PredictionValidation prediction;               // Tables 5-12
+};
+/// `quadid validate` on a log already read: loads the sets (an unphysical one
+/// is judged by prediction error only, with a note), re-flies the log for
+/// Table 4 (needs the log's quadid-simulate metadata or req.trajectory; else a
+/// note and no Table 4) and computes Tables 5-12. `note` receives the messages
+/// the command prints on stderr (warnings, progress). Throws
+/// std::invalid_argument when req.params gives no set.
+LogValidation validate_log(const FlightLog& log, const ValidateRequest& req,
+                           const std::function<void(const std::string&)>& note = {});
+/// The JSON of `quadid validate --json` ("log": log_name).
+nlohmann::json to_json(const LogValidation& v, const std::string& log_name);
 
 }  // namespace quadid

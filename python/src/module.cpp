@@ -229,7 +229,7 @@ py::dict validate(const std::string& log, const py::dict& opts, py::object warn)
   {
     py::gil_scoped_release nogil;
     const quadid::FlightLog fl = quadid::load_log_file(log, req.csv);
-    j = quadid::validate_log(fl, log, req, [&](const std::string& s) { notes.push_back(s); });
+    j = quadid::to_json(quadid::validate_log(fl, req, [&](const std::string& s) { notes.push_back(s); }), log);
   }
   for (const auto& s : notes) warn(s);
   return to_py(j).cast<py::dict>();

@@ -9,12 +9,13 @@
 
 namespace quadid {
 
-nlohmann::json validate_log(const FlightLog& log, const std::string& log_name, const ValidateRequest& req,
-                            const std::function<void(const std::string&)>& note) {
+LogValidation validate_log(const FlightLog& log, const ValidateRequest& req,
+                           const std::function<void(const std::string&)>& note) {
   auto say = [&](const std::string& s) {
     if (note) note(s);
   };
-  std::vector<NamedParams> sets;
+  LogValidation v;
+  std::vector<NamedParams>& sets = v.sets;
   for (const auto& spec : req.params)
     for (auto& [name, P] : load_param_sets(spec)) {
       try {
@@ -25,11 +26,12 @@ nlohmann::json validate_log(const FlightLog& log, const std::string& log_name, c
       sets.push_back({name, P});
     }
   if (sets.empty()) throw std::invalid_argument("give at least one --params set");
-  const NamedParams reference{"nom", load_params(req.reference)};
+  v.reference = NamedParams{"nom", load_params(req.reference)};
+  const NamedParams& reference = v.reference;
 
   // Table 4 needs the reference the log was flown with and the controller: a
   // simulated log carries both; for another log, --trajectory and defaults.
-  std::optional<SimulationComparison> sim;
+  std::optional<SimulationComparison>& sim = v.simulation;
   if (!req.no_simulation) {
     std::unique_ptr<Trajectory> traj;
     SimulationOptions base;
@@ -56,16 +58,19 @@ nlohmann::json validate_log(const FlightLog& log, const std::string& log_name, c
       sim = compare_simulations(log, *traj, base, sets, reference, req.simulation);
     }
   }
-  const PredictionValidation pv = validate_prediction(log, sets, reference, req.prediction);
+  v.prediction = validate_prediction(log, sets, reference, req.prediction);
+  return v;
+}
 
+nlohmann::json to_json(const LogValidation& v, const std::string& log_name) {
   nlohmann::json j;
   j["log"] = log_name;
-  j["reference"] = {{"name", reference.name}, {"params", to_json(reference.params)}};
+  j["reference"] = {{"name", v.reference.name}, {"params", to_json(v.reference.params)}};
   nlohmann::json js = nlohmann::json::object();
-  for (const auto& s : sets) js[s.name] = to_json(s.params);
+  for (const auto& s : v.sets) js[s.name] = to_json(s.params);
   j["sets"] = js;
-  if (sim) j["simulation"] = to_json(*sim);
-  j["prediction_error"] = {{"standard", to_json(pv.standard)}, {"filtered", to_json(pv.filtered)}};
+  if (v.simulation) j["simulation"] = to_json(*v.simulation);
+  j["prediction_error"] = {{"standard", to_json(v.prediction.standard)}, {"filtered", to_json(v.prediction.filtered)}};
   return j;
 }
 
