@@ -166,6 +166,7 @@ py::dict identify(const py::object& log, const py::dict& opts) {
     py::gil_scoped_release nogil;
     quadid::IdentificationResult res = quadid::identify(fl, req.options);
     j = quadid::to_json(res);
+    j["log"] = nullptr;  // the command's "log" is the file's name; a mapping has none
     evo = std::move(res.evolution);
   }
   py::dict d = to_py(j).cast<py::dict>();
