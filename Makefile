@@ -2,12 +2,17 @@
 JOBS ?= $(shell nproc 2>/dev/null || echo 2)
 OUT  ?= reproduction
 
-.PHONY: deps build test reproduce bench asan clean
+.PHONY: deps build python test reproduce bench asan clean
 deps:
 	scripts/install-deps.sh
 build:
 	cmake --preset release -DQUADID_BUILD_BENCH=OFF
 	cmake --build build -j $(JOBS) --target quadid
+# The Python module into build/python (PYTHONPATH=build/python /usr/bin/python3 -c 'import quadid').
+python:
+	cmake --preset release -DQUADID_BUILD_BENCH=OFF
+	cmake --build build -j $(JOBS) --target quadid_python
+# ctest runs the GoogleTest suite and the Python module's pytest suite (one CTest test, /usr/bin/python3).
 test:
 	cmake --preset release -DQUADID_BUILD_BENCH=OFF
 	cmake --build build -j $(JOBS)

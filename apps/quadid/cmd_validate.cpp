@@ -3,6 +3,7 @@
 #include "commands.hpp"
 #include "common.hpp"
 #include "quadid/logs.hpp"
+#include "quadid/options_json.hpp"
 #include "quadid/validation.hpp"
 
 #include <fmt/format.h>
@@ -27,87 +28,36 @@ struct ValidateArgs {
 };
 
 void run(const ValidateArgs& a) {
-  std::vector<NamedParams> sets;
-  for (const auto& spec : a.params)
-    for (auto& [name, P] : load_param_sets(spec)) {
-      try {
-        P.validate(name);
-      } catch (const std::invalid_argument& e) {
-        fmt::print(stderr, "quadid validate: warning: {} (judged by prediction error only; it cannot be flown)\n",
-                   e.what());
-      }
-      sets.push_back({name, P});
-    }
-  if (sets.empty()) throw std::invalid_argument("give at least one --params set");
-  const NamedParams reference{"nom", load_params(a.reference)};
-
-  PredictionValidationOptions popt;
-  popt.processing = a.proc.processing();
-  popt.lambda = a.proc.lambda;
-  popt.gd_variant = a.proc.gd_variant();
-  if (!a.error_window.empty()) popt.window = TimeWindow::parse(a.error_window);
-  SimulationComparisonOptions sopt;
-  sopt.window = TimeWindow::parse(a.window);
-  sopt.with_noise = a.with_noise;
-  popt.validate();
-  sopt.validate();
+  ValidateRequest req;
+  req.params = a.params;
+  req.reference = a.reference;
+  req.trajectory = a.trajectory;
+  req.no_simulation = a.no_simulation;
+  req.prediction.processing = a.proc.processing();
+  req.prediction.lambda = a.proc.lambda;
+  req.prediction.gd_variant = a.proc.gd_variant();
+  if (!a.error_window.empty()) req.prediction.window = TimeWindow::parse(a.error_window);
+  req.simulation.window = TimeWindow::parse(a.window);
+  req.simulation.with_noise = a.with_noise;
+  req.prediction.validate();
+  req.simulation.validate();
 
   logs::LoadOptions load;
   load.csv = a.proc.csv();
   const FlightLog log = logs::load_any_log(a.log, load);  // CSV, or an autopilot log imported
+  const LogValidation v =
+      validate_log(log, req, [](const std::string& note) { fmt::print(stderr, "quadid validate: {}\n", note); });
 
-  // Table 4 needs the reference the log was flown with and the controller: a
-  // simulated log carries both; for another log, --trajectory and defaults.
-  std::optional<SimulationComparison> sim;
-  std::string sim_note;
-  if (!a.no_simulation) {
-    std::unique_ptr<Trajectory> traj;
-    SimulationOptions base;
-    bool have_metadata = true;
-    try {
-      base = simulation_options_from_log(log);
-    } catch (const InputError&) {
-      have_metadata = false;
-    }
-    if (!a.trajectory.empty()) {
-      traj = load_trajectory(a.trajectory);
-    } else if (have_metadata) {
-      traj = trajectory_from_log(log);
-    }
-    if (!traj) {
-      sim_note = "no simulation comparison (Table 4): the log has no quadid-simulate metadata; give --trajectory "
-                 "to re-fly its reference with the default controller";
-    } else {
-      if (!have_metadata) {
-        const auto t = log.column("t");
-        base.controller.rate = static_cast<double>(t.size() - 1) / (t(t.size() - 1) - t(0));
-        base.dt = 1.0 / base.controller.rate / std::max(1.0, std::round(1e-3 * base.controller.rate));
-        fmt::print(stderr, "quadid validate: re-flying '{}' with the default controller at {:g} Hz\n",
-                   traj->describe(), base.controller.rate);
-      }
-      fmt::print(stderr, "quadid validate: re-flying the log with {} parameter sets...\n", sets.size() + 1);
-      sim = compare_simulations(log, *traj, base, sets, reference, sopt);
-    }
-  }
-  const PredictionValidation pv = validate_prediction(log, sets, reference, popt);
-
-  nlohmann::json j;
-  j["log"] = a.log;
-  j["reference"] = {{"name", reference.name}, {"params", to_json(reference.params)}};
-  nlohmann::json js = nlohmann::json::object();
-  for (const auto& s : sets) js[s.name] = to_json(s.params);
-  j["sets"] = js;
-  if (sim) j["simulation"] = to_json(*sim);
-  j["prediction_error"] = {{"standard", to_json(pv.standard)}, {"filtered", to_json(pv.filtered)}};
+  const nlohmann::json j = to_json(v, a.log);
   if (!a.out.empty()) write_file_atomic(a.out, j.dump(2) + "\n");
-  if (!sim_note.empty()) fmt::print(stderr, "quadid validate: {}\n", sim_note);
   if (a.json) {
     fmt::print("{}\n", j.dump(2));
     return;
   }
-  if (sim) fmt::print("{}\n", format_simulation_table(*sim, "Simulation against the log (Table 4 format)"));
-  fmt::print("{}\n", format_prediction_table(pv.standard, "Output prediction error (Tables 5, 7, 9, 11 format)"));
-  fmt::print("{}", format_prediction_table(pv.filtered, "Output prediction error (Tables 6, 8, 10, 12 format)"));
+  if (v.simulation)
+    fmt::print("{}\n", format_simulation_table(*v.simulation, "Simulation against the log (Table 4 format)"));
+  fmt::print("{}\n", format_prediction_table(v.prediction.standard, "Output prediction error (Tables 5, 7, 9, 11 format)"));
+  fmt::print("{}", format_prediction_table(v.prediction.filtered, "Output prediction error (Tables 6, 8, 10, 12 format)"));
 }
 
 }  // namespace

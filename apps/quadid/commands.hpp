@@ -14,5 +14,6 @@ void register_validate(CLI::App& app);
 void register_reproduce(CLI::App& app);
 void register_log_info(CLI::App& app);
 void register_import(CLI::App& app);
+void register_batch(CLI::App& app);
 
 }  // namespace quadid::cli

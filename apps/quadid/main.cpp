@@ -33,6 +33,7 @@ int main(int argc, char** argv) {
   quadid::cli::register_reproduce(app);
   quadid::cli::register_import(app);
   quadid::cli::register_log_info(app);
+  quadid::cli::register_batch(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -1,0 +1,123 @@
+// quadid batch: identify many logs on one machine with threads -> JSON Lines
+// (docs/fleet.md). The identify options are those of `quadid identify`, taken
+// from the library's table (command_option_specs) and read by
+// identify_options_from_json, so the names, defaults and checks are one.
+#include "commands.hpp"
+#include "quadid/batch.hpp"
+#include "quadid/io.hpp"
+
+#include <fmt/format.h>
+
+#include <cstdio>
+#include <iostream>
+#include <iterator>
+#include <map>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace quadid::cli {
+namespace {
+
+struct BatchArgs {
+  std::vector<std::string> logs;
+  std::string list;
+  std::string out;
+  int threads = 0;
+  bool quiet = false;
+  // identify options as typed, by long name (numbers stay text: the library parses them)
+  std::map<std::string, std::string> values;
+  std::map<std::string, bool> flags;
+  std::map<std::string, std::vector<std::string>> lists;
+};
+
+nlohmann::json identify_json(const BatchArgs& a) {
+  nlohmann::json j = nlohmann::json::object();
+  for (const auto& [k, v] : a.values) j[k] = v;
+  for (const auto& [k, v] : a.flags)
+    if (v) j[k] = true;
+  for (const auto& [k, v] : a.lists)
+    if (!v.empty()) j[k] = v;
+  return j;
+}
+
+void run(const BatchArgs& a) {
+  const IdentifyRequest req = identify_options_from_json(identify_json(a));
+  BatchOptions bopt;
+  bopt.threads = a.threads;
+  bopt.validate();
+
+  std::vector<std::string> paths = a.logs;
+  if (!a.list.empty()) {
+    std::string text;
+    if (a.list == "-") text.assign(std::istreambuf_iterator<char>(std::cin), std::istreambuf_iterator<char>());
+    else text = read_file(a.list);
+    const auto listed = parse_path_list(text, a.list == "-" ? "stdin" : a.list);
+    paths.insert(paths.end(), listed.begin(), listed.end());
+  }
+  if (paths.empty()) throw std::invalid_argument("no logs: give paths or --list FILE");
+
+  // Lines go to stdout as soon as every earlier log is done; with -o they are
+  // collected and the file is written once, atomically, at the end.
+  std::string collected;
+  const BatchSink sink = [&](std::size_t, const BatchRecord& r) {
+    const std::string line = to_json(r).dump() + "\n";
+    if (a.out.empty()) {
+      std::fputs(line.c_str(), stdout);
+      std::fflush(stdout);
+    } else {
+      collected += line;
+    }
+  };
+  BatchProgress progress;
+  if (!a.quiet)
+    progress = [](std::size_t done, std::size_t total, const BatchRecord& r) {
+      if (r.ok) fmt::print(stderr, "quadid batch: [{}/{}] {} ok ({:.2f} s)\n", done, total, r.path, r.seconds);
+      else fmt::print(stderr, "quadid batch: [{}/{}] {} FAILED: {}\n", done, total, r.path, r.error);
+    };
+  const BatchSummary s = identify_batch(paths, req, bopt, sink, progress);
+  if (!a.out.empty()) write_file_atomic(a.out, collected);
+  if (!a.quiet)
+    fmt::print(stderr, "quadid batch: {} logs, {} ok, {} failed in {:.2f} s ({:.3g} logs/s, {} threads){}\n", s.total,
+               s.ok, s.failed, s.seconds, s.seconds > 0 ? static_cast<double>(s.total) / s.seconds : 0.0, s.threads,
+               a.out.empty() ? "" : fmt::format("; wrote {}", a.out));
+  if (s.failed > 0) throw CLI::RuntimeError(2);
+}
+
+}  // namespace
+
+void register_batch(CLI::App& app) {
+  auto a = std::make_shared<BatchArgs>();
+  auto* sub = app.add_subcommand(
+      "batch", "identify many flight logs on this machine (threads) -> JSON Lines, one object per log");
+  sub->footer(
+      "Each log is identified as `quadid identify LOG --json` would (same options, same result), on\n"
+      "--threads worker threads. One JSON object per line, in input order: the identify result plus\n"
+      "\"path\" and \"ok\": true, or {\"path\", \"ok\": false, \"error\"} for a log that failed (the\n"
+      "others go on). Progress on stderr.\n"
+      "Exit status: 0 every log identified; 2 some logs failed (all lines written, theirs say why);\n"
+      "1 nothing ran (bad option, unreadable list, no logs).\n\n"
+      "Examples:\n"
+      "  quadid batch logs/*.csv > results.jsonl\n"
+      "  find logs -name '*.csv' | quadid batch --list - --threads 2 --cutoff 3 -o results.jsonl\n"
+      "See docs/fleet.md for a Dask cluster and a Slurm array job.");
+  sub->add_option("logs", a->logs, "flight logs");
+  sub->add_option("--list", a->list, "file with one log path per line ('-' = stdin; '#' comments)");
+  sub->add_option("-o,--out", a->out, "write the JSON Lines here (atomically, at the end) instead of stdout");
+  sub->add_option("--threads", a->threads, "worker threads; 0 = one per core")->capture_default_str();
+  sub->add_flag("-q,--quiet", a->quiet, "no progress on stderr");
+  for (const auto& spec : command_option_specs("identify")) {
+    const std::string flag = "--" + spec.name;
+    switch (spec.kind) {
+      case OptionKind::Flag: sub->add_flag(flag, a->flags[spec.name], spec.help); break;
+      case OptionKind::List: sub->add_option(flag, a->lists[spec.name], spec.help + " (repeatable)"); break;
+      default:
+        sub->add_option_function<std::string>(
+            flag, [a, name = spec.name](const std::string& v) { a->values[name] = v; }, spec.help);
+    }
+  }
+  sub->callback([a] { run(*a); });
+}
+
+}  // namespace quadid::cli

@@ -1,0 +1,107 @@
+// The commands' options as JSON objects keyed by the command line's long option
+// names, so that the Python module (python/), `quadid batch` and any
+// configuration file fill the library's Options structs through ONE
+// implementation, with the CLI's names, defaults and checks (docs/python.md).
+//
+// Keys: the long option without "--" ("cutoff", "window", "gd-init"); '_' is
+// accepted for '-' and a trailing '_' is dropped, so that Python's lambda_=30
+// and gd_init="nominal" read as --lambda and --gd-init. Values: JSON numbers or
+// numeric strings for numeric options, strings as typed on the command line
+// (e.g. "10:50", "butter", "qball2-nominal"), booleans for flags, a string or a
+// list of strings for repeatable options (map, params). A null value means
+// "the default". Angles keep the command line's units (design's --tilt-max is
+// in degrees). An unknown key, a wrong type or an out-of-range value throws
+// std::invalid_argument naming the key with its command-line spelling.
+#pragma once
+
+#include "quadid/design.hpp"
+#include "quadid/identification.hpp"
+#include "quadid/simulation.hpp"
+#include "quadid/validation.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace quadid {
+
+/// What an option's value is (for the CLI's registration and the error messages).
+enum class OptionKind { Number, Integer, String, Flag, List };
+
+/// One option of a command: its long name (without "--"), kind and help.
+struct OptionSpec {
+  std::string name;
+  OptionKind kind = OptionKind::Number;
+  std::string help;
+};
+
+/// The options the JSON functions below accept, per command ("identify",
+/// "simulate", "design", "check-trajectory", "validate"); throws
+/// std::invalid_argument for an unknown command.
+const std::vector<OptionSpec>& command_option_specs(std::string_view command);
+
+/// "gd_init" -> "gd-init", "lambda_" -> "lambda".
+std::string normalize_option_key(std::string_view key);
+
+/// Everything `quadid identify` needs besides the log: the identification and
+/// the log reader's options (--map, --period-tolerance).
+struct IdentifyRequest {
+  IdentificationOptions options;
+  CsvReadOptions csv;
+};
+/// Options of `quadid identify` (and `quadid batch`): window, error-window,
+/// sigma, gd-discretization, gd-init, nominal, allow-rank-deficient,
+/// evolution-interval, and the processing group filter, cutoff, order, taps,
+/// lambda, derivative-filter, g, period-tolerance, keep-edges, map.
+/// Defaults: those of `quadid identify --help`. Validated.
+IdentifyRequest identify_options_from_json(const nlohmann::json& j);
+
+/// `quadid simulate`: the trajectory (required: table2, circle1..3, circle,
+/// or a trajectory JSON file) and the SimulationOptions.
+struct SimulateRequest {
+  std::shared_ptr<const Trajectory> trajectory;
+  SimulationOptions options;
+};
+SimulateRequest simulate_options_from_json(const nlohmann::json& j);
+
+/// `quadid design` options (wf in deg/s, psi-max/tilt-max/psidot-max in degrees as on the CLI).
+DesignOptions design_options_from_json(const nlohmann::json& j);
+/// `quadid check-trajectory` options (the trajectory itself is not an option here).
+CheckOptions check_options_from_json(const nlohmann::json& j);
+
+/// `quadid validate` options besides the log and the sets.
+struct ValidateRequest {
+  std::vector<std::string> params;     // --params specs (presets, params JSON, identify result JSON)
+  std::string reference = "qball2-nominal";
+  std::string trajectory;              // empty: the one the log records
+  bool no_simulation = false;
+  PredictionValidationOptions prediction;
+  SimulationComparisonOptions simulation;
+  CsvReadOptions csv;
+};
+ValidateRequest validate_options_from_json(const nlohmann::json& j);
+
+/// What `quadid validate` computes on one log.
+struct LogValidation {
+  std::vector<NamedParams> sets;                 // from req.params, in order
+  NamedParams reference;                         // from req.reference, named "nom"
+  std::optional<SimulationComparison> simulation;  // Table 4 (absent: no_simulation or no reference to re-fly)
+  PredictionValidation prediction;               // Tables 5-12
+};
+/// `quadid validate` on a log already read: loads the sets (an unphysical one
+/// is judged by prediction error only, with a note), re-flies the log for
+/// Table 4 (needs the log's quadid-simulate metadata or req.trajectory; else a
+/// note and no Table 4) and computes Tables 5-12. `note` receives the messages
+/// the command prints on stderr (warnings, progress). Throws
+/// std::invalid_argument when req.params gives no set.
+LogValidation validate_log(const FlightLog& log, const ValidateRequest& req,
+                           const std::function<void(const std::string&)>& note = {});
+/// The JSON of `quadid validate --json` ("log": log_name).
+nlohmann::json to_json(const LogValidation& v, const std::string& log_name);
+
+}  // namespace quadid

@@ -1,0 +1,88 @@
+"""Many flight logs, one identification each (docs/fleet.md).
+
+    import quadid.fleet
+    from dask.distributed import Client, LocalCluster
+    client = Client(LocalCluster(n_workers=2, threads_per_worker=1))
+    records = quadid.fleet.identify_many(paths, client=client, cutoff=3.0)
+
+Each record is one line of `quadid batch`: {"path", "ok": True, ...the dict of
+`quadid identify --json`...} or {"path", "ok": False, "error": "..."} for a
+log that failed (bad file, bad data, a worker that died); the others go on.
+Records come back in the order of `paths`.
+"""
+
+from __future__ import annotations
+
+import concurrent.futures as _cf
+import functools
+import os
+from typing import Any, Iterable
+
+__all__ = ["identify_one", "identify_many"]
+
+
+def identify_one(path, options: dict | None = None, keep_evolution: bool = False) -> dict:
+    """One log -> one record; never raises for a bad log (the record says why)."""
+    import quadid  # imported here so that a worker process needs only `quadid` on its path
+
+    path = os.fspath(path)
+    try:
+        res = quadid.identify(path, **(options or {}))
+    except Exception as e:  # noqa: BLE001 - every failure of one log is that log's record
+        return {"path": path, "ok": False, "error": str(e)}
+    if not keep_evolution:
+        res.pop("evolution", None)
+    res["path"] = path
+    res["ok"] = True
+    return res
+
+
+def _failure(path, e: BaseException) -> dict:
+    return {"path": os.fspath(path), "ok": False, "error": f"{type(e).__name__}: {e}"}
+
+
+def identify_many(
+    paths: Iterable,
+    client: Any = None,
+    *,
+    max_workers: int | None = None,
+    keep_evolution: bool = False,
+    **options,
+) -> list[dict]:
+    """Identify every log of `paths`; the records in the order of `paths`.
+
+    client: a dask.distributed Client (a LocalCluster or a real scheduler):
+        one task per log on its workers. None: local processes
+        (concurrent.futures.ProcessPoolExecutor, `max_workers`, default one per core).
+    options: those of quadid.identify (cutoff=3.0, window="10:50", ...); they
+        are checked here first, so a bad option raises ValueError at once
+        instead of failing every log.
+    keep_evolution: keep each result's "evolution" arrays (costly to ship back).
+    """
+    import quadid
+
+    paths = [os.fspath(p) for p in paths]
+    quadid._quadid.check_identify_options(quadid._options("identify", options))
+    task = functools.partial(identify_one, options=options, keep_evolution=keep_evolution)
+    if not paths:
+        return []
+    if client is not None:
+        # pure=False: the same path may hold a new flight the next time.
+        futures = client.map(task, paths, pure=False)
+        out = []
+        for p, f in zip(paths, futures):
+            try:
+                out.append(f.result())
+            except Exception as e:  # noqa: BLE001 - a lost worker, a cancelled task
+                out.append(_failure(p, e))
+        return out
+    workers = max_workers or os.cpu_count() or 1
+    with _cf.ProcessPoolExecutor(max_workers=min(workers, len(paths))) as ex:
+        futures = [ex.submit(task, p) for p in paths]
+        out = []
+        for p, f in zip(paths, futures):
+            try:
+                out.append(f.result())
+            except Exception as e:  # noqa: BLE001 - a crashed worker process (BrokenProcessPool)
+                out.append(_failure(p, e))
+        return out

@@ -1,0 +1,278 @@
+// quadid._quadid: the C++ side of the Python module (python/quadid/__init__.py
+// wraps it; docs/python.md). Options arrive as a dict keyed by the command
+// line's long names and are read by the library (options_json.hpp), so the
+// names, defaults and checks are the CLI's. Results are the commands' JSON
+// as Python objects; signals are numpy arrays that VIEW the library's
+// column-major matrices (no copy): each array keeps its owner alive through
+// a capsule.
+#include "quadid/batch.hpp"
+#include "quadid/design.hpp"
+#include "quadid/identification.hpp"
+#include "quadid/io.hpp"
+#include "quadid/options_json.hpp"
+#include "quadid/simulation.hpp"
+
+#include <fmt/format.h>
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <cmath>
+#include <memory>
+#include <string>
+#include <utility>
+
+namespace py = pybind11;
+using nlohmann::json;
+
+namespace {
+
+// --- JSON <-> Python -------------------------------------------------------------
+
+py::object to_py(const json& j) {
+  switch (j.type()) {
+    case json::value_t::null: return py::none();
+    case json::value_t::boolean: return py::bool_(j.get<bool>());
+    case json::value_t::number_integer: return py::int_(j.get<long long>());
+    case json::value_t::number_unsigned: return py::int_(j.get<unsigned long long>());
+    case json::value_t::number_float: {
+      const double x = j.get<double>();
+      // `quadid ... --json` prints a non-finite number as null; so does this.
+      return std::isfinite(x) ? py::object(py::float_(x)) : py::object(py::none());
+    }
+    case json::value_t::string: return py::str(j.get_ref<const std::string&>());
+    case json::value_t::array: {
+      py::list l;
+      for (const auto& e : j) l.append(to_py(e));
+      return l;
+    }
+    case json::value_t::object: {
+      py::dict d;
+      for (const auto& [k, v] : j.items()) d[py::str(k)] = to_py(v);
+      return d;
+    }
+    default: return py::none();
+  }
+}
+
+json from_py(const py::handle& o, const std::string& where) {
+  if (o.is_none()) return nullptr;
+  if (py::isinstance<py::bool_>(o)) return o.cast<bool>();
+  if (py::isinstance<py::str>(o)) return o.cast<std::string>();
+  if (py::hasattr(o, "__fspath__")) return py::str(o.attr("__fspath__")()).cast<std::string>();
+  if (py::isinstance<py::int_>(o) || (py::hasattr(o, "__index__") && !py::isinstance<py::float_>(o)))
+    return py::int_(py::reinterpret_borrow<py::object>(o)).cast<long long>();
+  if (py::isinstance<py::float_>(o) || py::hasattr(o, "__float__")) return py::float_(py::reinterpret_borrow<py::object>(o)).cast<double>();
+  if (py::isinstance<py::list>(o) || py::isinstance<py::tuple>(o)) {
+    json a = json::array();
+    for (const auto& e : o) a.push_back(from_py(e, where));
+    return a;
+  }
+  throw py::value_error("option " + where + ": unsupported value of type " +
+                        py::str(py::type::of(o).attr("__name__")).cast<std::string>());
+}
+
+json options_json(const py::dict& d) {
+  json j = json::object();
+  for (const auto& [k, v] : d) {
+    const std::string key = py::str(k).cast<std::string>();
+    j[key] = from_py(v, "'" + key + "'");
+  }
+  return j;
+}
+
+// --- Zero-copy column views ----------------------------------------------------------
+
+/// A dict {column name: numpy array} whose arrays view the columns of `data`
+/// (column-major, so each column is contiguous); the matrix lives as long as
+/// any of the arrays.
+py::dict column_views(std::shared_ptr<const Eigen::MatrixXd> data, const std::vector<std::string>& names) {
+  auto* keep = new std::shared_ptr<const Eigen::MatrixXd>(data);
+  py::capsule owner(keep, [](void* p) { delete static_cast<std::shared_ptr<const Eigen::MatrixXd>*>(p); });
+  py::dict d;
+  const auto rows = static_cast<py::ssize_t>(data->rows());
+  for (std::size_t c = 0; c < names.size(); ++c) {
+    py::array_t<double> a({rows}, {static_cast<py::ssize_t>(sizeof(double))},
+                          data->data() + static_cast<Eigen::Index>(c) * data->rows(), owner);
+    a.attr("setflags")(py::arg("write") = false);  // read-only: the library's memory
+    d[py::str(names[c])] = a;
+  }
+  return d;
+}
+
+py::dict log_views(quadid::FlightLog&& log) {
+  auto data = std::make_shared<const Eigen::MatrixXd>(std::move(log.data));
+  return column_views(std::move(data), log.columns);
+}
+
+/// A FlightLog from a mapping of column name -> 1-D array: the columns the
+/// identification reads (the standard ones, after `map` renames) are copied
+/// once into the library's column-major matrix; the others are not touched.
+quadid::FlightLog log_from_mapping(const py::object& mapping, const quadid::CsvReadOptions& csv) {
+  quadid::FlightLog log;
+  const auto& required = csv.required;
+  Eigen::Index n = -1;
+  std::vector<py::array_t<double, py::array::c_style | py::array::forcecast>> cols;
+  for (const auto& canonical : required) {
+    const auto it = csv.map.find(canonical);
+    const std::string name = it == csv.map.end() ? canonical : it->second;
+    if (!py::bool_(mapping.attr("__contains__")(py::str(name))))
+      throw quadid::InputError("log: missing column '" + name + "'" +
+                               (name != canonical ? " (mapped to '" + canonical + "')" : std::string()));
+    auto a = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(mapping[py::str(name)]);
+    if (!a) throw quadid::InputError("log: column '" + name + "' is not convertible to an array of numbers");
+    if (a.ndim() != 1)
+      throw quadid::InputError("log: column '" + name + "' has " + std::to_string(a.ndim()) +
+                               " dimensions, expected 1");
+    if (n < 0) n = a.shape(0);
+    if (a.shape(0) != n)
+      throw quadid::InputError("log: column '" + name + "' has " + std::to_string(a.shape(0)) + " samples, column '" +
+                               log.columns.front() + "' has " + std::to_string(n));
+    log.columns.push_back(canonical);
+    cols.push_back(std::move(a));
+  }
+  log.data.resize(n, static_cast<Eigen::Index>(cols.size()));
+  for (std::size_t c = 0; c < cols.size(); ++c)
+    log.data.col(static_cast<Eigen::Index>(c)) = Eigen::Map<const Eigen::VectorXd>(cols[c].data(), n);
+  return log;
+}
+
+// --- The commands ------------------------------------------------------------------
+
+py::dict read_log(const std::string& path, const std::vector<std::string>& map, double period_tolerance) {
+  quadid::CsvReadOptions csv;  // the standard columns are required, the others kept
+  csv.map = quadid::parse_column_map(map);
+  csv.period_tolerance = period_tolerance;
+  quadid::FlightLog log;
+  {
+    py::gil_scoped_release nogil;
+    log = quadid::load_log_file(path, csv);
+  }
+  return log_views(std::move(log));
+}
+
+py::dict identify(const py::object& log, const py::dict& opts) {
+  const quadid::IdentifyRequest req = quadid::identify_options_from_json(options_json(opts));
+  json j;
+  quadid::Evolution evo;
+  if (py::isinstance<py::str>(log) || py::hasattr(log, "__fspath__")) {
+    const std::string path = py::str(py::isinstance<py::str>(log) ? log : log.attr("__fspath__")());
+    py::gil_scoped_release nogil;
+    j = quadid::identify_log_file(path, req, &evo);
+  } else {
+    if (!py::hasattr(log, "keys") || !py::hasattr(log, "__getitem__"))
+      throw py::type_error("identify: log must be a path or a mapping of column name -> array");
+    const quadid::FlightLog fl = log_from_mapping(log, req.csv);
+    py::gil_scoped_release nogil;
+    quadid::IdentificationResult res = quadid::identify(fl, req.options);
+    j = quadid::to_json(res);
+    j["log"] = nullptr;  // the command's "log" is the file's name; a mapping has none
+    evo = std::move(res.evolution);
+  }
+  py::dict d = to_py(j).cast<py::dict>();
+  auto data = std::make_shared<const Eigen::MatrixXd>(std::move(evo.data));
+  d["evolution"] = column_views(std::move(data), evo.columns);
+  return d;
+}
+
+py::dict simulate(const py::dict& opts, bool truth, const std::string& out, const std::string& truth_out) {
+  quadid::SimulateRequest req = quadid::simulate_options_from_json(options_json(opts));
+  req.options.record_truth = truth || !truth_out.empty();
+  quadid::SimulationResult res;
+  {
+    py::gil_scoped_release nogil;
+    res = quadid::simulate(*req.trajectory, req.options);
+    if (!truth_out.empty()) quadid::write_flight_log(res.truth, truth_out);
+    if (!out.empty()) quadid::write_flight_log(res.log, out);
+  }
+  py::dict d;
+  d["trajectory"] = quadid::trajectory_spec(*req.trajectory);
+  d["options"] = to_py(quadid::to_json(req.options));
+  d["summary"] = to_py(quadid::to_json(res.summary));
+  d["comments"] = py::cast(res.log.comments);
+  d["log"] = log_views(std::move(res.log));
+  d["truth"] = req.options.record_truth ? py::object(log_views(std::move(res.truth))) : py::object(py::none());
+  return d;
+}
+
+py::dict design(const py::dict& opts, const std::string& out) {
+  const quadid::DesignOptions opt = quadid::design_options_from_json(options_json(opts));
+  json j;
+  {
+    py::gil_scoped_release nogil;
+    const quadid::DesignResult res = quadid::design_trajectory(opt);
+    if (!res.check.all_hold())  // the message of `quadid design`
+      throw std::runtime_error(fmt::format(
+          "no start met every limit on the {:g} ms grid (best violation {:.3g}); try more --starts or a "
+          "different --seed",
+          opt.check_dt * 1e3, res.starts[static_cast<size_t>(res.best)].worst_violation));
+    j = quadid::design_to_json(res, opt);
+    if (!out.empty()) quadid::write_file_atomic(out, j.dump(2) + "\n");
+  }
+  return to_py(j).cast<py::dict>();
+}
+
+py::dict check_trajectory(const std::string& trajectory, const py::dict& opts) {
+  const quadid::CheckOptions opt = quadid::check_options_from_json(options_json(opts));
+  json j;
+  {
+    py::gil_scoped_release nogil;
+    const auto traj = quadid::load_trajectory(trajectory);
+    j = quadid::to_json(quadid::check_trajectory(*traj, opt));
+    j["source"] = trajectory;
+    j["limits"] = quadid::to_json(opt.limits);
+  }
+  return to_py(j).cast<py::dict>();
+}
+
+py::dict validate(const std::string& log, const py::dict& opts, py::object warn) {
+  const quadid::ValidateRequest req = quadid::validate_options_from_json(options_json(opts));
+  std::vector<std::string> notes;
+  json j;
+  {
+    py::gil_scoped_release nogil;
+    const quadid::FlightLog fl = quadid::load_log_file(log, req.csv);
+    j = quadid::to_json(quadid::validate_log(fl, req, [&](const std::string& s) { notes.push_back(s); }), log);
+  }
+  for (const auto& s : notes) warn(s);
+  return to_py(j).cast<py::dict>();
+}
+
+py::list option_specs(const std::string& command) {
+  py::list l;
+  for (const auto& s : quadid::command_option_specs(command)) {
+    const char* kind = "number";
+    switch (s.kind) {
+      case quadid::OptionKind::Number: kind = "number"; break;
+      case quadid::OptionKind::Integer: kind = "integer"; break;
+      case quadid::OptionKind::String: kind = "string"; break;
+      case quadid::OptionKind::Flag: kind = "flag"; break;
+      case quadid::OptionKind::List: kind = "list"; break;
+    }
+    l.append(py::make_tuple(s.name, kind, s.help));
+  }
+  return l;
+}
+
+}  // namespace
+
+PYBIND11_MODULE(_quadid, m) {
+  m.doc() = "quadid's C++ library (use the quadid package, which wraps this module)";
+  m.attr("__version__") = QUADID_VERSION;
+  // Bad data in a log or file: a ValueError, with the library's message (file, line, column).
+  py::register_exception<quadid::InputError>(m, "InputError", PyExc_ValueError);
+  // A simulated flight that left the safe region.
+  py::register_exception<quadid::SimulationDiverged>(m, "SimulationDiverged", PyExc_RuntimeError);
+  m.def("read_log", &read_log, py::arg("path"), py::arg("map"), py::arg("period_tolerance"));
+  m.def("identify", &identify, py::arg("log"), py::arg("options"));
+  m.def("simulate", &simulate, py::arg("options"), py::arg("truth"), py::arg("out"), py::arg("truth_out"));
+  m.def("design", &design, py::arg("options"), py::arg("out"));
+  m.def("check_trajectory", &check_trajectory, py::arg("trajectory"), py::arg("options"));
+  m.def("validate", &validate, py::arg("log"), py::arg("options"), py::arg("warn"));
+  m.def("option_specs", &option_specs, py::arg("command"));
+  m.def(
+      "check_identify_options",
+      [](const py::dict& opts) { (void)quadid::identify_options_from_json(options_json(opts)); },
+      py::arg("options"), "raises ValueError for an option identify would reject");
+  m.def("normalize_option_key", &quadid::normalize_option_key, py::arg("key"));
+}

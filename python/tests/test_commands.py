@@ -1,0 +1,68 @@
+"""simulate, check_trajectory, design and validate against the command line."""
+
+import numpy as np
+import pytest
+
+import quadid
+from conftest import DURATION, assert_same, cli_json, run_cli
+
+
+def test_simulate_equals_the_command_lines_log(tmp_path):
+    p = tmp_path / "cli.csv"
+    run_cli("simulate", "--trajectory", "circle1", "--duration", "5", "--seed", "7", "-o", str(p))
+    sim = quadid.simulate("circle1", duration=5, seed=7, out=tmp_path / "py.csv", truth=True)
+    assert (tmp_path / "py.csv").read_bytes() == p.read_bytes()  # same options -> same bytes
+    ref = quadid.read_log(p)
+    assert list(sim["log"]) == list(ref)
+    for k in ref:
+        np.testing.assert_array_equal(sim["log"][k], ref[k])
+    assert sim["truth"] is not None and "u_dot" in sim["truth"]
+    assert sim["summary"]["samples"] == len(ref["t"])
+
+
+def test_simulate_divergence_and_bad_options():
+    with pytest.raises(ValueError, match="trajectory"):
+        quadid.simulate("nowhere")
+    with pytest.raises(ValueError, match="noise"):
+        quadid.simulate("table2", noise="loud")
+
+
+def test_check_trajectory_equals_the_command_line():
+    cli = cli_json("check-trajectory", "table2", "--tilt-max", "6")
+    assert_same(quadid.check_trajectory("table2", tilt_max=6), cli, 1e-12)
+
+
+def design_cli_args(args: dict) -> list:
+    return [x for k, v in args.items() for x in ("--" + k.replace("_", "-"), str(v))]
+
+
+def drop_times(j):
+    """Wall times differ from run to run; everything else must not."""
+    if isinstance(j, dict):
+        return {k: drop_times(v) for k, v in j.items() if k not in ("seconds", "wall_s")}
+    if isinstance(j, list):
+        return [drop_times(v) for v in j]
+    return j
+
+
+def test_design_equals_the_command_line():
+    args = dict(starts=1, max_evals=40, seed=1, harmonics=3)  # feasible in ~1 s
+    cli = cli_json("design", *design_cli_args(args), "--quiet")
+    assert_same(drop_times(quadid.design(**args)), drop_times(cli), 1e-9)
+
+
+def test_design_without_a_feasible_start_raises_as_the_command_line():
+    args = dict(starts=1, max_evals=15, seed=3, harmonics=2)  # stops before meeting every limit
+    r = run_cli("design", *design_cli_args(args), "--quiet", check=False)
+    assert r.returncode == 1 and "no start met every limit" in r.stderr
+    with pytest.raises(RuntimeError) as e:
+        quadid.design(**args)
+    assert str(e.value) == r.stderr.strip().removeprefix("quadid design: error: ")
+
+
+def test_validate_equals_the_command_line(logs):
+    cli = cli_json("validate", "--log", str(logs[0]), "--params", "qball2-virtual", "--no-simulation")
+    res = quadid.validate(logs[0], "qball2-virtual", no_simulation=True)
+    assert_same(res, cli, 1e-12)
+    with pytest.raises(ValueError, match="at least one"):
+        quadid.validate(logs[0], [])

@@ -1,0 +1,48 @@
+"""quadid.fleet.identify_many on a 2-worker dask LocalCluster and on local processes."""
+
+import pytest
+
+import quadid
+import quadid.fleet
+from conftest import WINDOW, assert_same, cli_json
+
+
+@pytest.fixture
+def fleet(logs, tmp_path):
+    """The three logs with a corrupt one (a truncated copy) in the middle, and the CLI's results."""
+    corrupt = tmp_path / "corrupt.csv"
+    lines = logs[0].read_text().splitlines(keepends=True)
+    corrupt.write_text("".join(lines[: len(lines) // 3]) + "1.0,2.0\n")  # a short last row
+    paths = [logs[0], corrupt, logs[1], logs[2]]
+    expected = {str(p): cli_json("identify", str(p), "--window", WINDOW) for p in logs}
+    return paths, expected
+
+
+def check(records, paths, expected):
+    assert [r["path"] for r in records] == [str(p) for p in paths]  # input order
+    bad = records[1]
+    assert bad["ok"] is False and "corrupt.csv" in bad["error"] and "field" in bad["error"]
+    assert set(bad) == {"path", "ok", "error"}
+    for r in records[:1] + records[2:]:
+        assert r["ok"] is True
+        ref = dict(expected[r["path"]], path=r["path"], ok=True)
+        assert_same(r, ref, 1e-9)
+
+
+def test_identify_many_on_a_local_dask_cluster(fleet):
+    distributed = pytest.importorskip("dask.distributed")
+    paths, expected = fleet
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
+        with distributed.Client(cluster) as client:
+            records = quadid.fleet.identify_many(paths, client=client, window=WINDOW)
+    check(records, paths, expected)
+
+
+def test_identify_many_on_local_processes(fleet):
+    paths, expected = fleet
+    check(quadid.fleet.identify_many(paths, max_workers=2, window=WINDOW), paths, expected)
+
+
+def test_a_bad_option_fails_at_once_not_per_log(logs):
+    with pytest.raises(ValueError, match="cutof"):
+        quadid.fleet.identify_many(logs, cutof=3)

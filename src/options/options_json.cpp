@@ -1,0 +1,531 @@
+// Commands' options from JSON objects keyed by the CLI's long option names
+// (include/quadid/options_json.hpp). The defaults below are those of the
+// command line (apps/quadid/cmd_*.cpp); tests/test_options_json.cpp checks them.
+#include "quadid/options_json.hpp"
+
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <optional>
+#include <set>
+#include <stdexcept>
+
+namespace quadid {
+namespace {
+
+using json = nlohmann::json;
+using K = OptionKind;
+
+// --- The option tables (names, kinds, help) -------------------------------------
+
+const std::vector<OptionSpec>& processing_specs() {
+  static const std::vector<OptionSpec> s = {
+      {"filter", K::String, "zero-phase pre-filter: butter or fir (default butter)"},
+      {"cutoff", K::Number, "pre-filter cutoff, Hz (default 4)"},
+      {"order", K::Integer, "Butterworth order 1-8 (default 4)"},
+      {"taps", K::Integer, "FIR length, odd (default 31)"},
+      {"lambda", K::Number, "bandwidth of f_D, g_D of the filtered model (eqs. 35-36), rad/s (default 30)"},
+      {"derivative-filter", K::String, "g_D: consistent or printed (eq. 36) (default consistent)"},
+      {"g", K::Number, "gravity, m/s^2 (default 9.81)"},
+      {"period-tolerance", K::Number, "relative tolerance on a uniform sample period (default 1e-3)"},
+      {"keep-edges", K::Flag, "use the windows literally, including the filters' settling at the log's ends"},
+      {"map", K::List, "column name mapping CANONICAL=NAME, e.g. tau_phi=tau_x"},
+  };
+  return s;
+}
+
+const std::vector<OptionSpec>& limit_specs() {
+  static const std::vector<OptionSpec> s = {
+      {"x-max", K::Number, "|x| limit, m"},         {"y-max", K::Number, "|y| limit, m"},
+      {"z-min", K::Number, "lower z limit, m"},     {"z-max", K::Number, "upper z limit, m"},
+      {"psi-max", K::Number, "|psi| limit, deg"},   {"tilt-max", K::Number, "|phi|, |theta| limit of eqs. (26)-(27), deg"},
+      {"xdot-max", K::Number, "|x_dot| limit, m/s"}, {"ydot-max", K::Number, "|y_dot| limit, m/s"},
+      {"zdot-max", K::Number, "|z_dot| limit, m/s"}, {"psidot-max", K::Number, "|psi_dot| limit, deg/s"},
+      {"zddot-min", K::Number, "lower z_ddot limit, m/s^2"}, {"z0", K::Number, "start/end height, m"},
+  };
+  return s;
+}
+
+std::vector<OptionSpec> concat(std::vector<OptionSpec> a, const std::vector<OptionSpec>& b) {
+  a.insert(a.end(), b.begin(), b.end());
+  return a;
+}
+
+const std::vector<OptionSpec>& identify_specs() {
+  static const std::vector<OptionSpec> s = concat(
+      {
+          {"window", K::String, "estimation window T0:T1, seconds from the log's start (default 10:50)"},
+          {"error-window", K::String, "window of the prediction-error tables (default: the whole log)"},
+          {"sigma", K::Number, "gradient-descent gain of eq. (41) (default 30)"},
+          {"gd-discretization", K::String, "exact or literal (eq. 42) (default exact)"},
+          {"gd-init", K::String, "GD initial guess: nominal, a preset or a params JSON (default nominal)"},
+          {"nominal", K::String, "reference set: qball2-nominal, qball2-virtual or a params JSON"},
+          {"allow-rank-deficient", K::Flag, "warn instead of failing when the data do not determine some parameters"},
+          {"evolution-interval", K::Number, "seconds between evolution rows, 0 = every sample (default 0.01)"},
+          // HOOK(vehicle files, DESIGN.md): "vehicle" and "known-mass" join here once the
+          // library reads vehicle files; the Python module passes vehicle=... through unchanged.
+      },
+      processing_specs());
+  return s;
+}
+
+const std::vector<OptionSpec>& simulate_specs() {
+  static const std::vector<OptionSpec> s = {
+      {"trajectory", K::String, "table2, circle1..3, circle (with radius/altitude) or a trajectory JSON file (required)"},
+      {"radius", K::Number, "circle radius, m (trajectory circle; default 0.5)"},
+      {"altitude", K::Number, "circle altitude, m (trajectory circle; default 1)"},
+      {"duration", K::Number, "flight length, s (default 50)"},
+      {"plant", K::String, "the simulated vehicle: qball2-virtual, qball2-nominal or a params JSON"},
+      {"controller-params", K::String, "the controller's model (default qball2-nominal)"},
+      {"torque-map", K::String, "WT or WinvT (eq. 31) (default WT)"},
+      {"derivative", K::String, "tustin or backward-euler (default tustin)"},
+      {"fz-max", K::Number, "thrust saturation, N (default 34.4)"},
+      {"tau-max", K::Number, "torque saturation, N m (default 1.72)"},
+      {"noise", K::String, "sensor noise profile: default or none"},
+      {"sigma-position", K::Number, "mocap position noise std, m"},
+      {"sigma-yaw", K::Number, "mocap yaw noise std, rad"},
+      {"sigma-attitude", K::Number, "IMU roll/pitch noise std, rad"},
+      {"sigma-gyro", K::Number, "gyro noise std, rad/s"},
+      {"sigma-velocity", K::Number, "velocity noise std, m/s (velocity-source truth)"},
+      {"sigma-yaw-rate", K::Number, "yaw-rate noise std, rad/s (velocity-source truth)"},
+      {"velocity-source", K::String, "mocap-difference or truth"},
+      {"seed", K::Integer, "noise seed (default 1)"},
+      {"dt", K::Number, "plant RK4 step, s (default 0.001)"},
+      {"rate", K::Number, "controller (and log) rate, Hz (default 500)"},
+      {"mocap-rate", K::Number, "motion-capture rate, Hz (default 30)"},
+      {"imu-rate", K::Number, "IMU rate, Hz (default 500)"},
+      {"actuator-tau", K::Number, "actuator lag time constant, s (default 0)"},
+      {"g", K::Number, "gravity, m/s^2 (default 9.81)"},
+      {"summary-from", K::Number, "start of the window of the RMS tracking errors, s (default 0)"},
+  };
+  return s;
+}
+
+const std::vector<OptionSpec>& design_specs() {
+  static const std::vector<OptionSpec> s = concat(
+      {
+          {"seed", K::Integer, "seed of the random starts (default 1)"},
+          {"starts", K::Integer, "number of random starts (default 8)"},
+          {"threads", K::Integer, "worker threads, 0 = one per core"},
+          {"criterion", K::String, "cond, cond-scaled or dopt (default cond)"},
+          {"reference", K::String, "parameter set scaling cond-scaled and dopt (default qball2-nominal)"},
+          {"harmonics", K::Integer, "number of harmonics N of eq. (18) (default 5)"},
+          {"wf", K::Number, "fundamental frequency, deg/s (default 36)"},
+          {"max-evals", K::Integer, "SLSQP evaluations per round of one start (default 300)"},
+          {"check-dt", K::Number, "grid of the limits, s (default 0.001)"},
+          {"cond-dt", K::Number, "sampling period T of W (eq. 20), s (default 0.002)"},
+      },
+      limit_specs());
+  return s;
+}
+
+const std::vector<OptionSpec>& check_specs() {
+  static const std::vector<OptionSpec> s = concat(
+      {
+          {"duration", K::Number, "seconds checked, 0 = one period"},
+          {"check-dt", K::Number, "grid of the limit check, s (default 0.001)"},
+          {"cond-dt", K::Number, "sampling period T of W (eq. 20), s (default 0.002)"},
+          {"endpoint-tol", K::Number, "tolerance of the start/end conditions, SI units (default 1e-3)"},
+      },
+      limit_specs());
+  return s;
+}
+
+const std::vector<OptionSpec>& validate_specs() {
+  static const std::vector<OptionSpec> s = concat(
+      {
+          {"params", K::List, "parameter sets to judge: presets, params JSON or identify result JSON files"},
+          {"reference", K::String, "the set improvements are measured against (default qball2-nominal)"},
+          {"trajectory", K::String, "reference to re-fly (default: the one the log records)"},
+          {"window", K::String, "window of the simulation comparison (default 10:50)"},
+          {"error-window", K::String, "window of the prediction error (default: the whole log)"},
+          {"no-simulation", K::Flag, "skip the simulation comparison"},
+          {"with-noise", K::Flag, "re-fly with the log's sensor noise and seed"},
+      },
+      processing_specs());
+  return s;
+}
+
+std::string kind_name(OptionKind k) {
+  switch (k) {
+    case K::Number: return "a number";
+    case K::Integer: return "an integer";
+    case K::String: return "a string";
+    case K::Flag: return "true or false";
+    case K::List: return "a string or a list of strings";
+  }
+  return "?";
+}
+
+// --- Reading a JSON object against a table ----------------------------------------
+
+/// Reads the keys of one command's JSON object; every key must be read or finish() throws.
+class Reader {
+ public:
+  Reader(const json& j, std::string command, const std::vector<OptionSpec>& specs)
+      : command_(std::move(command)), specs_(specs) {
+    if (j.is_null()) return;
+    if (!j.is_object())
+      throw std::invalid_argument(fmt::format("{} options: expected a JSON object of option: value", command_));
+    for (const auto& [k, v] : j.items()) {
+      const std::string name = normalize_option_key(k);
+      if (given_.count(name))
+        throw std::invalid_argument(fmt::format("{}: option --{} is given twice ({} and {})", command_, name,
+                                                given_[name], k));
+      if (!spec(name)) {
+        std::vector<std::string> known;
+        for (const auto& s : specs_) known.push_back(s.name);
+        throw std::invalid_argument(fmt::format("{}: unknown option '{}' (known: {})", command_, k,
+                                                fmt::join(known, ", ")));
+      }
+      given_[name] = k;
+      if (!v.is_null()) values_[name] = v;
+    }
+  }
+
+  std::optional<double> number(const std::string& name) {
+    const json* v = get(name, K::Number);
+    if (!v) return std::nullopt;
+    if (v->is_number()) return v->get<double>();
+    if (v->is_string()) {
+      const std::string s = v->get<std::string>();
+      double x = 0.0;
+      const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), x);
+      if (ec == std::errc() && end == s.data() + s.size() && !s.empty()) return x;
+    }
+    bad(name, *v);
+  }
+
+  std::optional<long long> integer(const std::string& name) {
+    const json* v = get(name, K::Integer);
+    if (!v) return std::nullopt;
+    if (v->is_number_integer()) return v->get<long long>();
+    if (v->is_number_float()) {
+      const double x = v->get<double>();
+      if (std::isfinite(x) && x == std::trunc(x) && std::abs(x) < 9e15) return static_cast<long long>(x);
+    }
+    if (v->is_string()) {
+      const std::string s = v->get<std::string>();
+      long long x = 0;
+      const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), x);
+      if (ec == std::errc() && end == s.data() + s.size() && !s.empty()) return x;
+    }
+    bad(name, *v);
+  }
+
+  std::optional<int> integer32(const std::string& name) {
+    const auto v = integer(name);
+    if (!v) return std::nullopt;
+    if (*v < std::numeric_limits<int>::min() || *v > std::numeric_limits<int>::max())
+      throw std::invalid_argument(fmt::format("{}: option {}: {} is out of range", command_, spelled(name), *v));
+    return static_cast<int>(*v);
+  }
+
+  std::optional<std::string> string(const std::string& name) {
+    const json* v = get(name, K::String);
+    if (!v) return std::nullopt;
+    if (!v->is_string()) bad(name, *v);
+    return v->get<std::string>();
+  }
+
+  bool flag(const std::string& name) {
+    const json* v = get(name, K::Flag);
+    if (!v) return false;
+    if (!v->is_boolean()) bad(name, *v);
+    return v->get<bool>();
+  }
+
+  std::vector<std::string> list(const std::string& name) {
+    const json* v = get(name, K::List);
+    if (!v) return {};
+    if (v->is_string()) return {v->get<std::string>()};
+    if (!v->is_array()) bad(name, *v);
+    std::vector<std::string> out;
+    for (const auto& e : *v) {
+      if (!e.is_string()) bad(name, *v);
+      out.push_back(e.get<std::string>());
+    }
+    return out;
+  }
+
+  /// Runs f, prefixing an std::invalid_argument's message with the option's spelling.
+  template <class F>
+  auto with_option(const std::string& name, F&& f) -> decltype(f()) {
+    try {
+      return f();
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument(fmt::format("{}: option {}: {}", command_, spelled(name), e.what()));
+    }
+  }
+
+  const std::string& command() const { return command_; }
+
+  /// Every given option must have been read: a declared option the code forgets
+  /// would otherwise be silently ignored (tests give each option once).
+  void finish() const {
+    for (const auto& [name, as_given] : given_)
+      if (!read_.count(name))
+        throw std::logic_error(fmt::format("{}: option --{} is declared but not read", command_, name));
+  }
+
+ private:
+  const OptionSpec* spec(const std::string& name) const {
+    for (const auto& s : specs_)
+      if (s.name == name) return &s;
+    return nullptr;
+  }
+  const json* get(const std::string& name, OptionKind kind) {
+    const OptionSpec* s = spec(name);
+    // A programming error: the reading code and the table disagree (tests read every option).
+    if (!s || s->kind != kind)
+      throw std::logic_error(fmt::format("{}: option --{} is read as {} but declared otherwise", command_, name,
+                                         kind_name(kind)));
+    read_.insert(name);
+    const auto it = values_.find(name);
+    return it == values_.end() ? nullptr : &it->second;
+  }
+  std::string spelled(const std::string& name) const {
+    const auto it = given_.find(name);
+    if (it == given_.end() || it->second == name) return fmt::format("'{}' (--{})", name, name);
+    return fmt::format("'{}' (--{})", it->second, name);
+  }
+  [[noreturn]] void bad(const std::string& name, const json& v) const {
+    throw std::invalid_argument(fmt::format("{}: option {}: expected {}, got {}", command_, spelled(name),
+                                            kind_name(spec(name)->kind), v.dump()));
+  }
+
+  std::string command_;
+  const std::vector<OptionSpec>& specs_;
+  std::map<std::string, json> values_;
+  std::map<std::string, std::string> given_;  // normalized name -> key as given
+  std::set<std::string> read_;
+};
+
+/// The processing group (ProcessingArgs of the CLI).
+struct Processing {
+  ProcessingOptions processing;
+  double lambda = 30.0;
+  signal::GdVariant gd_variant = signal::GdVariant::Consistent;
+  CsvReadOptions csv;
+};
+
+Processing read_processing(Reader& r) {
+  Processing p;
+  auto& lp = p.processing.lowpass;
+  const std::string filter = r.string("filter").value_or("butter");
+  if (filter == "butter") lp.kind = signal::LowpassOptions::Kind::Butterworth;
+  else if (filter == "fir") lp.kind = signal::LowpassOptions::Kind::FirBlackmanHarris;
+  else throw std::invalid_argument(fmt::format("{}: option 'filter' (--filter): {}: expected butter or fir",
+                                               r.command(), filter));
+  lp.cutoff_hz = r.number("cutoff").value_or(4.0);
+  lp.order = r.integer32("order").value_or(4);
+  lp.taps = r.integer32("taps").value_or(31);
+  p.lambda = r.number("lambda").value_or(30.0);
+  const std::string df = r.string("derivative-filter").value_or("consistent");
+  if (df == "consistent") p.gd_variant = signal::GdVariant::Consistent;
+  else if (df == "printed") p.gd_variant = signal::GdVariant::Printed;
+  else throw std::invalid_argument(fmt::format(
+      "{}: option 'derivative-filter' (--derivative-filter): {}: expected consistent or printed", r.command(), df));
+  p.processing.g = r.number("g").value_or(kDefaultGravity);
+  p.processing.period_tolerance = r.number("period-tolerance").value_or(1e-3);
+  p.processing.exclude_edges = !r.flag("keep-edges");
+  const auto map = r.list("map");
+  p.csv.map = r.with_option("map", [&] { return parse_column_map(map); });
+  p.csv.period_tolerance = p.processing.period_tolerance;
+  return p;
+}
+
+Constraints read_limits(Reader& r) {
+  Constraints c;
+  c.x_max = r.number("x-max").value_or(c.x_max);
+  c.y_max = r.number("y-max").value_or(c.y_max);
+  c.z_min = r.number("z-min").value_or(c.z_min);
+  c.z_max = r.number("z-max").value_or(c.z_max);
+  c.psi_max = r.number("psi-max").value_or(180.0) * kDeg;
+  c.tilt_max = r.number("tilt-max").value_or(5.73) * kDeg;
+  c.xdot_max = r.number("xdot-max").value_or(c.xdot_max);
+  c.ydot_max = r.number("ydot-max").value_or(c.ydot_max);
+  c.zdot_max = r.number("zdot-max").value_or(c.zdot_max);
+  c.psidot_max = r.number("psidot-max").value_or(28.65) * kDeg;
+  c.zddot_min = r.number("zddot-min").value_or(c.zddot_min);
+  c.z0 = r.number("z0").value_or(c.z0);
+  return c;
+}
+
+/// Validation messages name the struct's field; prefix the command so that a
+/// Python user knows where it came from.
+template <class F>
+void validate_as(const std::string& command, F&& f) {
+  try {
+    f();
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(fmt::format("{}: {}", command, e.what()));
+  }
+}
+
+}  // namespace
+
+std::string normalize_option_key(std::string_view key) {
+  std::string s(key);
+  while (!s.empty() && s.front() == '-') s.erase(s.begin());
+  while (!s.empty() && s.back() == '_') s.pop_back();
+  std::replace(s.begin(), s.end(), '_', '-');
+  return s;
+}
+
+const std::vector<OptionSpec>& command_option_specs(std::string_view command) {
+  if (command == "identify") return identify_specs();
+  if (command == "simulate") return simulate_specs();
+  if (command == "design") return design_specs();
+  if (command == "check-trajectory") return check_specs();
+  if (command == "validate") return validate_specs();
+  throw std::invalid_argument(fmt::format("no options table for command '{}'", command));
+}
+
+IdentifyRequest identify_options_from_json(const nlohmann::json& j) {
+  Reader r(j, "identify", identify_specs());
+  IdentifyRequest req;
+  IdentificationOptions& opt = req.options;
+  opt.window = r.with_option("window", [&] { return TimeWindow::parse(r.string("window").value_or("10:50")); });
+  if (const auto ew = r.string("error-window"))
+    opt.error_window = r.with_option("error-window", [&] { return TimeWindow::parse(*ew); });
+  opt.gd.sigma = r.number("sigma").value_or(30.0);
+  const std::string disc = r.string("gd-discretization").value_or("exact");
+  if (disc == "exact") opt.gd.discretization = GdDiscretization::Exact;
+  else if (disc == "literal") opt.gd.discretization = GdDiscretization::ForwardEuler;
+  else throw std::invalid_argument(fmt::format(
+      "identify: option 'gd-discretization' (--gd-discretization): {}: expected exact or literal", disc));
+  const std::string nominal = r.string("nominal").value_or("qball2-nominal");
+  opt.reference = NamedParams{"nom", load_params(nominal)};
+  const std::string init = r.string("gd-init").value_or("nominal");
+  if (init != "nominal") opt.gd_initial = load_params(init);
+  opt.allow_rank_deficient = r.flag("allow-rank-deficient");
+  opt.evolution_interval = r.number("evolution-interval").value_or(0.01);
+  Processing p = read_processing(r);
+  opt.processing = p.processing;
+  opt.lambda = p.lambda;
+  opt.gd_variant = p.gd_variant;
+  req.csv = std::move(p.csv);
+  req.csv.keep_extra_columns = false;  // identification uses the 14 standard columns only
+  r.finish();
+  validate_as("identify", [&] { opt.validate(); });
+  return req;
+}
+
+SimulateRequest simulate_options_from_json(const nlohmann::json& j) {
+  Reader r(j, "simulate", simulate_specs());
+  SimulateRequest req;
+  SimulationOptions& o = req.options;
+  const auto spec = r.string("trajectory");
+  if (!spec) throw std::invalid_argument("simulate: option 'trajectory' (--trajectory) is required");
+  const auto radius = r.number("radius");
+  const auto altitude = r.number("altitude");
+  if (*spec == "circle") {
+    req.trajectory = std::make_shared<CircleTrajectory>(radius.value_or(0.5), altitude.value_or(1.0));
+  } else {
+    if (radius || altitude)
+      throw std::invalid_argument("simulate: options radius and altitude only apply to trajectory circle");
+    req.trajectory = trajectory_from_spec(*spec);
+  }
+  o.duration = r.number("duration").value_or(o.duration);
+  o.plant = load_params(r.string("plant").value_or("qball2-virtual"));
+  o.controller.params = load_params(r.string("controller-params").value_or("qball2-nominal"));
+  o.controller.torque_map = r.with_option("torque-map", [&] { return torque_map_from_string(r.string("torque-map").value_or("WT")); });
+  o.controller.derivative_discretization = r.with_option("derivative", [&] {
+    return derivative_discretization_from_string(r.string("derivative").value_or("tustin"));
+  });
+  o.controller.Fz_max = r.number("fz-max").value_or(o.controller.Fz_max);
+  o.controller.tau_max = r.number("tau-max").value_or(o.controller.tau_max);
+  NoiseSigmas& n = o.sensors.noise;
+  n = r.with_option("noise", [&] { return NoiseSigmas::preset(r.string("noise").value_or("default")); });
+  n.position = r.number("sigma-position").value_or(n.position);
+  n.yaw = r.number("sigma-yaw").value_or(n.yaw);
+  n.attitude = r.number("sigma-attitude").value_or(n.attitude);
+  n.gyro = r.number("sigma-gyro").value_or(n.gyro);
+  n.velocity = r.number("sigma-velocity").value_or(n.velocity);
+  n.yaw_rate = r.number("sigma-yaw-rate").value_or(n.yaw_rate);
+  o.sensors.velocity_source = r.with_option("velocity-source", [&] {
+    return velocity_source_from_string(r.string("velocity-source").value_or("mocap-difference"));
+  });
+  const auto seed = r.integer("seed");
+  if (seed && *seed < 0) throw std::invalid_argument(fmt::format("simulate: option 'seed' (--seed): {} < 0", *seed));
+  o.sensors.seed = seed ? static_cast<std::uint64_t>(*seed) : o.sensors.seed;
+  o.dt = r.number("dt").value_or(o.dt);
+  o.controller.rate = r.number("rate").value_or(o.controller.rate);
+  o.sensors.mocap_rate = r.number("mocap-rate").value_or(o.sensors.mocap_rate);
+  o.sensors.imu_rate = r.number("imu-rate").value_or(o.sensors.imu_rate);
+  o.actuator_tau = r.number("actuator-tau").value_or(o.actuator_tau);
+  o.g = r.number("g").value_or(o.g);
+  o.controller.g = o.g;  // as the CLI: one gravity for plant and controller
+  o.summary_from = r.number("summary-from").value_or(o.summary_from);
+  o.record_truth = false;
+  r.finish();
+  validate_as("simulate", [&] { o.validate(); });
+  return req;
+}
+
+DesignOptions design_options_from_json(const nlohmann::json& j) {
+  Reader r(j, "design", design_specs());
+  DesignOptions o;
+  const auto seed = r.integer("seed");
+  if (seed && *seed < 0) throw std::invalid_argument(fmt::format("design: option 'seed' (--seed): {} < 0", *seed));
+  o.seed = seed ? static_cast<std::uint64_t>(*seed) : o.seed;
+  o.starts = r.integer32("starts").value_or(o.starts);
+  o.threads = r.integer32("threads").value_or(o.threads);
+  o.criterion = r.with_option("criterion", [&] { return parse_criterion(r.string("criterion").value_or("cond")); });
+  o.reference = load_params(r.string("reference").value_or("qball2-nominal"));
+  o.harmonics = r.integer32("harmonics").value_or(o.harmonics);
+  o.wf = r.number("wf").value_or(36.0) * kDeg;
+  o.max_evals = r.integer32("max-evals").value_or(o.max_evals);
+  o.check_dt = r.number("check-dt").value_or(o.check_dt);
+  o.cond_dt = r.number("cond-dt").value_or(o.cond_dt);
+  o.limits = read_limits(r);
+  r.finish();
+  validate_as("design", [&] { o.validate(); });
+  return o;
+}
+
+CheckOptions check_options_from_json(const nlohmann::json& j) {
+  Reader r(j, "check-trajectory", check_specs());
+  CheckOptions o;
+  o.duration = r.number("duration").value_or(o.duration);
+  o.constraint_dt = r.number("check-dt").value_or(o.constraint_dt);
+  o.cond_dt = r.number("cond-dt").value_or(o.cond_dt);
+  o.endpoint_tol = r.number("endpoint-tol").value_or(o.endpoint_tol);
+  o.limits = read_limits(r);
+  r.finish();
+  validate_as("check-trajectory", [&] { o.validate(); });
+  return o;
+}
+
+ValidateRequest validate_options_from_json(const nlohmann::json& j) {
+  Reader r(j, "validate", validate_specs());
+  ValidateRequest req;
+  req.params = r.list("params");
+  req.reference = r.string("reference").value_or(req.reference);
+  req.trajectory = r.string("trajectory").value_or("");
+  req.simulation.window =
+      r.with_option("window", [&] { return TimeWindow::parse(r.string("window").value_or("10:50")); });
+  if (const auto ew = r.string("error-window"))
+    req.prediction.window = r.with_option("error-window", [&] { return TimeWindow::parse(*ew); });
+  req.no_simulation = r.flag("no-simulation");
+  req.simulation.with_noise = r.flag("with-noise");
+  Processing p = read_processing(r);
+  req.prediction.processing = p.processing;
+  req.prediction.lambda = p.lambda;
+  req.prediction.gd_variant = p.gd_variant;
+  req.csv = std::move(p.csv);
+  r.finish();
+  validate_as("validate", [&] {
+    req.prediction.validate();
+    req.simulation.validate();
+  });
+  return req;
+}
+
+}  // namespace quadid
