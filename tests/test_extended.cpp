@@ -222,3 +222,39 @@ TEST(Extended, BadOptionsNamed) {
     EXPECT_NE(std::string(e.what()).find("--cutoff-moment"), std::string::npos) << e.what();
   }
 }
+
+// The held-out choice of cutoffs: on a log whose gyro carries white noise and
+// whose positions are held at 30 Hz, the chosen cutoffs lie inside the
+// candidates' range, the scores are finite, and the choice gives estimates at
+// least as close to the truth as the extremes of the range.
+TEST(Extended, HeldOutCutoffChoice) {
+  const Params truth = Params::qball2_virtual();
+  FlightLog log = perfect_log(truth, 500.0, 50.0, 30.0);
+  std::mt19937 rng(11);
+  std::normal_distribution<double> gyro(0.0, 0.01);  // rad/s: 7x the MPU-6000's white noise
+  for (Eigen::Index k = 0; k < log.rows(); ++k)
+    for (int c = 7; c < 10; ++c) log.data(k, c) += gyro(rng);
+  ExtendedOptions o;
+  o.auto_cutoffs = true;
+  const CutoffSelection sel = select_cutoffs(log, o);
+  const auto cand = candidate_cutoffs(500.0);
+  ASSERT_EQ(sel.moment_scores.size(), cand.size());
+  for (const auto& [f, s] : sel.moment_scores) EXPECT_TRUE(std::isfinite(s)) << f;
+  EXPECT_GT(sel.moment_cutoff_hz, cand.front());
+  EXPECT_LT(sel.moment_cutoff_hz, cand.back());
+  auto izz_err = [&](double fm) {
+    ExtendedOptions x;
+    x.moment_cutoff_hz = fm;
+    const auto r = identify_extended(log, x);
+    const Theta e = (r.estimates[0].theta - truth.theta()).cwiseQuotient(truth.theta());
+    return std::abs(e(1)) + std::abs(e(4)) + std::abs(e(6));
+  };
+  const double chosen = izz_err(sel.moment_cutoff_hz);
+  EXPECT_LE(chosen, izz_err(cand.back()));
+  EXPECT_LE(chosen, izz_err(cand.front()));
+  for (size_t i = 0; i < cand.size(); ++i)
+    fmt::print("  {:5g} Hz  moment score {:.6g}  force score {:.6g}  err {:.3g}%\n", cand[i], sel.moment_scores[i].second,
+               sel.force_scores[i].second, 100 * izz_err(cand[i]));
+  fmt::print("chosen cutoffs: force {:g} Hz, moment {:g} Hz; sum of |errors| of Ixx Iyy Izz {:.3g}%\n",
+             sel.force_cutoff_hz, sel.moment_cutoff_hz, 100 * chosen);
+}
