@@ -57,6 +57,9 @@ struct ProcessingOptions {
   /// already moving at 0.63 m/s) has edge residuals that dominate the 0-50 s
   /// prediction-error tables. false: the paper's windows taken literally.
   bool exclude_edges = true;
+  /// Also keep the body-frame horizontal velocity [u v] (RegressionSignals::uv),
+  /// for the blade-flapping term of the real-flight regression.
+  bool keep_body_velocity = false;
   void validate() const;
 };
 
@@ -87,6 +90,8 @@ struct RegressionSignals {
   /// settling time; 0 when ProcessingOptions::exclude_edges is false).
   double edge = 0.0;
   Eigen::Matrix<double, Eigen::Dynamic, kCols> x;
+  /// Body velocity [u v] (m/s), only with ProcessingOptions::keep_body_velocity.
+  Eigen::Matrix<double, Eigen::Dynamic, 2> uv;
   Eigen::Index size() const { return x.rows(); }
 };
 
@@ -168,6 +173,28 @@ PredictionErrorTable prediction_error(const Regression& reg, const std::vector<N
 
 // --- The whole identification ---------------------------------------------------
 
+/// The terms of the real-flight regression. Each is linear in its parameters.
+struct ModelTerms {
+  /// kg, weighed: estimate the thrust scale s instead of the mass.
+  std::optional<double> known_mass{};
+  bool torque_offsets = false;  // o: centre of mass off the rotors' centre, rotor mismatch (N m)
+  bool flapping = false;        // K_x, K_y: blade-flapping moment, -K (e_z x v_body) (N s)
+  bool rate_damping = false;    // D_x, D_y, D_z: -D w (N m s)
+  bool rotor_inertia = false;   // J_r: yaw reaction and gyroscopic torque (kg m^2); needs Omega_r
+  bool force_drag = false;      // k_w: -k_w w in the force row (N s/m)
+  /// Weigh the four rows by the inverse of their own residual RMS (two passes).
+  bool weight_rows = false;
+  /// True when any term beyond the paper's model is on.
+  bool any() const {
+    return known_mass || torque_offsets || flapping || rate_damping || rotor_inertia || force_drag || weight_rows;
+  }
+  /// All real-flight terms on (the defaults with a rotor model).
+  static ModelTerms real_flight(bool have_rotor_speeds);
+  /// Throws std::invalid_argument naming the option (command-line spelling).
+  void validate() const;
+};
+
+
 struct IdentificationOptions {
   ProcessingOptions processing{};
   /// Estimation window (the paper's 10-50 s skips the take-off transient).
@@ -188,6 +215,13 @@ struct IdentificationOptions {
   bool allow_rank_deficient = false;
   /// Spacing of the recorded evolution (s); 0 records every sample.
   double evolution_interval = 0.01;
+  /// The real-flight regression's terms (extended.hpp). With any of them on, or
+  /// with cutoffs of their own for the force and moment rows, LS and FMLS come
+  /// from the real-flight regression; GD and FMGD stay the paper's model.
+  ModelTerms terms{};
+  std::optional<double> force_cutoff_hz{};   // Hz, default processing.lowpass.cutoff_hz
+  std::optional<double> moment_cutoff_hz{};  // Hz, default processing.lowpass.cutoff_hz
+  bool extended() const;
   void validate() const;
 };
 
@@ -199,6 +233,8 @@ struct SetEstimate {
   Theta theta = Theta::Zero();
   bool valid = true;   // false when GD diverged (literal eq. 42)
   std::string note;    // why not valid
+  /// Extra estimated quantities (thrust_scale, offsets, ...) of the real-flight regression.
+  std::vector<std::pair<std::string, double>> extra;
   Params params() const { return Params::from_theta(theta); }
 };
 
@@ -209,6 +245,8 @@ struct Evolution {
   std::vector<std::string> columns;
   Eigen::MatrixXd data;
 };
+
+struct ExtendedResult;
 
 struct IdentificationResult {
   std::array<SetEstimate, 4> estimates;  // LS, GD, FMLS, FMGD (DESIGN.md names)
@@ -223,6 +261,8 @@ struct IdentificationResult {
   Theta gd_initial = Theta::Zero();
   IdentificationOptions options;  // as used
   std::vector<std::string> warnings;
+  /// The real-flight regression's full result, when it was used (options.extended()).
+  std::shared_ptr<const ExtendedResult> extended;
   const SetEstimate& estimate(std::string_view name) const;  // throws on an unknown name
 };
 

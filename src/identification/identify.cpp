@@ -3,6 +3,8 @@
 // prediction errors (Tables 5-6).
 #include "quadid/identification.hpp"
 
+#include "quadid/extended.hpp"
+
 #include <fmt/format.h>
 
 #include <Eigen/Eigenvalues>
@@ -77,11 +79,20 @@ void IdentificationOptions::validate() const {
     throw std::invalid_argument(fmt::format("lambda={} must be a positive bandwidth in rad/s", lambda));
   gd.validate();
   ls.validate();
+  terms.validate();
+  for (auto [name, f] : {std::pair{"--cutoff-force", force_cutoff_hz}, std::pair{"--cutoff-moment", moment_cutoff_hz}})
+    if (f && (!(*f > 0.0) || !std::isfinite(*f)))
+      throw std::invalid_argument(fmt::format("{} {}: must be a positive frequency in Hz", name, *f));
   reference.params.validate("reference parameter set '" + reference.name + "'");
   if (gd_initial && !gd_initial->theta().allFinite())
     throw std::invalid_argument("gd_initial: the initial guess is not finite");
   if (!(evolution_interval >= 0.0) || !std::isfinite(evolution_interval))
     throw std::invalid_argument(fmt::format("evolution_interval={} must be >= 0 s", evolution_interval));
+}
+
+bool IdentificationOptions::extended() const {
+  const double c = processing.lowpass.cutoff_hz;
+  return terms.any() || force_cutoff_hz.value_or(c) != c || moment_cutoff_hz.value_or(c) != c;
 }
 
 const SetEstimate& IdentificationResult::estimate(std::string_view name) const {
@@ -123,17 +134,48 @@ IdentificationResult identify(const FlightLog& log, const IdentificationOptions&
   res.gd_step_gain_filtered = f.gd->max_step_gain();
 
   auto gd_estimate = [&](const char* name, RegressionModel m, const GradientDescent& gd) {
-    SetEstimate e{name, m, false, gd.theta(), !gd.diverged(), ""};
+    SetEstimate e{name, m, false, gd.theta(), !gd.diverged(), "", {}};
     if (gd.diverged()) {
       e.note = fmt::format("{} diverged: {}", name, gd.divergence_reason());
       res.warnings.push_back(e.note);
     }
     return e;
   };
-  res.estimates[0] = SetEstimate{"LS", RegressionModel::Standard, true, res.ls_standard.theta, true, ""};
+  res.estimates[0] = SetEstimate{"LS", RegressionModel::Standard, true, res.ls_standard.theta, true, "", {}};
   res.estimates[1] = gd_estimate("GD", RegressionModel::Standard, *s.gd);
-  res.estimates[2] = SetEstimate{"FMLS", RegressionModel::Filtered, true, res.ls_filtered.theta, true, ""};
+  res.estimates[2] = SetEstimate{"FMLS", RegressionModel::Filtered, true, res.ls_filtered.theta, true, "", {}};
   res.estimates[3] = gd_estimate("FMGD", RegressionModel::Filtered, *f.gd);
+
+  if (opt.extended()) {
+    // LS and FMLS from the real-flight regression (extended.hpp); the paper's
+    // model above still gives GD, FMGD and the identifiability diagnostics.
+    ExtendedOptions xo;
+    xo.processing = opt.processing;
+    xo.force_cutoff_hz = opt.force_cutoff_hz.value_or(opt.processing.lowpass.cutoff_hz);
+    xo.moment_cutoff_hz = opt.moment_cutoff_hz.value_or(opt.processing.lowpass.cutoff_hz);
+    xo.window = opt.window;
+    xo.lambda = opt.lambda;
+    xo.gd_variant = opt.gd_variant;
+    xo.terms = opt.terms;
+    xo.reference = opt.reference.params;
+    xo.ls = opt.ls;
+    auto xr = std::make_shared<ExtendedResult>(identify_extended(log, xo));
+    for (int i : {0, 1}) {
+      const ExtendedEstimate& x = xr->estimates[static_cast<size_t>(i)];
+      SetEstimate& e = res.estimates[static_cast<size_t>(2 * i)];
+      LeastSquaresSolution& sol = i == 0 ? res.ls_standard : res.ls_filtered;
+      e.theta = x.theta;
+      e.extra = x.extra;
+      sol.theta = x.theta;
+      sol.condition = x.condition;
+      for (int j = 0; j < 7; ++j) sol.std_error(j) = (j == 0 && opt.terms.known_mass) ? 0.0 : x.std_error(j);
+      sol.poorly_determined.clear();
+      for (const auto& n : x.poorly_determined)
+        if (n != "thrust_scale") sol.poorly_determined.push_back(n);
+    }
+    for (const auto& w : xr->warnings) res.warnings.push_back(w);
+    res.extended = std::move(xr);
+  }
 
   // Identifiability: rank deficiency is an error unless allowed; a large
   // standard error is a warning.

@@ -161,6 +161,7 @@ std::shared_ptr<const RegressionSignals> process_log(const FlightLog& log, const
   }
   // Step 3: v = R(eta)^T p_dot (eq. 3), then the Phi_b signals.
   const double g = opt.g;
+  if (opt.keep_body_velocity) out->uv.resize(n, 2);
   for (Eigen::Index k = 0; k < n; ++k) {
     const double phi = X(k, 8), theta = X(k, 9);
     const Vec3 eta(phi, theta, X(k, 10));
@@ -168,6 +169,7 @@ std::shared_ptr<const RegressionSignals> process_log(const FlightLog& log, const
     const Vec3 v = rotation<double>(eta).transpose() * pdot;
     const double p = X(k, 1), q = X(k, 2), r = X(k, 3);
     X(k, 0) = v(2);
+    if (opt.keep_body_velocity) out->uv.row(k) = v.head<2>().transpose();
     X(k, 4) = p * v(1) - q * v(0) + g * std::cos(theta) * std::cos(phi);  // eq. (7): p v - q u + g_bz
     X(k, 5) = p * q;
     X(k, 6) = p * r;

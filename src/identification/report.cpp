@@ -1,6 +1,8 @@
 // Text tables (Table 3, Tables 5-6), JSON and evolution CSV of an identification.
 #include "quadid/identification.hpp"
 
+#include "quadid/extended.hpp"
+
 #include <fmt/format.h>
 
 #include <cmath>
@@ -123,7 +125,14 @@ json to_json(const IdentificationResult& r) {
               r.options.gd.discretization == GdDiscretization::Exact ? "exact" : "forward-euler (eq. 42)"},
              {"initial", theta_json(r.gd_initial)}};
   for (const auto& e : r.estimates) {
-    if (e.valid) est[e.name] = to_json(e.params());
+    if (e.valid) {
+      est[e.name] = to_json(e.params());
+      if (!e.extra.empty()) {
+        json x = json::object();
+        for (const auto& [n, v] : e.extra) x[n] = v;
+        est[e.name]["extra"] = x;
+      }
+    }
     if (!e.least_squares) {
       const double gain = e.model == RegressionModel::Standard ? r.gd_step_gain_standard : r.gd_step_gain_filtered;
       gd[e.name] = {{"diverged", !e.valid}, {"max_step_gain", gain}};
@@ -131,7 +140,7 @@ json to_json(const IdentificationResult& r) {
     }
   }
   const auto& p = r.processing;
-  return {{"estimates", est},
+  json out = {{"estimates", est},
           {"reference", {{"name", r.reference.name}, {"params", to_json(r.reference.params)}}},
           {"window", {{"t0", r.window.t0}, {"t1", r.window.t1}, {"samples", r.window_samples}}},
           {"processing",
@@ -151,6 +160,30 @@ json to_json(const IdentificationResult& r) {
           {"gradient_descent", gd},
           {"prediction_error", {{"standard", to_json(r.errors_standard)}, {"filtered", to_json(r.errors_filtered)}}},
           {"warnings", r.warnings}};
+  if (r.extended) out["real_flight"] = to_json(*r.extended);
+  return out;
+}
+
+json to_json(const ExtendedResult& x) {
+  json sets = json::object();
+  for (const auto& e : x.estimates) {
+    json params = json::object();
+    for (size_t j = 0; j < e.names.size(); ++j) {
+      const auto jj = static_cast<Eigen::Index>(j);
+      params[e.names[j]] = {{"value", e.value(jj)}, {"std_error", e.std_error(jj)}};
+    }
+    sets[e.name] = {{"model", to_string(e.model)},
+                    {"parameters", params},
+                    {"row_weight", {e.row_weight(0), e.row_weight(1), e.row_weight(2), e.row_weight(3)}},
+                    {"residual_rms", {e.residual_rms(0), e.residual_rms(1), e.residual_rms(2), e.residual_rms(3)}},
+                    {"condition", e.condition},
+                    {"unidentifiable", e.unidentifiable},
+                    {"poorly_determined", e.poorly_determined}};
+  }
+  return {{"sets", sets},
+          {"window", {{"t0", x.window.t0}, {"t1", x.window.t1}, {"samples", x.window_samples}}},
+          {"force_prefilter", x.force_processing.filter},
+          {"moment_prefilter", x.moment_processing.filter}};
 }
 
 }  // namespace quadid

@@ -1,0 +1,109 @@
+// The regression for real flights: the paper's model (eqs. 7-10) plus terms
+// that real rotors and real logs add, every term linear in its parameter and
+// each switchable. See docs/real-flights.md.
+//
+// Rows (body FLU, SI), with s the thrust scale, o the torque offsets, K the
+// blade-flapping moment, D the rate damping, J_r the rotor inertia, k_w the
+// vertical rotor drag:
+//   m (w_dot + p v - q u + g_bz)            = s Fz - k_w w                 eq. (7) + drag
+//   I w_dot + w x (I w) + J_r (Omega_r_dot e_z + w x e_z Omega_r)
+//                                           = s tau + o - K (e_z x v_b) - D w   eqs. (8)-(10) + terms
+// Omega_r = sum_i d_i Omega_i (rad/s), d_i = +1 for a rotor spinning
+// counter-clockwise seen from above (its angular momentum points along +z
+// body), -1 for a clockwise one: the log column `Omega_r`.
+//
+// Mass, thrust and inertia cannot all be found from motion alone: scaling m,
+// I, J_r, K, D, k_w and the true wrench by one factor leaves every row
+// satisfied. Either the thrust model is trusted (s = 1, m estimated) or the
+// mass is weighed (m known, s estimated).
+#pragma once
+
+#include "quadid/identification.hpp"
+
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace quadid {
+
+/// Name of the log column holding Omega_r (rad/s), see above.
+inline constexpr const char* kRotorMomentumColumn = "Omega_r";
+
+/// One estimated set of the real-flight regression.
+struct ExtendedEstimate {
+  std::string name;  // LS or FMLS
+  RegressionModel model = RegressionModel::Standard;
+  /// Names and values of every estimated parameter, in regression order:
+  /// m (or s), Ixx Ixy Ixz Iyy Iyz Izz, then the extra terms.
+  std::vector<std::string> names;
+  Eigen::VectorXd value, std_error;
+  /// The rigid-body parameters (m = the known mass when it was given).
+  Theta theta = Theta::Zero();
+  /// The extra parameters (thrust_scale, offset_x, ... rotor_inertia), name -> value.
+  std::vector<std::pair<std::string, double>> extra;
+  Vec4 row_weight = Vec4::Ones();  // 1/N, 1/(N m): weights of the last pass
+  Vec4 residual_rms = Vec4::Zero();  // N, N m: per row, unweighted
+  double condition = 0.0;  // of the column-scaled weighted regressor
+  std::vector<std::string> unidentifiable;
+  std::vector<std::string> poorly_determined;
+};
+
+/// Identifies with the real-flight regression. The force row is built from
+/// signals filtered at `force_cutoff_hz` (positions differentiated twice),
+/// the moment rows from signals filtered at `moment_cutoff_hz` (gyro
+/// differentiated once); the window is clipped clear of both filters' edges.
+/// Returns LS (standard model) and FMLS (filtered model).
+struct ExtendedOptions {
+  ProcessingOptions processing{};  // lowpass.cutoff_hz is replaced by the two cutoffs below
+  double force_cutoff_hz = 4.0;
+  double moment_cutoff_hz = 4.0;
+  TimeWindow window{};
+  double lambda = 30.0;
+  signal::GdVariant gd_variant = signal::GdVariant::Consistent;
+  ModelTerms terms{};
+  Params reference = Params::qball2_nominal();  // prior in unidentifiable directions
+  LeastSquaresOptions ls{};
+  /// Choose both cutoffs by prediction error on held-out time blocks
+  /// (select_cutoffs); force_cutoff_hz and moment_cutoff_hz are then the
+  /// starting point only.
+  bool auto_cutoffs = false;
+  int cv_blocks = 5;  // contiguous time blocks, each held out once
+  /// s, integration segment of the held-out score (at most a quarter of a
+  /// block): long against the noise of the rates at its two ends, which
+  /// otherwise favours shrunk parameters (1 s picks 2 Hz, 0.3 s 4 Hz and
+  /// 0.1 s 8 Hz on the test's noisy Table 2 log, where 1.5-3 Hz is best).
+  double cv_segment = 0.5;
+  void validate() const;
+};
+
+/// The held-out choice of the two cutoffs: for each candidate, LS is fitted on
+/// all time blocks but one and scored on the held-out block by the weighted
+/// residual of its rows, those rows processed at the widest candidate cutoff
+/// (so the score does not favour the candidate's own smoothing) and integrated
+/// over short segments (so the rates enter undifferentiated and their noise
+/// does not favour parameters shrunk toward zero). The choice is the lowest
+/// cutoff whose score is within one standard error (paired over blocks) of the
+/// best. The moment rows' cutoff is chosen first, then the force row's.
+struct CutoffSelection {
+  double force_cutoff_hz = 0.0, moment_cutoff_hz = 0.0;
+  std::vector<std::pair<double, double>> force_scores, moment_scores;  // (cutoff Hz, held-out weighted SSE)
+};
+/// Candidate cutoffs for a log sampled at fs: 1-30 Hz, below fs/5.
+std::vector<double> candidate_cutoffs(double fs);
+CutoffSelection select_cutoffs(const FlightLog& log, const ExtendedOptions& opt);
+
+struct ExtendedResult {
+  std::array<ExtendedEstimate, 2> estimates;  // LS, FMLS
+  TimeWindow window;
+  Eigen::Index window_samples = 0;
+  ProcessingSummary force_processing, moment_processing;
+  std::optional<CutoffSelection> cutoff_selection;  // with ExtendedOptions::auto_cutoffs
+  std::vector<std::string> warnings;
+};
+
+ExtendedResult identify_extended(const FlightLog& log, const ExtendedOptions& opt);
+
+/// {"sets": {"LS": {"parameters": {name: {value, std_error}}, row_weight, residual_rms, ...}}, "window", ...}
+nlohmann::json to_json(const ExtendedResult& x);
+
+}  // namespace quadid

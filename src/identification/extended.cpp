@@ -1,0 +1,486 @@
+// The real-flight regression (include/quadid/extended.hpp): the paper's rows
+// with two pre-filter cutoffs (force and moment rows), optional extra terms,
+// row weighting, and least squares by streaming QR.
+#include "quadid/extended.hpp"
+
+#include "quadid/qr_least_squares.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <stdexcept>
+
+namespace quadid {
+namespace {
+
+// Columns of the raw signal matrix. "a" signals enter differentiated (eq. 33
+// in the standard model, g_D in the filtered one), "b" signals as they are
+// (f_D in the filtered model): every column of the regressor is d/dt a + b.
+enum : int {
+  // a signals
+  A_W = 0, A_P, A_Q, A_R, A_OMEGA_R, kNumA,
+};
+enum : int {
+  // b signals (index into the b block)
+  B_C = 0, B_PQ, B_PR, B_QR, B_PP, B_QQ, B_RR,  // Phi_b signals (eq. 13)
+  B_FZ, B_TX, B_TY, B_TZ,                       // outputs
+  B_ONE, B_U, B_V, B_W, B_P, B_Q, B_R, B_QOM, B_POM,
+  kNumB,
+};
+
+struct Term {
+  const char* name;
+  // Column of G for this parameter, given d/dt a (da) and b at one sample.
+  Vec4 (*column)(const double* da, const double* b);
+};
+
+Vec4 v4(double a, double b, double c, double d) { return Vec4(a, b, c, d); }
+
+// Extra columns. Signs follow the rows of the header: terms moved to the
+// left-hand side of "= s tau".
+const Term kOffsetTerms[] = {
+    {"offset_x", [](const double*, const double*) { return v4(0, -1, 0, 0); }},
+    {"offset_y", [](const double*, const double*) { return v4(0, 0, -1, 0); }},
+    {"offset_z", [](const double*, const double*) { return v4(0, 0, 0, -1); }},
+};
+// -K (e_z x v_b) = -K (-v, u, 0): moved left, +K_x (-v) ... as K_x * (-v) on row x.
+const Term kFlapTerms[] = {
+    {"flapping_x", [](const double*, const double* b) { return v4(0, -b[B_V], 0, 0); }},
+    {"flapping_y", [](const double*, const double* b) { return v4(0, 0, b[B_U], 0); }},
+};
+const Term kDampTerms[] = {
+    {"damping_x", [](const double*, const double* b) { return v4(0, b[B_P], 0, 0); }},
+    {"damping_y", [](const double*, const double* b) { return v4(0, 0, b[B_Q], 0); }},
+    {"damping_z", [](const double*, const double* b) { return v4(0, 0, 0, b[B_R]); }},
+};
+// J_r (Omega_r_dot e_z + w x e_z Omega_r), w x e_z = (q, -p, 0).
+const Term kRotorTerms[] = {
+    {"rotor_inertia",
+     [](const double* da, const double* b) { return v4(0, b[B_QOM], -b[B_POM], da[A_OMEGA_R]); }},
+};
+const Term kDragTerms[] = {
+    {"drag_z", [](const double*, const double* b) { return v4(b[B_W], 0, 0, 0); }},
+};
+
+std::vector<Term> active_terms(const ModelTerms& t) {
+  std::vector<Term> v;
+  auto add = [&](const auto& arr) {
+    for (const Term& t : arr) v.push_back(t);
+  };
+  if (t.torque_offsets) add(kOffsetTerms);
+  if (t.flapping) add(kFlapTerms);
+  if (t.rate_damping) add(kDampTerms);
+  if (t.rotor_inertia) add(kRotorTerms);
+  if (t.force_drag) add(kDragTerms);
+  return v;
+}
+
+// The regressor of one sample: G (4 x P) and Y (4) with G x = Y.
+struct Assembler {
+  const ModelTerms& terms;
+  const std::vector<Term>& extra;
+  Eigen::Index P;
+  void operator()(const double* da, const double* b, Eigen::Matrix<double, 4, Eigen::Dynamic>& G, Vec4& Y) const {
+    Eigen::Matrix<double, 7, 1> bb;
+    for (int i = 0; i < 7; ++i) bb(i) = b[i];
+    const Regressor4x7 Gamma = assemble_regressor(Vec4(da[A_W], da[A_P], da[A_Q], da[A_R]), bb);
+    const Vec4 F(b[B_FZ], b[B_TX], b[B_TY], b[B_TZ]);
+    if (terms.known_mass) {
+      // m0 Gamma_m + Gamma_I I + E x_e - s F = 0
+      G.col(0) = -F;
+      G.middleCols<6>(1) = Gamma.rightCols<6>();
+      Y = -*terms.known_mass * Gamma.col(0);
+    } else {
+      G.leftCols<7>() = Gamma;
+      Y = F;
+    }
+    for (size_t j = 0; j < extra.size(); ++j) G.col(7 + static_cast<Eigen::Index>(j)) = extra[j].column(da, b);
+  }
+};
+
+double rms(const Eigen::Ref<const Eigen::VectorXd>& x) {
+  return x.size() ? std::sqrt(x.squaredNorm() / static_cast<double>(x.size())) : 0.0;
+}
+
+}  // namespace
+
+ModelTerms ModelTerms::real_flight(bool have_rotor_speeds) {
+  ModelTerms t;
+  t.torque_offsets = true;
+  t.flapping = true;
+  t.rotor_inertia = have_rotor_speeds;
+  t.weight_rows = true;
+  return t;
+}
+
+void ModelTerms::validate() const {
+  if (known_mass && !(*known_mass > 0.0 && std::isfinite(*known_mass)))
+    throw std::invalid_argument(fmt::format("--known-mass {}: must be a positive mass in kg", *known_mass));
+}
+
+void ExtendedOptions::validate() const {
+  processing.validate();
+  terms.validate();
+  for (auto [name, f] : {std::pair{"--cutoff-force", force_cutoff_hz}, std::pair{"--cutoff-moment", moment_cutoff_hz}})
+    if (!(f > 0.0) || !std::isfinite(f)) throw std::invalid_argument(fmt::format("{} {}: must be a positive frequency in Hz", name, f));
+  if (!(lambda > 0.0) || !std::isfinite(lambda))
+    throw std::invalid_argument(fmt::format("--lambda {}: must be a positive bandwidth in rad/s", lambda));
+  ls.validate();
+  reference.validate("reference parameter set");
+  if (!(cv_segment > 0.0) || !std::isfinite(cv_segment))
+    throw std::invalid_argument(fmt::format("--cv-segment {}: must be a positive duration in s", cv_segment));
+  if (cv_blocks < 2 || cv_blocks > 100)
+    throw std::invalid_argument(fmt::format("--cv-blocks {}: must be in 2..100", cv_blocks));
+}
+
+namespace {
+
+using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+
+// The raw a and b signals of one processing (force row at one cutoff, moment
+// rows at another).
+struct RawSignals {
+  std::shared_ptr<const RegressionSignals> sf, sm;
+  ProcessingSummary pf, pm;
+  Eigen::MatrixXd a, b;
+  double T = 0.0;
+};
+
+RawSignals raw_signals(const FlightLog& log, const ExtendedOptions& opt, double f_force, double f_moment) {
+  const ModelTerms& terms = opt.terms;
+  RawSignals r;
+  ProcessingOptions pf = opt.processing, pm = opt.processing;
+  pf.lowpass.cutoff_hz = f_force;
+  pm.lowpass.cutoff_hz = f_moment;
+  pm.keep_body_velocity = terms.flapping;
+  r.sf = process_log(log, pf, &r.pf);
+  r.sm = f_moment == f_force && !terms.flapping ? r.sf : process_log(log, pm, &r.pm);
+  if (r.sm == r.sf) r.pm = r.pf;
+  const Eigen::Index n = r.sf->size();
+  r.T = r.sf->T;
+  Eigen::VectorXd omega_r = Eigen::VectorXd::Zero(n);
+  if (terms.rotor_inertia) {
+    if (!log.has(kRotorMomentumColumn))
+      throw InputError(fmt::format(
+          "the rotor-inertia term needs the rotor speeds (log column '{}', made from the rotor columns by --vehicle); "
+          "turn it off with --no-rotor-inertia",
+          kRotorMomentumColumn));
+    omega_r = signal::zero_phase_lowpass(log.column(kRotorMomentumColumn), 1.0 / r.T, pm.lowpass);
+  }
+  Eigen::MatrixXd& a = r.a;
+  Eigen::MatrixXd& b = r.b;
+  a.resize(n, kNumA);
+  b.resize(n, kNumB);
+  const auto& XF = r.sf->x;
+  const auto& XM = r.sm->x;
+  a.col(A_W) = XF.col(0);
+  a.middleCols<3>(A_P) = XM.middleCols<3>(1);
+  a.col(A_OMEGA_R) = omega_r;
+  b.col(B_C) = XF.col(4);
+  b.middleCols<6>(B_PQ) = XM.middleCols<6>(5);
+  b.col(B_FZ) = XF.col(11);
+  b.middleCols<3>(B_TX) = XM.middleCols<3>(12);
+  b.col(B_ONE).setOnes();
+  if (terms.flapping) b.middleCols<2>(B_U) = r.sm->uv;
+  else b.middleCols<2>(B_U).setZero();
+  b.col(B_W) = XF.col(0);
+  b.middleCols<3>(B_P) = XM.middleCols<3>(1);
+  b.col(B_QOM) = XM.col(2).cwiseProduct(omega_r);
+  b.col(B_POM) = XM.col(1).cwiseProduct(omega_r);
+  return r;
+}
+
+// The window's sample range clear of both processings' edges (and f_D's start).
+std::pair<Eigen::Index, Eigen::Index> window_range(const RawSignals& r, RegressionModel model, const ExtendedOptions& opt) {
+  const Regression rf(r.sf, model, opt.window, opt.lambda, opt.gd_variant);
+  const Regression rm(r.sm, model, opt.window, opt.lambda, opt.gd_variant);
+  const Eigen::Index k0 = std::max(rf.begin(), rm.begin()), k1 = std::min(rf.end(), rm.end());
+  if (k1 - k0 < 8)
+    throw InputError(fmt::format("window {}: fewer than 8 samples clear of the pre-filters' edges", opt.window.to_string()));
+  return {k0, k1};
+}
+
+// d/dt a and b through the model's discretization: eq. (33) for the standard
+// model; g_D and f_D (eqs. 35-36) for the filtered one. Row-major, so that one
+// sample's signals are contiguous.
+struct Discrete {
+  RowMajor DA, BV;
+};
+Discrete discretize(const RawSignals& r, RegressionModel model, const ExtendedOptions& opt) {
+  Discrete d;
+  if (model == RegressionModel::Standard) {
+    d.DA = signal::central_difference(r.a, r.T);
+    d.BV = r.b;
+  } else {
+    d.DA = signal::filter_gD(r.a, opt.lambda, r.T, opt.gd_variant);
+    d.BV = signal::filter_fD(r.b, opt.lambda, r.T);
+  }
+  return d;
+}
+
+struct Fit {
+  QRSolution sol;
+  Vec4 w = Vec4::Ones();
+  Vec4 res_rms = Vec4::Zero();
+};
+
+// Weighted least squares over samples [k0, k1); with weight_rows, three
+// passes, each weighting the rows by the inverse of the last pass's residual RMS.
+Fit fit(const Discrete& d, Eigen::Index k0, Eigen::Index k1, const Assembler& assemble, const Eigen::VectorXd& prior,
+        const ExtendedOptions& opt) {
+  const Eigen::Index P = assemble.P;
+  Eigen::Matrix<double, 4, Eigen::Dynamic> G(4, P);
+  Vec4 Y;
+  Fit f;
+  Vec4 out_rms = Vec4::Zero();
+  for (int r = 0; r < 4; ++r) out_rms(r) = rms(d.BV.col(B_FZ + r).segment(k0, k1 - k0));
+  // Pass 0 weights: the inverse RMS of each row's output (N, N m), so that the
+  // rows count alike whatever the vehicle's size.
+  if (opt.terms.weight_rows)
+    for (int r = 0; r < 4; ++r) f.w(r) = out_rms(r) > 0.0 ? 1.0 / out_rms(r) : 1.0;
+  const int passes = opt.terms.weight_rows ? 3 : 1;
+  for (int pass = 0; pass < passes; ++pass) {
+    StreamingQR qr(P);
+    for (Eigen::Index k = k0; k < k1; ++k) {
+      assemble(d.DA.row(k).data(), d.BV.row(k).data(), G, Y);
+      for (int r = 0; r < 4; ++r) qr.add_row(f.w(r) * G.row(r).transpose(), f.w(r) * Y(r));
+    }
+    f.sol = solve_qr(qr.factor(), qr.rows(), prior, opt.ls.rank_tolerance);
+    Vec4 ss = Vec4::Zero();
+    for (Eigen::Index k = k0; k < k1; ++k) {
+      assemble(d.DA.row(k).data(), d.BV.row(k).data(), G, Y);
+      ss += (G * f.sol.x - Y).cwiseAbs2();
+    }
+    f.res_rms = (ss / static_cast<double>(k1 - k0)).cwiseSqrt();
+    if (pass + 1 < passes)
+      for (int r = 0; r < 4; ++r) f.w(r) = 1.0 / std::max(f.res_rms(r), 1e-9 * out_rms(r) + 1e-300);
+  }
+  return f;
+}
+
+// Per time block: the QR factor of the weighted rows of `rows` (bit r = row r).
+std::vector<StreamingQR::Factor> block_factors(const Discrete& d, Eigen::Index k0, Eigen::Index k1, int blocks,
+                                               const Assembler& assemble, const Vec4& w, unsigned rows) {
+  std::vector<StreamingQR::Factor> out;
+  Eigen::Matrix<double, 4, Eigen::Dynamic> G(4, assemble.P);
+  Vec4 Y;
+  for (int j = 0; j < blocks; ++j) {
+    const Eigen::Index b0 = k0 + (k1 - k0) * j / blocks, b1 = k0 + (k1 - k0) * (j + 1) / blocks;
+    StreamingQR qr(assemble.P);
+    for (Eigen::Index k = b0; k < b1; ++k) {
+      assemble(d.DA.row(k).data(), d.BV.row(k).data(), G, Y);
+      for (int r = 0; r < 4; ++r)
+        if (rows & (1u << r)) qr.add_row(w(r) * G.row(r).transpose(), w(r) * Y(r));
+    }
+    out.push_back(qr.factor());
+  }
+  return out;
+}
+
+// Per time block: the QR factor of the weighted rows of `rows`, integrated
+// over consecutive segments of `seg` samples: each row of the regression
+// averaged over a segment, d/dt a by its end points and b by the trapezoid
+// rule (every column is linear in d/dt a and b, so the average is exact). The
+// rates and velocities then enter undifferentiated: their noise does not
+// become noise in the regressor, which would make held-out scores favour
+// parameters shrunk toward zero.
+std::vector<StreamingQR::Factor> block_factors_integral(const RawSignals& r, Eigen::Index k0, Eigen::Index k1,
+                                                        int blocks, Eigen::Index seg, const Assembler& assemble,
+                                                        const Vec4& w, unsigned rows) {
+  std::vector<StreamingQR::Factor> out;
+  Eigen::Matrix<double, 4, Eigen::Dynamic> G(4, assemble.P);
+  Vec4 Y;
+  Eigen::VectorXd da(kNumA), bavg(kNumB);
+  for (int j = 0; j < blocks; ++j) {
+    const Eigen::Index b0 = k0 + (k1 - k0) * j / blocks, b1 = k0 + (k1 - k0) * (j + 1) / blocks;
+    StreamingQR qr(assemble.P);
+    for (Eigen::Index s = b0; s + seg < b1; s += seg) {
+      const Eigen::Index e = s + seg;
+      const double len = static_cast<double>(seg) * r.T;
+      da = (r.a.row(e) - r.a.row(s)).transpose() / len;
+      bavg = (r.b.middleRows(s, seg + 1).colwise().sum() - 0.5 * (r.b.row(s) + r.b.row(e))).transpose() *
+             (r.T / len);
+      assemble(da.data(), bavg.data(), G, Y);
+      for (int q = 0; q < 4; ++q)
+        if (rows & (1u << q)) qr.add_row(w(q) * G.row(q).transpose(), w(q) * Y(q));
+    }
+    out.push_back(qr.factor());
+  }
+  return out;
+}
+
+// Sum of squares of R x - qty over a factor: the weighted residual of its rows.
+double factor_sse(const StreamingQR::Factor& f, const Eigen::VectorXd& x) { return (f.R * x - f.qty).squaredNorm() + f.rss; }
+
+}  // namespace
+
+std::vector<double> candidate_cutoffs(double fs) {
+  std::vector<double> c;
+  for (double f : {1.0, 1.5, 2.0, 3.0, 4.0, 6.0, 8.0, 10.0, 12.0, 15.0, 20.0, 25.0, 30.0})
+    if (f < 0.2 * fs) c.push_back(f);
+  return c;
+}
+
+ExtendedResult identify_extended(const FlightLog& log, const ExtendedOptions& opt) {
+  opt.validate();
+  ExtendedResult res;
+  const ModelTerms& terms = opt.terms;
+  const std::vector<Term> extra = active_terms(terms);
+  const Eigen::Index P = 7 + static_cast<Eigen::Index>(extra.size());
+  std::vector<std::string> names;
+  names.emplace_back(terms.known_mass ? "thrust_scale" : "m");
+  for (int j = 1; j < 7; ++j) names.emplace_back(kThetaNames[static_cast<size_t>(j)]);
+  for (const auto& t : extra) names.emplace_back(t.name);
+  Eigen::VectorXd prior = Eigen::VectorXd::Zero(P);
+  prior.head<7>() = opt.reference.theta();
+  if (terms.known_mass) prior(0) = 1.0;
+  const Assembler assemble{terms, extra, P};
+
+  double f_force = opt.force_cutoff_hz, f_moment = opt.moment_cutoff_hz;
+  if (opt.auto_cutoffs) {
+    res.cutoff_selection = select_cutoffs(log, opt);
+    f_force = res.cutoff_selection->force_cutoff_hz;
+    f_moment = res.cutoff_selection->moment_cutoff_hz;
+  }
+  const RawSignals raw = raw_signals(log, opt, f_force, f_moment);
+  res.force_processing = raw.pf;
+  res.moment_processing = raw.pm;
+  const double fs = 1.0 / raw.T;
+
+  const RegressionModel models[2] = {RegressionModel::Standard, RegressionModel::Filtered};
+  for (int mi = 0; mi < 2; ++mi) {
+    const RegressionModel model = models[mi];
+    const auto [k0, k1] = window_range(raw, model, opt);
+    if (mi == 0) {
+      res.window = {static_cast<double>(k0) * raw.T, static_cast<double>(k1 - 1) * raw.T};
+      res.window_samples = k1 - k0;
+    }
+    const Fit f = fit(discretize(raw, model, opt), k0, k1, assemble, prior, opt);
+    ExtendedEstimate e;
+    e.name = mi == 0 ? "LS" : "FMLS";
+    e.model = model;
+    e.names = names;
+    e.value = f.sol.x;
+    // Residuals of filtered data are correlated over ~fs / (2 f) samples: the
+    // standard errors grow by the square root of that length (as for the
+    // paper's model in identify.cpp).
+    double fc = std::min(res.force_processing.filter_f3db, res.moment_processing.filter_f3db);
+    if (model == RegressionModel::Filtered) fc = std::min(fc, opt.lambda / (2.0 * std::numbers::pi));
+    const double corr = std::max(1.0, fs / (2.0 * fc));
+    e.std_error = (f.sol.covariance.diagonal() * corr).cwiseSqrt();
+    e.theta = f.sol.x.head<7>();
+    if (terms.known_mass) e.theta(0) = *terms.known_mass;
+    for (Eigen::Index j = 7; j < P; ++j) e.extra.emplace_back(names[static_cast<size_t>(j)], f.sol.x(j));
+    if (terms.known_mass) e.extra.insert(e.extra.begin(), {"thrust_scale", f.sol.x(0)});
+    e.row_weight = f.w;
+    e.residual_rms = f.res_rms;
+    e.condition = f.sol.condition;
+    for (auto j : f.sol.unidentifiable) e.unidentifiable.push_back(names[static_cast<size_t>(j)]);
+    // Poorly determined: the rigid-body parameters against their scale (the
+    // mass, or the mean principal moment), the thrust scale against 1.
+    const double iscale = (std::abs(e.theta(1)) + std::abs(e.theta(4)) + std::abs(e.theta(6))) / 3.0;
+    for (Eigen::Index j = 0; j < 7; ++j) {
+      const double scale = j == 0 ? std::abs(f.sol.x(0)) : iscale;
+      if (!(e.std_error(j) <= opt.ls.poor_fraction * scale)) e.poorly_determined.push_back(names[static_cast<size_t>(j)]);
+    }
+    res.estimates[static_cast<size_t>(mi)] = std::move(e);
+  }
+  return res;
+}
+
+CutoffSelection select_cutoffs(const FlightLog& log, const ExtendedOptions& opt) {
+  opt.validate();
+  CutoffSelection sel;
+  const ModelTerms& terms = opt.terms;
+  const std::vector<Term> extra = active_terms(terms);
+  const Eigen::Index P = 7 + static_cast<Eigen::Index>(extra.size());
+  Eigen::VectorXd prior = Eigen::VectorXd::Zero(P);
+  prior.head<7>() = opt.reference.theta();
+  if (terms.known_mass) prior(0) = 1.0;
+  const Assembler assemble{terms, extra, P};
+  const int K = opt.cv_blocks;
+
+  // The sample rate, from a first processing at the given cutoffs.
+  const RawSignals first = raw_signals(log, opt, opt.force_cutoff_hz, opt.moment_cutoff_hz);
+  const double fs = 1.0 / first.T;
+  std::vector<double> cand = candidate_cutoffs(fs);
+  if (cand.empty()) throw InputError(fmt::format("a log sampled at {:g} Hz is too slow to choose pre-filter cutoffs", fs));
+  // Held-out data are judged at the widest candidate cutoff: the parameters
+  // that best predict the wrench over the data's full band win, whatever
+  // cutoff produced them. The window is the one clear of the narrowest
+  // filter's edges, so that every candidate sees the same samples.
+  const double f_eval = cand.back();
+  const RawSignals narrow = raw_signals(log, opt, cand.front(), cand.front());
+  const auto [k0, k1] = window_range(narrow, RegressionModel::Standard, opt);
+  if (k1 - k0 < 8 * K) throw InputError("the log is too short to choose the pre-filter cutoffs on held-out data");
+  const RawSignals eval_raw = raw_signals(log, opt, f_eval, f_eval);
+  const Discrete eval = discretize(eval_raw, RegressionModel::Standard, opt);
+  const Eigen::Index seg = std::max<Eigen::Index>(
+      4, std::min<Eigen::Index>(std::llround(opt.cv_segment / first.T), (k1 - k0) / (4 * K)));
+  // Weights: the final weights of a fit at the given cutoffs, so that every
+  // candidate is scored on the same footing.
+  const Discrete d0 = discretize(first, RegressionModel::Standard, opt);
+  Vec4 w = fit(d0, k0, k1, assemble, prior, opt).w;
+  if (!opt.terms.weight_rows) {
+    for (int r = 0; r < 4; ++r) {
+      const double s = rms(eval.BV.col(B_FZ + r).segment(k0, k1 - k0));
+      w(r) = s > 0.0 ? 1.0 / s : 1.0;
+    }
+  }
+  const auto eval_force = block_factors_integral(eval_raw, k0, k1, K, seg, assemble, w, 0x1u);
+  const auto eval_moment = block_factors_integral(eval_raw, k0, k1, K, seg, assemble, w, 0xEu);
+
+  // Held-out scores of one candidate pair, per block: fit on K-1 blocks, the
+  // held-out block's weighted SSE of the force row and of the moment rows.
+  using Scores = std::pair<Eigen::VectorXd, Eigen::VectorXd>;
+  auto score = [&](double ff, double fm) {
+    const RawSignals r = raw_signals(log, opt, ff, fm);
+    const Discrete d = discretize(r, RegressionModel::Standard, opt);
+    const auto train = block_factors(d, k0, k1, K, assemble, w, 0xFu);
+    Scores s{Eigen::VectorXd(K), Eigen::VectorXd(K)};
+    for (int j = 0; j < K; ++j) {
+      StreamingQR qr(P);
+      long rows = 0;
+      for (int i = 0; i < K; ++i) {
+        if (i == j) continue;
+        const auto& f = train[static_cast<size_t>(i)];
+        for (Eigen::Index q = 0; q < P; ++q) qr.add_row(f.R.row(q).transpose(), f.qty(q));
+        rows += (k1 - k0) / K * 4;
+      }
+      const QRSolution sol = solve_qr(qr.factor(), rows, prior, opt.ls.rank_tolerance);
+      s.first(j) = factor_sse(eval_force[static_cast<size_t>(j)], sol.x);
+      s.second(j) = factor_sse(eval_moment[static_cast<size_t>(j)], sol.x);
+    }
+    return s;
+  };
+  // The choice among candidates: the lowest cutoff (the most noise removed)
+  // whose held-out score is not worse than the best one's by more than one
+  // standard error of the paired per-block differences (the "one standard
+  // error" rule of cross-validation): where the scores are flat the data
+  // cannot tell the candidates apart, and the narrower filter is the safer one.
+  auto choose = [&](const std::vector<Eigen::VectorXd>& per_block, std::vector<std::pair<double, double>>& table) {
+    size_t best = 0;
+    for (size_t i = 0; i < per_block.size(); ++i) {
+      table.push_back({cand[i], per_block[i].sum()});
+      if (per_block[i].sum() < per_block[best].sum()) best = i;
+    }
+    for (size_t i = 0; i < per_block.size(); ++i) {
+      const Eigen::VectorXd d = per_block[i] - per_block[best];
+      const double mean = d.mean();
+      const double se = std::sqrt((d.array() - mean).square().sum() / (K - 1) / K);
+      if (mean <= se) return cand[i];
+    }
+    return cand[best];
+  };
+  // Moment rows first (the force row's cutoff barely changes them), then the force row.
+  std::vector<Eigen::VectorXd> mom, force;
+  for (double fm : cand) mom.push_back(score(opt.force_cutoff_hz, fm).second);
+  sel.moment_cutoff_hz = choose(mom, sel.moment_scores);
+  for (double ff : cand) force.push_back(score(ff, sel.moment_cutoff_hz).first);
+  sel.force_cutoff_hz = choose(force, sel.force_scores);
+  return sel;
+}
+
+}  // namespace quadid

@@ -1,0 +1,260 @@
+// The real-flight regression (extended.hpp). Truth comes from perfect-tracking
+// logs (tests/perfect_log.hpp) whose logged wrench is altered by known terms:
+// the rotor model's thrust scale, torque offsets, the blade-flapping moment,
+// rate damping and the rotor inertia, computed here from the exact reference.
+#include "quadid/extended.hpp"
+#include "quadid/qr_least_squares.hpp"
+
+#include "perfect_log.hpp"
+
+#include <gtest/gtest.h>
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <numbers>
+#include <random>
+
+using namespace quadid;
+using quadid::testing::perfect_log;
+
+namespace {
+
+const FlightLog& perfect_table2() {
+  static const FlightLog log = perfect_log(Params::qball2_virtual(), 500.0, 50.0);
+  return log;
+}
+
+double extra(const ExtendedEstimate& e, const std::string& name) {
+  for (const auto& [n, v] : e.extra)
+    if (n == name) return v;
+  ADD_FAILURE() << "no extra parameter " << name;
+  return NAN;
+}
+
+// Omega_r(t) (rad/s) and its derivative: a rotor-speed sum that varies like a
+// real one (a mean of a few hundred rad/s, swings at the flight's frequencies).
+double omega_r(double t) { return 300.0 + 80.0 * std::sin(2.0 * std::numbers::pi * 0.4 * t) + 40.0 * std::sin(5.0 * t + 1.0); }
+double omega_r_dot(double t) {
+  return 80.0 * 2.0 * std::numbers::pi * 0.4 * std::cos(2.0 * std::numbers::pi * 0.4 * t) + 200.0 * std::cos(5.0 * t + 1.0);
+}
+
+struct TrueTerms {
+  double s = 1.0;             // logged wrench = true / s
+  Vec3 offset = Vec3::Zero(); // N m
+  Eigen::Vector2d K = Eigen::Vector2d::Zero();  // flapping, N s
+  Vec3 D = Vec3::Zero();      // damping, N m s
+  double Jr = 0.0;            // kg m^2
+  double kw = 0.0;            // N s/m
+};
+
+// The perfect log of `P` on Table 2 whose logged wrench F_log satisfies the
+// rows of extended.hpp with the given terms: s F_log = F_rigid + terms.
+// mocap_hz = 0: positions not held (a hold delays the mocap-derived velocity
+// by half its period, which the flapping term then sees: see TimeOffsets).
+FlightLog altered_log(const Params& P, const TrueTerms& tt, double mocap_hz = 0.0) {
+  FlightLog log = perfect_log(P, 500.0, 50.0, mocap_hz);
+  const auto traj = FourierTrajectory::table2();
+  log.columns.push_back(kRotorMomentumColumn);
+  log.data.conservativeResize(Eigen::NoChange, log.data.cols() + 1);
+  for (Eigen::Index k = 0; k < log.rows(); ++k) {
+    const double t = log.data(k, 0);
+    const Reference ref = reference_at(traj, t);
+    const Vec3 w = ref.omega, v = ref.v;
+    const double Om = omega_r(t), Omd = omega_r_dot(t);
+    // Rigid-body wrench (the perfect log's) plus the terms, from the rows:
+    // m(..) + k_w w = s Fz ; I w_dot + w x I w + J_r(..) = s tau + o - K(e_z x v) - D w.
+    double Fz = log.data(k, 10) + tt.kw * v(2);
+    Vec3 tau(log.data(k, 11), log.data(k, 12), log.data(k, 13));
+    tau += tt.Jr * Vec3(w(1) * Om, -w(0) * Om, Omd);
+    tau -= tt.offset;
+    tau += Vec3(tt.K(0) * -v(1), tt.K(1) * v(0), 0.0);  // + K (e_z x v)
+    tau += tt.D.cwiseProduct(w);
+    log.data(k, 10) = Fz / tt.s;
+    log.data.row(k).segment<3>(11) = (tau / tt.s).transpose();
+    log.data(k, 14) = Om;
+  }
+  return log;
+}
+
+}  // namespace
+
+// A physical identity for the QR solver: the solution of a random
+// overdetermined system equals the one of a dense QR, and a random-access
+// block order gives the same R up to row signs.
+TEST(StreamingQR, MatchesDenseLeastSquares) {
+  std::mt19937 rng(3);
+  std::normal_distribution<double> N;
+  const Eigen::Index P = 9, rows = 3001;  // not a multiple of the block
+  Eigen::MatrixXd A(rows, P);
+  Eigen::VectorXd y(rows);
+  for (Eigen::Index i = 0; i < A.size(); ++i) A(i) = N(rng) * std::pow(10.0, static_cast<double>(i % P) - 4.0);
+  for (Eigen::Index i = 0; i < rows; ++i) y(i) = N(rng);
+  StreamingQR qr(P, 100);
+  qr.add_rows(A, y);
+  const QRSolution s = solve_qr(qr.factor(), qr.rows(), Eigen::VectorXd::Zero(P), 1e-12);
+  const Eigen::VectorXd ref = A.colPivHouseholderQr().solve(y);
+  // Columns span 8 decades; relative agreement to 1e-10 is what double
+  // precision leaves after column scaling (condition ~ 10 here).
+  EXPECT_LT(((s.x - ref).cwiseQuotient(ref)).cwiseAbs().maxCoeff(), 1e-10);
+  EXPECT_TRUE(s.unidentifiable.empty());
+  // Covariance: sigma^2 (A^T A)^-1 with sigma^2 = rss / (rows - P).
+  const double rss = (A * ref - y).squaredNorm();
+  const Eigen::MatrixXd cov = rss / static_cast<double>(rows - P) * (A.transpose() * A).inverse();
+  EXPECT_LT(((s.covariance.diagonal() - cov.diagonal()).cwiseQuotient(cov.diagonal())).cwiseAbs().maxCoeff(), 1e-8);
+}
+
+TEST(StreamingQR, RankDeficientKeepsPrior) {
+  // Column 2 = column 0 + column 1: the direction (1, 1, -1) is not determined.
+  Eigen::MatrixXd A(50, 3);
+  std::mt19937 rng(5);
+  std::normal_distribution<double> N;
+  for (Eigen::Index i = 0; i < 50; ++i) {
+    A(i, 0) = N(rng);
+    A(i, 1) = N(rng);
+    A(i, 2) = A(i, 0) + A(i, 1);
+  }
+  const Eigen::Vector3d truth(1.0, 2.0, 3.0);
+  const Eigen::VectorXd y = A * truth;
+  StreamingQR qr(3);
+  qr.add_rows(A, y);
+  const QRSolution s = solve_qr(qr.factor(), qr.rows(), Eigen::Vector3d(0.0, 0.0, 0.0), 1e-6);
+  EXPECT_EQ(s.unidentifiable.size(), 3u);
+  EXPECT_LT((A * s.x - y).norm(), 1e-9 * y.norm());  // fits the data
+  // Along the null direction of the column-scaled problem, A D y = 0 with
+  // D = diag(1/|a_j|), the solution keeps the prior's component (0): with
+  // y = D^-1 n, n = (1, 1, -1), that is n^T D^-2 x = 0.
+  const Eigen::Vector3d n(1, 1, -1);
+  const Eigen::Vector3d c2 = A.colwise().squaredNorm().transpose();
+  EXPECT_NEAR(n.cwiseProduct(c2).dot(s.x) / (n.cwiseProduct(c2).norm() * s.x.norm()), 0.0, 1e-9);
+}
+
+// With no extra term and one cutoff, the real-flight regression is the
+// paper's: the same LS and FMLS as identify(), through another solver.
+TEST(Extended, PaperModelEqualsIdentify) {
+  ExtendedOptions o;
+  o.window = {10.0, 50.0};
+  const ExtendedResult x = identify_extended(perfect_table2(), o);
+  IdentificationOptions io;
+  const IdentificationResult r = identify(perfect_table2(), io);
+  for (int i : {0, 1}) {
+    const Theta a = x.estimates[static_cast<size_t>(i)].theta;
+    const Theta b = r.estimate(i == 0 ? "LS" : "FMLS").theta;
+    // Normal equations (identify) against QR (extended): they agree to what
+    // the normal equations keep of double precision at condition ~16.
+    EXPECT_LT(((a - b).cwiseQuotient(b)).cwiseAbs().maxCoeff(), 1e-7) << i << "\n" << a.transpose() << "\n" << b.transpose();
+  }
+}
+
+// "Weigh it, fly it": a rotor model 25 % off in kf, the mass known.
+TEST(Extended, KnownMassRecoversThrustScale) {
+  const Params truth = Params::qball2_virtual();
+  TrueTerms tt;
+  tt.s = 1.25;
+  const FlightLog log = altered_log(truth, tt);
+  ExtendedOptions o;
+  o.terms.known_mass = truth.m;
+  o.terms.weight_rows = true;
+  const ExtendedResult x = identify_extended(log, o);
+  for (const auto& e : x.estimates) {
+    // Noise-free data: the errors are the filters' and differences' (the
+    // paper's model reaches ~0.1 % on the principal moments, see
+    // test_identification); 0.5 % on s and 1 % on the moments leave margin.
+    EXPECT_NEAR(extra(e, "thrust_scale"), 1.25, 0.005 * 1.25) << e.name;
+    EXPECT_DOUBLE_EQ(e.theta(0), truth.m);
+    for (int j : {1, 4, 6}) EXPECT_NEAR(e.theta(j), truth.theta()(j), 0.01 * truth.theta()(j)) << e.name << " " << j;
+  }
+}
+
+// Every extra term at once, known mass and a wrong kf: each is recovered.
+TEST(Extended, RecoversEveryTerm) {
+  const Params truth = Params::qball2_virtual();
+  TrueTerms tt;
+  tt.s = 0.9;
+  tt.offset = Vec3(0.004, -0.003, 0.002);  // N m: 2 mm of CoM offset at 18 N
+  tt.K = Eigen::Vector2d(0.02, 0.03);      // N s: 0.6-0.9 mN m at 3 cm/s
+  tt.D = Vec3(0.002, 0.003, 0.004);
+  tt.Jr = 3e-5;                            // kg m^2 (QBall 2 rotor + propeller order)
+  const FlightLog log = altered_log(truth, tt);
+  ExtendedOptions o;
+  o.terms = ModelTerms::real_flight(true);
+  o.terms.rate_damping = true;
+  o.terms.known_mass = truth.m;
+  const ExtendedResult x = identify_extended(log, o);
+  for (const auto& e : x.estimates) {
+    EXPECT_NEAR(extra(e, "thrust_scale"), 0.9, 0.005 * 0.9) << e.name;
+    for (int j : {1, 4, 6}) EXPECT_NEAR(e.theta(j), truth.theta()(j), 0.01 * truth.theta()(j)) << e.name << " " << j;
+    // Extra terms: within 5 % of their size, 10 % for the yaw damping (they
+    // are 1-10 % of the rigid-body torques, and D_z r, with |r| < 0.3 rad/s on
+    // Table 2, is the smallest, so the discretization errors of eq. (33) and of
+    // f_D/g_D weigh most on it).
+    EXPECT_NEAR(extra(e, "offset_x"), 0.004, 0.05 * 0.004) << e.name;
+    EXPECT_NEAR(extra(e, "offset_y"), -0.003, 0.05 * 0.003) << e.name;
+    EXPECT_NEAR(extra(e, "offset_z"), 0.002, 0.05 * 0.002) << e.name;
+    EXPECT_NEAR(extra(e, "flapping_x"), 0.02, 0.05 * 0.02) << e.name;
+    EXPECT_NEAR(extra(e, "flapping_y"), 0.03, 0.05 * 0.03) << e.name;
+    EXPECT_NEAR(extra(e, "damping_z"), 0.004, 0.10 * 0.004) << e.name;
+    EXPECT_NEAR(extra(e, "rotor_inertia"), 3e-5, 0.05 * 3e-5) << e.name;
+  }
+}
+
+TEST(Extended, RotorInertiaNeedsRotorSpeeds) {
+  ExtendedOptions o;
+  o.terms.rotor_inertia = true;
+  try {
+    identify_extended(perfect_table2(), o);
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("Omega_r"), std::string::npos) << e.what();
+  }
+}
+
+TEST(Extended, BadOptionsNamed) {
+  ExtendedOptions o;
+  o.terms.known_mass = -1.0;
+  EXPECT_THROW(identify_extended(perfect_table2(), o), std::invalid_argument);
+  ExtendedOptions o2;
+  o2.moment_cutoff_hz = 0.0;
+  try {
+    identify_extended(perfect_table2(), o2);
+    FAIL();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("--cutoff-moment"), std::string::npos) << e.what();
+  }
+}
+
+// The held-out choice of cutoffs: on a log whose gyro carries white noise and
+// whose positions are held at 30 Hz, the chosen cutoffs lie inside the
+// candidates' range, the scores are finite, and the choice gives estimates at
+// least as close to the truth as the extremes of the range.
+TEST(Extended, HeldOutCutoffChoice) {
+  const Params truth = Params::qball2_virtual();
+  FlightLog log = perfect_log(truth, 500.0, 50.0, 30.0);
+  std::mt19937 rng(11);
+  std::normal_distribution<double> gyro(0.0, 0.01);  // rad/s: 7x the MPU-6000's white noise
+  for (Eigen::Index k = 0; k < log.rows(); ++k)
+    for (int c = 7; c < 10; ++c) log.data(k, c) += gyro(rng);
+  ExtendedOptions o;
+  o.auto_cutoffs = true;
+  const CutoffSelection sel = select_cutoffs(log, o);
+  const auto cand = candidate_cutoffs(500.0);
+  ASSERT_EQ(sel.moment_scores.size(), cand.size());
+  for (const auto& [f, s] : sel.moment_scores) EXPECT_TRUE(std::isfinite(s)) << f;
+  EXPECT_GT(sel.moment_cutoff_hz, cand.front());
+  EXPECT_LT(sel.moment_cutoff_hz, cand.back());
+  auto izz_err = [&](double fm) {
+    ExtendedOptions x;
+    x.moment_cutoff_hz = fm;
+    const auto r = identify_extended(log, x);
+    const Theta e = (r.estimates[0].theta - truth.theta()).cwiseQuotient(truth.theta());
+    return std::abs(e(1)) + std::abs(e(4)) + std::abs(e(6));
+  };
+  const double chosen = izz_err(sel.moment_cutoff_hz);
+  EXPECT_LE(chosen, izz_err(cand.back()));
+  EXPECT_LE(chosen, izz_err(cand.front()));
+  for (size_t i = 0; i < cand.size(); ++i)
+    fmt::print("  {:5g} Hz  moment score {:.6g}  force score {:.6g}  err {:.3g}%\n", cand[i], sel.moment_scores[i].second,
+               sel.force_scores[i].second, 100 * izz_err(cand[i]));
+  fmt::print("chosen cutoffs: force {:g} Hz, moment {:g} Hz; sum of |errors| of Ixx Iyy Izz {:.3g}%\n",
+             sel.force_cutoff_hz, sel.moment_cutoff_hz, 100 * chosen);
+}
