@@ -221,6 +221,8 @@ struct IdentificationOptions {
   ModelTerms terms{};
   std::optional<double> force_cutoff_hz{};   // Hz, default processing.lowpass.cutoff_hz
   std::optional<double> moment_cutoff_hz{};  // Hz, default processing.lowpass.cutoff_hz
+  /// Choose both cutoffs on held-out time blocks (extended.hpp, select_cutoffs).
+  bool auto_cutoffs = false;
   bool extended() const;
   void validate() const;
 };

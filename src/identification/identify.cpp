@@ -92,7 +92,7 @@ void IdentificationOptions::validate() const {
 
 bool IdentificationOptions::extended() const {
   const double c = processing.lowpass.cutoff_hz;
-  return terms.any() || force_cutoff_hz.value_or(c) != c || moment_cutoff_hz.value_or(c) != c;
+  return terms.any() || auto_cutoffs || force_cutoff_hz.value_or(c) != c || moment_cutoff_hz.value_or(c) != c;
 }
 
 const SetEstimate& IdentificationResult::estimate(std::string_view name) const {
@@ -159,6 +159,7 @@ IdentificationResult identify(const FlightLog& log, const IdentificationOptions&
     xo.terms = opt.terms;
     xo.reference = opt.reference.params;
     xo.ls = opt.ls;
+    xo.auto_cutoffs = opt.auto_cutoffs;
     auto xr = std::make_shared<ExtendedResult>(identify_extended(log, xo));
     for (int i : {0, 1}) {
       const ExtendedEstimate& x = xr->estimates[static_cast<size_t>(i)];

@@ -180,10 +180,23 @@ json to_json(const ExtendedResult& x) {
                     {"unidentifiable", e.unidentifiable},
                     {"poorly_determined", e.poorly_determined}};
   }
-  return {{"sets", sets},
-          {"window", {{"t0", x.window.t0}, {"t1", x.window.t1}, {"samples", x.window_samples}}},
-          {"force_prefilter", x.force_processing.filter},
-          {"moment_prefilter", x.moment_processing.filter}};
+  json out = {{"sets", sets},
+              {"window", {{"t0", x.window.t0}, {"t1", x.window.t1}, {"samples", x.window_samples}}},
+              {"force_prefilter", x.force_processing.filter},
+              {"moment_prefilter", x.moment_processing.filter}};
+  if (x.cutoff_selection) {
+    const auto& c = *x.cutoff_selection;
+    auto table = [](const std::vector<std::pair<double, double>>& v) {
+      json t = json::array();
+      for (const auto& [f, s] : v) t.push_back({{"cutoff_hz", f}, {"heldout_score", s}});
+      return t;
+    };
+    out["cutoff_selection"] = {{"force_cutoff_hz", c.force_cutoff_hz},
+                               {"moment_cutoff_hz", c.moment_cutoff_hz},
+                               {"force_scores", table(c.force_scores)},
+                               {"moment_scores", table(c.moment_scores)}};
+  }
+  return out;
 }
 
 }  // namespace quadid
