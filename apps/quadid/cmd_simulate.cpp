@@ -112,8 +112,11 @@ void run(SimulateArgs& a) {
     return;
   }
   constexpr double deg = 180.0 / M_PI;
-  const bool overridden = a.sigma_position || a.sigma_yaw || a.sigma_attitude || a.sigma_gyro || a.sigma_velocity ||
-                          a.sigma_yaw_rate;
+  const NoiseSigmas profile = NoiseSigmas::preset(a.noise);
+  const NoiseSigmas& used = o.sensors.noise;
+  const bool overridden = used.position != profile.position || used.yaw != profile.yaw ||
+                          used.attitude != profile.attitude || used.gyro != profile.gyro ||
+                          used.velocity != profile.velocity || used.yaw_rate != profile.yaw_rate;
   fmt::print("simulated {:g} s of {} ({} samples at {:g} Hz); plant {}, controller params {}, noise {}, seed {}\n",
              s.duration, traj->describe(), s.samples, o.controller.rate,
              a.vehicle.empty() || a.was_given("--plant") ? a.plant : "vehicle " + a.vehicle,
