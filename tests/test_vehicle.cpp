@@ -324,3 +324,40 @@ TEST(RotorActuators, PlantStepIsStepStagesWithItsOwnLag) {
   }
   EXPECT_EQ(x.to_vector(), y.to_vector());
 }
+
+TEST(RotorActuators, TimeScaledTrajectoryIsTheSamePathPlayedFaster) {
+  // q_s(t) = q(S t)  =>  q_s^(k)(t) = S^k q^(k)(S t), for every flat output and derivative order.
+  const FourierTrajectory base = FourierTrajectory::table2();
+  const double S = 1.5;
+  const auto fast = time_scaled(base, S);
+  for (double t : {0.0, 0.7, 3.3, 12.1}) {
+    const FlatOutput a = fast->eval(t), b = base.eval(S * t);
+    for (Eigen::Index k = 0; k < a.cols(); ++k)
+      for (Eigen::Index i = 0; i < a.rows(); ++i)
+        EXPECT_NEAR(a(i, k), std::pow(S, static_cast<double>(k)) * b(i, k), 1e-12 * (1.0 + std::abs(a(i, k))))
+            << "t " << t << " output " << i << " order " << k;
+  }
+  EXPECT_NEAR(fast->period(), base.period() / S, 1e-12);
+  EXPECT_THROW(time_scaled(CircleTrajectory::experiment(1), 2.0), std::invalid_argument);
+  EXPECT_THROW(time_scaled(base, 0.0), std::invalid_argument);
+}
+
+TEST(RotorActuators, RotorNoiseIsForMeasuredSpeedsOnly) {
+  SimulationOptions o;
+  configure_for_vehicle(o, load_vehicle("jmavsim-quad"));  // commands
+  o.rotor_noise = 0.01;
+  EXPECT_THROW(o.validate(), std::invalid_argument);
+  Vehicle v = parse_vehicle(kGood + "thrust_max = 12.0\n[sensors]\nrotor_noise = 3.0\n", "good.toml");
+  SimulationOptions s;
+  configure_for_vehicle(s, v);
+  EXPECT_EQ(s.rotor_noise, 3.0);
+  EXPECT_NO_THROW(s.validate());
+  // Round trip through the log metadata (validate re-flies a vehicle log from it).
+  s.duration = 0.1;
+  const SimulationResult r = simulate(FourierTrajectory::table2(), s);
+  const SimulationOptions back = simulation_options_from_log(r.log);
+  ASSERT_TRUE(back.rotors.has_value());
+  EXPECT_EQ(back.rotors->columns, v.rotors.columns);
+  EXPECT_EQ(back.rotor_noise, 3.0);
+  EXPECT_TRUE(r.log.has("w4"));
+}

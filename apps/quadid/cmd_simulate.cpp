@@ -26,6 +26,8 @@ struct SimulateArgs {
   std::string torque_map = "WT";
   std::string derivative = "tustin";
   std::string noise = "default";
+  std::optional<double> sigma_rotor;
+  double speedup = 1.0;
   std::optional<double> sigma_position, sigma_yaw, sigma_attitude, sigma_gyro, sigma_velocity, sigma_yaw_rate;
   std::string velocity_source = "mocap-difference";
   SimulationOptions opt;
@@ -60,7 +62,9 @@ std::unique_ptr<Trajectory> make_trajectory(const SimulateArgs& a) {
   }
   if (a.radius || a.altitude)
     throw std::invalid_argument("--radius and --altitude only apply to --trajectory circle");
-  return trajectory_from_spec(a.trajectory);
+  auto t = trajectory_from_spec(a.trajectory);
+  if (a.speedup == 1.0) return t;
+  return time_scaled(*t, a.speedup);
 }
 
 void run(SimulateArgs& a) {
@@ -73,6 +77,7 @@ void run(SimulateArgs& a) {
   NoiseSigmas& n = o.sensors.noise;
   n = NoiseSigmas::preset(a.noise);
   if (!a.vehicle.empty()) apply_vehicle(a);
+  if (a.sigma_rotor) o.rotor_noise = *a.sigma_rotor;
   if (a.sigma_position) n.position = *a.sigma_position;
   if (a.sigma_yaw) n.yaw = *a.sigma_yaw;
   if (a.sigma_attitude) n.attitude = *a.sigma_attitude;
@@ -206,6 +211,12 @@ void register_simulate(CLI::App& app) {
   sub->add_option("--g", o.g, "gravity, m/s^2 (plant and controller)")->capture_default_str();
   sub->add_option("--summary-from", o.summary_from, "start of the window for the RMS tracking errors, s")
       ->capture_default_str();
+  sub->add_option("--speedup", args->speedup,
+                  "play the trajectory this many times faster (same path; velocities x S, accelerations x S^2; "
+                  "Fourier trajectories only), e.g. for a small vehicle")
+      ->capture_default_str();
+  sub->add_option("--sigma-rotor", args->sigma_rotor,
+                  "with --vehicle: noise std on the logged rotor speeds, rad/s or rpm (overrides [sensors] rotor_noise)");
   sub->add_option("--vehicle", args->vehicle,
                   "fly a vehicle with rotor-level actuation: a vehicle file or built-in (qball2, crazyflie21, "
                   "jmavsim-quad); plant and controller model = its [nominal], gains scaled to it (docs/vehicles.md); "

@@ -163,6 +163,9 @@ struct SimulationOptions {
   /// (which must then be 0): set by configure_for_vehicle(). The log gains one column per
   /// rotor (its `columns` names) and its Fz tau_* are the rotors' wrench at each instant.
   std::optional<RotorModel> rotors;
+  /// With rotors: standard deviation of the white noise added to each logged rotor column, in
+  /// its unit (rad/s or rpm; only measured speeds, not commands). Only the log sees it.
+  double rotor_noise = 0.0;
 
   /// Throws std::invalid_argument naming the bad option.
   void validate() const;
@@ -222,6 +225,13 @@ SimulationResult simulate(const Trajectory& traj, const SimulationOptions& opt);
 /// Throws std::invalid_argument if the vehicle cannot be flown (no thrust_max, or a layout
 /// that cannot produce every wrench).
 void configure_for_vehicle(SimulationOptions& opt, const Vehicle& v);
+
+/// `traj` played `speedup` times faster, q_s(t) = q(speedup t): the same path, velocities
+/// x speedup, accelerations x speedup^2 (a small, agile vehicle can fly a faster version of a
+/// trajectory designed for the QBall 2). Fourier trajectories only (eq. 18: wf -> speedup wf,
+/// a, b -> speedup a, speedup b, c unchanged). Throws std::invalid_argument otherwise or
+/// when speedup is not > 0.
+std::unique_ptr<Trajectory> time_scaled(const Trajectory& traj, double speedup);
 
 /// The default initial state: at rest, level, at the start position and yaw of `traj`.
 State initial_state_at_rest(const Trajectory& traj);

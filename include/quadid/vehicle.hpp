@@ -101,6 +101,7 @@ struct VehicleController {
 struct VehicleSensors {
   std::optional<double> mocap_rate, imu_rate;
   std::optional<double> position, yaw, attitude, gyro;
+  std::optional<double> rotor;  // white noise on the logged rotor speeds, rad/s or rpm (rotor_noise)
 };
 
 /// A vehicle file: what a log cannot say about the vehicle.

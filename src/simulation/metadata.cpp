@@ -151,7 +151,10 @@ json simulation_json(const SimulationOptions& o) {
     const State& x = *o.initial_state;
     j["initial_state"] = {{"p", vec(x.p)}, {"v", vec(x.v)}, {"eta", vec(x.eta)}, {"omega", vec(x.omega)}};
   }
-  if (o.rotors) j["rotors"] = to_json(*o.rotors);  // rotor-level actuation (simulate --vehicle)
+  if (o.rotors) {  // rotor-level actuation (simulate --vehicle)
+    j["rotors"] = to_json(*o.rotors);
+    j["rotor_noise"] = o.rotor_noise;
+  }
   return j;
 }
 
@@ -269,6 +272,7 @@ SimulationOptions simulation_options_from_json(const json& j, const std::string&
   }
   r.num("summary_from", o.summary_from);
   if (r.has("rotors")) o.rotors = rotor_model_from_json(j.at("rotors"), source);
+  r.num("rotor_noise", o.rotor_noise);
   if (r.has("record_truth")) {
     if (!j.at("record_truth").is_boolean()) throw InputError(fmt::format("{}.record_truth: must be true or false", source));
     o.record_truth = j.at("record_truth").get<bool>();

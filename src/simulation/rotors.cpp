@@ -1,5 +1,6 @@
 // Rotor-level actuation for `simulate --vehicle`: mixer, saturation, motor lag
-// on the rotor speed, rotor model (include/quadid/simulation.hpp, RotorActuators).
+// on the rotor speed, rotor model (include/quadid/simulation.hpp, RotorActuators);
+// and the time scaling of a trajectory for small, agile vehicles.
 #include "quadid/simulation.hpp"
 
 #include <fmt/format.h>
@@ -88,6 +89,22 @@ void configure_for_vehicle(SimulationOptions& o, const Vehicle& v) {
   if (s.yaw) o.sensors.noise.yaw = *s.yaw;
   if (s.attitude) o.sensors.noise.attitude = *s.attitude;
   if (s.gyro) o.sensors.noise.gyro = *s.gyro;
+  o.rotor_noise = s.rotor.value_or(0.0);
+}
+
+std::unique_ptr<Trajectory> time_scaled(const Trajectory& traj, double speedup) {
+  if (!std::isfinite(speedup) || !(speedup > 0.0))
+    throw std::invalid_argument(fmt::format("speedup = {} must be > 0", speedup));
+  const auto* f = dynamic_cast<const FourierTrajectory*>(&traj);
+  if (!f)
+    throw std::invalid_argument(fmt::format("only Fourier trajectories can be time-scaled, not '{}'", traj.describe()));
+  std::array<FourierTrajectory::AxisCoeffs, 4> axes;
+  for (int i = 0; i < 4; ++i) {
+    axes[static_cast<size_t>(i)] = f->axis(i);
+    axes[static_cast<size_t>(i)].a *= speedup;  // eq. (18): a/(wf l) unchanged when wf -> speedup wf
+    axes[static_cast<size_t>(i)].b *= speedup;
+  }
+  return std::make_unique<FourierTrajectory>(speedup * f->wf(), axes);
 }
 
 }  // namespace quadid

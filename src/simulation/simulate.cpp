@@ -54,6 +54,11 @@ void SimulationOptions::validate() const {
       throw std::invalid_argument("actuator_tau must be 0 with rotor-level actuation (the rotors' time_constant is the lag)");
     rotors->validate();
   }
+  if (!std::isfinite(rotor_noise) || rotor_noise < 0.0)
+    throw std::invalid_argument(fmt::format("rotor_noise = {} must be >= 0", rotor_noise));
+  if (rotor_noise > 0.0 && (!rotors || rotors->input == RotorInput::kCommand))
+    throw std::invalid_argument(
+        "rotor_noise applies to logged rotor speeds (a vehicle with rotors.input = speed or rpm), not to commands");
   if (!std::isfinite(g) || g <= 0.0) throw std::invalid_argument(fmt::format("g = {} m/s^2 must be > 0", g));
   for (int i = 0; i < 3; ++i)
     if (!(safety.box_min(i) < safety.box_max(i)))
@@ -132,6 +137,7 @@ SimulationResult simulate(const Trajectory& traj, const SimulationOptions& opt) 
   Plant plant(opt.plant, opt.g, opt.actuator_tau);
   std::optional<RotorActuators> rotors;
   if (opt.rotors) rotors.emplace(*opt.rotors);
+  detail::Rng rotor_rng(opt.sensors.seed, 4);  // its own stream: the other sensors' noise is unchanged
   PidController ctrl(opt.controller);
   detail::SensorModel sensors(opt.sensors, rate);
   State x = opt.initial_state ? *opt.initial_state : initial_state_at_rest(traj);
@@ -185,7 +191,11 @@ SimulationResult simulate(const Trajectory& traj, const SimulationOptions& opt) 
     auto L = res.log.data.row(row);
     L.head(18) << t, rd.p(0), rd.p(1), rd.p(2), rd.phi, rd.theta, rd.psi, rd.gyro(0), rd.gyro(1), rd.gyro(2),
         logged.Fz, logged.tau(0), logged.tau(1), logged.tau(2), d(kX, 0), d(kY, 0), d(kZ, 0), d(kPsi, 0);
-    if (rotors) L.tail(n_rotors) = rotors->logged().transpose();
+    if (rotors) {
+      L.tail(n_rotors) = rotors->logged().transpose();
+      if (opt.rotor_noise > 0.0)
+        for (Eigen::Index i = 0; i < n_rotors; ++i) L(L.size() - n_rotors + i) += opt.rotor_noise * rotor_rng.normal();
+    }
     if (opt.record_truth) {
       const State::Vector xd = plant.derivative(x, applied);
       const Vec3 vi = rotation(x.eta) * x.v;

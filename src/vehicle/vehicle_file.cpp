@@ -207,7 +207,7 @@ VehicleController read_controller(const Reader& r, const toml::table& t) {
 
 VehicleSensors read_sensors(const Reader& r, const toml::table& t) {
   r.only(t, "sensors.",
-         {"mocap_rate", "imu_rate", "position_noise", "yaw_noise", "attitude_noise", "gyro_noise"});
+         {"mocap_rate", "imu_rate", "position_noise", "yaw_noise", "attitude_noise", "gyro_noise", "rotor_noise"});
   VehicleSensors s;
   s.mocap_rate = r.number(t, "sensors.", "mocap_rate", false, true);
   s.imu_rate = r.number(t, "sensors.", "imu_rate", false, true);
@@ -218,6 +218,7 @@ VehicleSensors read_sensors(const Reader& r, const toml::table& t) {
   s.yaw = r.number(t, "sensors.", "yaw_noise", false, true);
   s.attitude = r.number(t, "sensors.", "attitude_noise", false, true);
   s.gyro = r.number(t, "sensors.", "gyro_noise", false, true);
+  s.rotor = r.number(t, "sensors.", "rotor_noise", false, true);
   return s;
 }
 
