@@ -81,6 +81,7 @@ void run(const IdentifyArgs& a) {
 
   nlohmann::json j = to_json(res);
   j["log"] = a.log;
+  if (vehicle) j["vehicle"] = {{"name", vehicle->name}, {"source", vehicle->source}};
   // Files first (atomically), so that a failed write leaves no partial report.
   if (!a.evolution.empty()) write_file_atomic(a.evolution, format_evolution_csv(res.evolution));
   if (!a.out.empty()) write_file_atomic(a.out, j.dump(2) + "\n");
