@@ -4,12 +4,14 @@
 #include "quadid/identification.hpp"
 #include "quadid/io.hpp"
 #include "quadid/logs.hpp"
+#include "quadid/vehicle.hpp"
 
 #include <fmt/format.h>
 
 #include <cstdio>
 #include <map>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -31,6 +33,8 @@ struct IdentifyArgs {
   double evolution_interval = 0.01;
   std::string out;
   bool json = false;
+  std::string vehicle;                 // --vehicle: wrench from the rotor columns, reference from [nominal]
+  const CLI::Option* nominal_opt = nullptr;
 };
 
 void run(const IdentifyArgs& a) {
@@ -44,7 +48,9 @@ void run(const IdentifyArgs& a) {
   if (a.gd_discretization == "exact") opt.gd.discretization = GdDiscretization::Exact;
   else if (a.gd_discretization == "literal") opt.gd.discretization = GdDiscretization::ForwardEuler;
   else throw std::invalid_argument(fmt::format("--gd-discretization {}: expected exact or literal", a.gd_discretization));
-  opt.reference = NamedParams{"nom", load_params(a.nominal)};
+  std::optional<Vehicle> vehicle;
+  if (!a.vehicle.empty()) vehicle = load_vehicle(a.vehicle);
+  opt.reference = NamedParams{"nom", vehicle && a.nominal_opt->count() == 0 ? vehicle->nominal : load_params(a.nominal)};
   if (a.gd_init != "nominal") opt.gd_initial = load_params(a.gd_init);
   opt.allow_rank_deficient = a.allow_rank_deficient;
   opt.evolution_interval = a.evolution_interval;
@@ -52,9 +58,22 @@ void run(const IdentifyArgs& a) {
 
   CsvReadOptions csv = a.proc.csv();
   csv.keep_extra_columns = false;  // only the 14 standard columns are used
+  if (vehicle) {  // the rotor columns instead of the wrench
+    const auto& std_cols = standard_log_columns();  // t x y z phi theta psi p q r, then the wrench
+    csv.required.assign(std_cols.begin(), std_cols.begin() + 10);
+    csv.required.insert(csv.required.end(), vehicle->rotors.columns.begin(), vehicle->rotors.columns.end());
+  }
   logs::LoadOptions load;
   load.csv = csv;
-  const FlightLog log = logs::load_any_log(a.log, load);  // CSV, or an autopilot log imported
+  load.check_required = !vehicle;  // an imported autopilot log has no wrench: the rotor model adds it
+  FlightLog log = logs::load_any_log(a.log, load);  // CSV, or an autopilot log imported
+  if (vehicle) {
+    try {
+      log = with_rotor_wrench(log, vehicle->rotors);
+    } catch (const std::exception& e) {
+      throw InputError(fmt::format("{}: {}", a.log, e.what()));
+    }
+  }
 
   IdentificationResult res;
   try {
@@ -66,6 +85,7 @@ void run(const IdentifyArgs& a) {
 
   nlohmann::json j = to_json(res);
   j["log"] = a.log;
+  if (vehicle) j["vehicle"] = {{"name", vehicle->name}, {"source", vehicle->source}};
   // Files first (atomically), so that a failed write leaves no partial report.
   if (!a.evolution.empty()) write_file_atomic(a.evolution, format_evolution_csv(res.evolution));
   if (!a.out.empty()) write_file_atomic(a.out, j.dump(2) + "\n");
@@ -110,10 +130,14 @@ void register_identify(CLI::App& app) {
       ->capture_default_str();
   sub->add_option("--gd-init", a->gd_init, "GD initial guess: nominal (the --nominal set), a preset or a params JSON")
       ->capture_default_str();
-  sub->add_option("--nominal", a->nominal,
+  a->nominal_opt = sub->add_option("--nominal", a->nominal,
                   "reference set of Tables 5-6 (preset qball2-nominal|qball2-virtual or a params JSON); also the "
-                  "value kept for unidentifiable parameters")
+                  "value kept for unidentifiable parameters (default with --vehicle: the vehicle's [nominal])")
       ->capture_default_str();
+  sub->add_option("--vehicle", a->vehicle,
+                  "vehicle file or built-in (qball2, crazyflie21, jmavsim-quad): compute Fz and the torques from the "
+                  "log's rotor columns with its rotor model, and take its [nominal] as the reference set "
+                  "(docs/vehicles.md)");
   sub->add_flag("--allow-rank-deficient", a->allow_rank_deficient,
                 "warn instead of failing when the data do not determine some parameters (they keep the nominal values)");
   a->proc.add_to(sub);

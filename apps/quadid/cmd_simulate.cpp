@@ -2,6 +2,7 @@
 #include "commands.hpp"
 #include "quadid/io.hpp"
 #include "quadid/simulation.hpp"
+#include "quadid/vehicle.hpp"
 
 #include <fmt/format.h>
 
@@ -25,11 +26,34 @@ struct SimulateArgs {
   std::string torque_map = "WT";
   std::string derivative = "tustin";
   std::string noise = "default";
+  std::optional<double> sigma_rotor;
+  double speedup = 1.0;
   std::optional<double> sigma_position, sigma_yaw, sigma_attitude, sigma_gyro, sigma_velocity, sigma_yaw_rate;
   std::string velocity_source = "mocap-difference";
   SimulationOptions opt;
   bool json = false;
+  std::string vehicle;
+  const CLI::App* app = nullptr;  // to ask which options were given (they beat the vehicle file)
+
+  bool was_given(const std::string& name) const { return app->get_option(name)->count() > 0; }
 };
+
+// --vehicle: rotor-level actuation, the vehicle's nominal parameters, scaled gains, its
+// [controller]/[sensors] tables; options given on the command line still win.
+void apply_vehicle(SimulateArgs& a) {
+  SimulationOptions& o = a.opt;
+  const SimulationOptions before = o;
+  configure_for_vehicle(o, load_vehicle(a.vehicle));
+  if (a.was_given("--plant")) o.plant = before.plant;
+  if (a.was_given("--controller-params")) o.controller.params = before.controller.params;
+  if (a.was_given("--fz-max")) o.controller.Fz_max = before.controller.Fz_max;
+  if (a.was_given("--tau-max")) o.controller.tau_max = before.controller.tau_max;
+  if (a.was_given("--rate")) o.controller.rate = before.controller.rate;
+  if (a.was_given("--mocap-rate")) o.sensors.mocap_rate = before.sensors.mocap_rate;
+  if (a.was_given("--imu-rate")) o.sensors.imu_rate = before.sensors.imu_rate;
+  if (a.was_given("--actuator-tau") && before.actuator_tau > 0.0)
+    throw std::invalid_argument("--actuator-tau cannot be used with --vehicle (the vehicle's rotors.time_constant is the lag)");
+}
 
 std::unique_ptr<Trajectory> make_trajectory(const SimulateArgs& a) {
   if (a.trajectory == "circle") {
@@ -38,7 +62,9 @@ std::unique_ptr<Trajectory> make_trajectory(const SimulateArgs& a) {
   }
   if (a.radius || a.altitude)
     throw std::invalid_argument("--radius and --altitude only apply to --trajectory circle");
-  return trajectory_from_spec(a.trajectory);
+  auto t = trajectory_from_spec(a.trajectory);
+  if (a.speedup == 1.0) return t;
+  return time_scaled(*t, a.speedup);
 }
 
 void run(SimulateArgs& a) {
@@ -50,6 +76,8 @@ void run(SimulateArgs& a) {
   o.controller.g = o.g;
   NoiseSigmas& n = o.sensors.noise;
   n = NoiseSigmas::preset(a.noise);
+  if (!a.vehicle.empty()) apply_vehicle(a);
+  if (a.sigma_rotor) o.rotor_noise = *a.sigma_rotor;
   if (a.sigma_position) n.position = *a.sigma_position;
   if (a.sigma_yaw) n.yaw = *a.sigma_yaw;
   if (a.sigma_attitude) n.attitude = *a.sigma_attitude;
@@ -89,10 +117,15 @@ void run(SimulateArgs& a) {
     return;
   }
   constexpr double deg = 180.0 / M_PI;
-  const bool overridden = a.sigma_position || a.sigma_yaw || a.sigma_attitude || a.sigma_gyro || a.sigma_velocity ||
-                          a.sigma_yaw_rate;
+  const NoiseSigmas profile = NoiseSigmas::preset(a.noise);
+  const NoiseSigmas& used = o.sensors.noise;
+  const bool overridden = used.position != profile.position || used.yaw != profile.yaw ||
+                          used.attitude != profile.attitude || used.gyro != profile.gyro ||
+                          used.velocity != profile.velocity || used.yaw_rate != profile.yaw_rate;
   fmt::print("simulated {:g} s of {} ({} samples at {:g} Hz); plant {}, controller params {}, noise {}, seed {}\n",
-             s.duration, traj->describe(), s.samples, o.controller.rate, a.plant, a.controller_params,
+             s.duration, traj->describe(), s.samples, o.controller.rate,
+             a.vehicle.empty() || a.was_given("--plant") ? a.plant : "vehicle " + a.vehicle,
+             a.vehicle.empty() || a.was_given("--controller-params") ? a.controller_params : "vehicle " + a.vehicle,
              overridden ? a.noise + " with overrides" : a.noise, o.sensors.seed);
   fmt::print("RMS position error (t >= {:g} s): x {:.2f} mm, y {:.2f} mm, z {:.2f} mm, |p| {:.2f} mm (max {:.2f} mm)\n",
              s.summary_from, 1e3 * s.rms_position_error(0), 1e3 * s.rms_position_error(1),
@@ -103,6 +136,10 @@ void run(SimulateArgs& a) {
              "Fz high {}, tau [{} {} {}]\n",
              s.Fz_min, s.Fz_max, s.tau_abs_max(0), s.tau_abs_max(1), s.tau_abs_max(2), s.Fz_saturated_low,
              s.Fz_saturated_high, s.tau_saturated[0], s.tau_saturated[1], s.tau_saturated[2]);
+  for (size_t i = 0; i < s.rotor_columns.size(); ++i)
+    fmt::print("{}rotor {} saturated {} ticks ({:.2f}% of the flight){}", i == 0 ? "" : ", ", s.rotor_columns[i],
+               s.rotor_saturated[i], 100.0 * static_cast<double>(s.rotor_saturated[i]) / static_cast<double>(s.samples),
+               i + 1 == s.rotor_columns.size() ? "\n" : "");
   if (!a.out.empty()) fmt::print("wrote {} ({} rows)\n", a.out, s.samples);
   if (!a.truth.empty()) fmt::print("wrote {} (true state)\n", a.truth);
   if (a.out.empty() && a.truth.empty()) fmt::print(stderr, "note: no -o/--out given, no log written\n");
@@ -174,7 +211,18 @@ void register_simulate(CLI::App& app) {
   sub->add_option("--g", o.g, "gravity, m/s^2 (plant and controller)")->capture_default_str();
   sub->add_option("--summary-from", o.summary_from, "start of the window for the RMS tracking errors, s")
       ->capture_default_str();
+  sub->add_option("--speedup", args->speedup,
+                  "play the trajectory this many times faster (same path; velocities x S, accelerations x S^2; "
+                  "Fourier trajectories only), e.g. for a small vehicle")
+      ->capture_default_str();
+  sub->add_option("--sigma-rotor", args->sigma_rotor,
+                  "with --vehicle: noise std on the logged rotor speeds, rad/s or rpm (overrides [sensors] rotor_noise)");
+  sub->add_option("--vehicle", args->vehicle,
+                  "fly a vehicle with rotor-level actuation: a vehicle file or built-in (qball2, crazyflie21, "
+                  "jmavsim-quad); plant and controller model = its [nominal], gains scaled to it (docs/vehicles.md); "
+                  "the log gains its rotor columns");
   sub->add_flag("--json", args->json, "print the summary as JSON on stdout (nothing else there)");
+  args->app = sub;
   sub->callback([args] { run(*args); });
 }
 

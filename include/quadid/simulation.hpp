@@ -9,6 +9,7 @@
 #include "quadid/io.hpp"
 #include "quadid/model.hpp"
 #include "quadid/trajectory.hpp"
+#include "quadid/vehicle.hpp"
 
 #include <nlohmann/json.hpp>
 
@@ -35,6 +36,10 @@ class Plant {
   State::Vector derivative(const State& x, const Input& u) const;
   /// Advances x by dt with `command` held (zero-order hold).
   void step(State& x, const Input& command, double dt);
+  /// Advances x by dt (classical RK4) with the wrench the actuators apply at the stage
+  /// times s = 0, dt/2 and dt given by the caller (actuator dynamics integrated outside,
+  /// e.g. RotorActuators); step() is this with its own first-order lag.
+  void step_stages(State& x, const Input& u0, const Input& uh, const Input& u1, double dt) const;
 
   /// Force and torques the actuators deliver now (== the last command when tau_a = 0).
   const Input& applied() const { return applied_; }
@@ -46,6 +51,44 @@ class Plant {
   Mat3 I_inv_;
   double g_, tau_a_;
   Input applied_;
+};
+
+// --- Rotor-level actuation (simulate --vehicle) ------------------------------------
+
+/// The actuators of a vehicle with rotors: the controller's wrench -> mixer (the
+/// minimum-norm inverse of the rotor model's allocation matrix) -> per-rotor thrust
+/// clipped to [0, thrust_max] -> rotor speed target -> first-order lag of the rotor
+/// speed (time_constant) -> rotor model -> applied wrench. The lag is integrated
+/// exactly with the target held over a step, w(s) = w* + (w0 - w*) exp(-s/tau), so the
+/// wrench at the RK4 stage times is exact (vehicle.hpp: T = k w^2).
+class RotorActuators {
+ public:
+  /// Validates the model and builds its mixer (std::invalid_argument if it cannot produce every wrench).
+  explicit RotorActuators(const RotorModel& model);
+
+  /// Mixes and saturates a wrench command into per-rotor thrust commands (held until the next call).
+  void command(const Input& wrench);
+  /// Puts every rotor at the steady state of the current command (the start of a flight).
+  void settle();
+  /// Wrench applied at s = 0, dt/2 and dt of a step with the command held; advances the rotors by dt.
+  void step(double dt, Input& u0, Input& uh, Input& u1);
+
+  /// Wrench of the current rotor speeds.
+  Input applied() const;
+  /// Rotor speeds w (vehicle.hpp units: rad/s, rpm, or speed / speed at command 1).
+  const Eigen::VectorXd& speeds() const { return w_; }
+  /// What a log of this vehicle holds per rotor: the speeds (speed, rpm) or the commands (command).
+  Eigen::VectorXd logged() const;
+  /// Which rotors the last command() clipped (below 0 or above thrust_max).
+  const std::vector<bool>& saturated() const { return sat_; }
+  const RotorModel& model() const { return m_; }
+
+ private:
+  RotorModel m_;
+  Eigen::Matrix<double, Eigen::Dynamic, 4> mixer_;
+  Eigen::VectorXd thrust_cmd_, target_, w_;
+  std::vector<bool> sat_;
+  Input wrench_of(const Eigen::VectorXd& w) const;
 };
 
 // --- Sensors -----------------------------------------------------------------
@@ -116,6 +159,13 @@ struct SimulationOptions {
   std::optional<State> initial_state;
   bool record_truth = true;    // fill SimulationResult::truth (costs memory; validation re-flies can skip it)
   double summary_from = 0.0;   // s, summary statistics use t >= summary_from
+  /// Rotor-level actuation (RotorActuators) instead of the wrench lag `actuator_tau`
+  /// (which must then be 0): set by configure_for_vehicle(). The log gains one column per
+  /// rotor (its `columns` names) and its Fz tau_* are the rotors' wrench at each instant.
+  std::optional<RotorModel> rotors;
+  /// With rotors: standard deviation of the white noise added to each logged rotor column, in
+  /// its unit (rad/s or rpm; only measured speeds, not commands). Only the log sees it.
+  double rotor_noise = 0.0;
 
   /// Throws std::invalid_argument naming the bad option.
   void validate() const;
@@ -134,6 +184,10 @@ struct SimulationSummary {
   std::array<int, 3> tau_saturated{};               // ticks, whole flight
   double Fz_min = 0.0, Fz_max = 0.0;                // N, applied, whole flight
   Vec3 tau_abs_max = Vec3::Zero();                  // N m, applied, whole flight
+  /// With rotors: ticks at which the mixer clipped each rotor (below 0 or above thrust_max),
+  /// whole flight, in the order of the vehicle's columns (empty without rotors).
+  std::vector<std::string> rotor_columns;
+  std::vector<long long> rotor_saturated;
 };
 
 struct SimulationResult {
@@ -163,6 +217,21 @@ class SimulationDiverged : public std::runtime_error {
 /// Flies `traj` in closed loop. Throws std::invalid_argument on bad options and
 /// SimulationDiverged on divergence (nothing is returned then).
 SimulationResult simulate(const Trajectory& traj, const SimulationOptions& opt);
+
+/// Sets `opt` up to fly `v` with rotor-level actuation: rotors = v.rotors; the plant
+/// (the simulated truth) and the controller's model = v.nominal; the gains from
+/// vehicle_gains(v); the controller's wrench saturations from the rotors (Fz <= N thrust_max);
+/// and the rate and sensors of the vehicle file's [controller] and [sensors] tables where given.
+/// Throws std::invalid_argument if the vehicle cannot be flown (no thrust_max, or a layout
+/// that cannot produce every wrench).
+void configure_for_vehicle(SimulationOptions& opt, const Vehicle& v);
+
+/// `traj` played `speedup` times faster, q_s(t) = q(speedup t): the same path, velocities
+/// x speedup, accelerations x speedup^2 (a small, agile vehicle can fly a faster version of a
+/// trajectory designed for the QBall 2). Fourier trajectories only (eq. 18: wf -> speedup wf,
+/// a, b -> speedup a, speedup b, c unchanged). Throws std::invalid_argument otherwise or
+/// when speedup is not > 0.
+std::unique_ptr<Trajectory> time_scaled(const Trajectory& traj, double speedup);
 
 /// The default initial state: at rest, level, at the start position and yaw of `traj`.
 State initial_state_at_rest(const Trajectory& traj);

@@ -151,6 +151,10 @@ json simulation_json(const SimulationOptions& o) {
     const State& x = *o.initial_state;
     j["initial_state"] = {{"p", vec(x.p)}, {"v", vec(x.v)}, {"eta", vec(x.eta)}, {"omega", vec(x.omega)}};
   }
+  if (o.rotors) {  // rotor-level actuation (simulate --vehicle)
+    j["rotors"] = to_json(*o.rotors);
+    j["rotor_noise"] = o.rotor_noise;
+  }
   return j;
 }
 
@@ -267,6 +271,8 @@ SimulationOptions simulation_options_from_json(const json& j, const std::string&
     s.num("max_speed", o.safety.max_speed);
   }
   r.num("summary_from", o.summary_from);
+  if (r.has("rotors")) o.rotors = rotor_model_from_json(j.at("rotors"), source);
+  r.num("rotor_noise", o.rotor_noise);
   if (r.has("record_truth")) {
     if (!j.at("record_truth").is_boolean()) throw InputError(fmt::format("{}.record_truth: must be true or false", source));
     o.record_truth = j.at("record_truth").get<bool>();
@@ -289,7 +295,7 @@ SimulationOptions simulation_options_from_json(const json& j, const std::string&
 }
 
 json to_json(const SimulationSummary& s) {
-  return {{"duration_s", s.duration},
+  json j = {{"duration_s", s.duration},
           {"samples", s.samples},
           {"summary_from_s", s.summary_from},
           {"rms_position_error_m", vec(s.rms_position_error)},
@@ -303,6 +309,17 @@ json to_json(const SimulationSummary& s) {
           {"Fz_min_N", s.Fz_min},
           {"Fz_max_N", s.Fz_max},
           {"tau_abs_max_Nm", vec(s.tau_abs_max)}};
+  if (!s.rotor_columns.empty()) {
+    json rot = json::array();
+    for (size_t i = 0; i < s.rotor_columns.size(); ++i)
+      rot.push_back({{"column", s.rotor_columns[i]},
+                     {"saturated_ticks", s.rotor_saturated[i]},
+                     {"saturated_fraction", s.samples > 0 ? static_cast<double>(s.rotor_saturated[i]) /
+                                                                static_cast<double>(s.samples)
+                                                          : 0.0}});
+    j["rotor_saturation"] = rot;
+  }
+  return j;
 }
 
 // --- log comments --------------------------------------------------------------
@@ -352,6 +369,24 @@ json comment_json(const FlightLog& log, const char* key) {
 }  // namespace
 
 std::vector<std::string> simulation_log_comments(const Trajectory& traj, const SimulationOptions& o) {
+  if (o.rotors)
+    return {kMagic,
+            "trajectory: " + trajectory_spec(traj),
+            "plant: " + to_json(o.plant).dump(),
+            "controller: " + controller_json(o.controller).dump(),
+            "sensors: " + sensors_json(o.sensors).dump(),
+            "noise: " + noise_label(o.sensors.noise),
+            fmt::format("seed: {}", o.sensors.seed),
+            fmt::format("dt: {}", o.dt),
+            "simulation: " + simulation_json(o).dump(),
+            fmt::format("columns: x y z psi = motion capture (held between samples); phi theta p q r = IMU; "
+                        "Fz tau_* = the rotors' wrench (after mixer, saturation and motor lag); {} = rotor {} "
+                        "({}); x_d y_d z_d psi_d = reference. SI units, radians",
+                        fmt::join(o.rotors->columns, " "),
+                        o.rotors->input == RotorInput::kCommand ? "commands" : "speeds",
+                        o.rotors->input == RotorInput::kCommand ? "0..1, before the motor lag"
+                        : o.rotors->input == RotorInput::kRpm   ? "rev/min"
+                                                                : "rad/s")};
   return {kMagic,
           "trajectory: " + trajectory_spec(traj),
           "plant: " + to_json(o.plant).dump(),

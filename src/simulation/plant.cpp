@@ -67,6 +67,11 @@ void Plant::step(State& x, const Input& command, double dt) {
     uh = blend(command, applied_, std::exp(-0.5 * dt / tau_a_));
     u1 = blend(command, applied_, std::exp(-dt / tau_a_));
   }
+  step_stages(x, u0, uh, u1, dt);
+  applied_ = u1;
+}
+
+void Plant::step_stages(State& x, const Input& u0, const Input& uh, const Input& u1, double dt) const {
   // Classical RK4 (local error O(dt^5), global O(dt^4)).
   State tmp;
   const State::Vector k1 = derivative(x, u0);
@@ -81,7 +86,6 @@ void Plant::step(State& x, const Input& command, double dt) {
   x.v += incr.segment<3>(3);
   x.eta += incr.segment<3>(6);
   x.omega += incr.segment<3>(9);
-  applied_ = u1;
 }
 
 }  // namespace quadid

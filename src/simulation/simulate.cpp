@@ -49,6 +49,16 @@ void SimulationOptions::validate() const {
     throw std::invalid_argument(fmt::format("duration = {} s is too long for one log at {} Hz", duration, controller.rate));
   if (!std::isfinite(actuator_tau) || actuator_tau < 0.0)
     throw std::invalid_argument(fmt::format("actuator_tau = {} s must be >= 0", actuator_tau));
+  if (rotors) {
+    if (actuator_tau > 0.0)
+      throw std::invalid_argument("actuator_tau must be 0 with rotor-level actuation (the rotors' time_constant is the lag)");
+    rotors->validate();
+  }
+  if (!std::isfinite(rotor_noise) || rotor_noise < 0.0)
+    throw std::invalid_argument(fmt::format("rotor_noise = {} must be >= 0", rotor_noise));
+  if (rotor_noise > 0.0 && (!rotors || rotors->input == RotorInput::kCommand))
+    throw std::invalid_argument(
+        "rotor_noise applies to logged rotor speeds (a vehicle with rotors.input = speed or rpm), not to commands");
   if (!std::isfinite(g) || g <= 0.0) throw std::invalid_argument(fmt::format("g = {} m/s^2 must be > 0", g));
   for (int i = 0; i < 3; ++i)
     if (!(safety.box_min(i) < safety.box_max(i)))
@@ -125,6 +135,9 @@ SimulationResult simulate(const Trajectory& traj, const SimulationOptions& opt) 
   const double dt = opt.dt;
 
   Plant plant(opt.plant, opt.g, opt.actuator_tau);
+  std::optional<RotorActuators> rotors;
+  if (opt.rotors) rotors.emplace(*opt.rotors);
+  detail::Rng rotor_rng(opt.sensors.seed, 4);  // its own stream: the other sensors' noise is unchanged
   PidController ctrl(opt.controller);
   detail::SensorModel sensors(opt.sensors, rate);
   State x = opt.initial_state ? *opt.initial_state : initial_state_at_rest(traj);
@@ -134,7 +147,10 @@ SimulationResult simulate(const Trajectory& traj, const SimulationOptions& opt) 
   const Eigen::Index rows = static_cast<Eigen::Index>(tm.ticks + 1);
   res.log.comments = simulation_log_comments(traj, opt);
   res.log.columns = log_columns();
-  res.log.data.resize(rows, static_cast<Eigen::Index>(log_columns().size()));
+  const Eigen::Index n_rotors = rotors ? rotors->model().count() : 0;
+  if (rotors)
+    res.log.columns.insert(res.log.columns.end(), opt.rotors->columns.begin(), opt.rotors->columns.end());
+  res.log.data.resize(rows, static_cast<Eigen::Index>(log_columns().size()) + n_rotors);
   if (opt.record_truth) {
     res.truth.comments = res.log.comments;
     res.truth.comments.push_back("true state (not what the sensors saw); Fz and tau = actuator output");
@@ -148,6 +164,10 @@ SimulationResult simulate(const Trajectory& traj, const SimulationOptions& opt) 
   sum.summary_from = opt.summary_from;
   sum.Fz_min = std::numeric_limits<double>::infinity();
   sum.Fz_max = -sum.Fz_min;
+  if (rotors) {
+    sum.rotor_columns = opt.rotors->columns;
+    sum.rotor_saturated.assign(static_cast<size_t>(n_rotors), 0);
+  }
   Stats st;
 
   detail::SensorReadings rd;
@@ -159,12 +179,23 @@ SimulationResult simulate(const Trajectory& traj, const SimulationOptions& opt) 
     sensors.sample(k, t, x, rd, meas);
     const ControllerOutput out = ctrl.update(d, meas);
     if (k == 0) plant.set_applied(out.command);  // actuators start at the first command, not at zero thrust
-    const Input applied = opt.actuator_tau > 0.0 ? plant.applied() : out.command;
+    Input applied = opt.actuator_tau > 0.0 ? plant.applied() : out.command;
+    Input logged = out.command;
+    if (rotors) {
+      rotors->command(out.command);
+      if (k == 0) rotors->settle();  // rotors start at the first command's steady state
+      applied = logged = rotors->applied();
+      for (size_t i = 0; i < rotors->saturated().size(); ++i) sum.rotor_saturated[i] += rotors->saturated()[i];
+    }
 
     auto L = res.log.data.row(row);
-    L << t, rd.p(0), rd.p(1), rd.p(2), rd.phi, rd.theta, rd.psi, rd.gyro(0), rd.gyro(1), rd.gyro(2),
-        out.command.Fz, out.command.tau(0), out.command.tau(1), out.command.tau(2), d(kX, 0), d(kY, 0), d(kZ, 0),
-        d(kPsi, 0);
+    L.head(18) << t, rd.p(0), rd.p(1), rd.p(2), rd.phi, rd.theta, rd.psi, rd.gyro(0), rd.gyro(1), rd.gyro(2),
+        logged.Fz, logged.tau(0), logged.tau(1), logged.tau(2), d(kX, 0), d(kY, 0), d(kZ, 0), d(kPsi, 0);
+    if (rotors) {
+      L.tail(n_rotors) = rotors->logged().transpose();
+      if (opt.rotor_noise > 0.0)
+        for (Eigen::Index i = 0; i < n_rotors; ++i) L(L.size() - n_rotors + i) += opt.rotor_noise * rotor_rng.normal();
+    }
     if (opt.record_truth) {
       const State::Vector xd = plant.derivative(x, applied);
       const Vec3 vi = rotation(x.eta) * x.v;
@@ -178,9 +209,9 @@ SimulationResult simulate(const Trajectory& traj, const SimulationOptions& opt) 
     sum.Fz_saturated_low += out.Fz_low;
     sum.Fz_saturated_high += out.Fz_high;
     for (size_t i = 0; i < 3; ++i) sum.tau_saturated[i] += out.tau_saturated[i];
-    sum.Fz_min = std::min(sum.Fz_min, out.command.Fz);
-    sum.Fz_max = std::max(sum.Fz_max, out.command.Fz);
-    sum.tau_abs_max = sum.tau_abs_max.cwiseMax(out.command.tau.cwiseAbs());
+    sum.Fz_min = std::min(sum.Fz_min, logged.Fz);
+    sum.Fz_max = std::max(sum.Fz_max, logged.Fz);
+    sum.tau_abs_max = sum.tau_abs_max.cwiseMax(logged.tau.cwiseAbs());
     if (t >= opt.summary_from - 1e-12) {
       const Vec3 e_p = x.p - d.col(0).head<3>();
       // eta_d of eqs. (26)-(27): the consistent command law at zero error with m = 1.
@@ -197,7 +228,13 @@ SimulationResult simulate(const Trajectory& traj, const SimulationOptions& opt) 
 
     if (k == tm.ticks) break;
     for (long long s = 0; s < tm.steps_per_tick; ++s) {
-      plant.step(x, out.command, dt);
+      if (rotors) {
+        Input u0, uh, u1;
+        rotors->step(dt, u0, uh, u1);
+        plant.step_stages(x, u0, uh, u1, dt);
+      } else {
+        plant.step(x, out.command, dt);
+      }
       if (const std::string why = check_state(x, opt.safety); !why.empty())
         throw SimulationDiverged(t + static_cast<double>(s + 1) * dt, why);
     }

@@ -1,0 +1,152 @@
+// Real vehicles: the vehicle file (TOML, DESIGN.md "Real vehicles") and the
+// rotor model that turns per-rotor log columns into the total thrust and body
+// torques of eqs. (1)-(2). See docs/vehicles.md.
+//
+// Frames and units: body FLU (x forward, y left, z up along the thrust), SI.
+// Rotor model (DESIGN.md):
+//   Fz        = sum T_i
+//   tau_phi   = sum y_i T_i
+//   tau_theta = -sum x_i T_i
+//   tau_psi   = sum s_i Q_i,  Q_i = torque_ratio * T_i,
+//               s_i = -1 for a counter-clockwise rotor (seen from above), +1 clockwise.
+// Thrust of one rotor from its "speed" w_i (the rotor state after the motor lag):
+//   input = "speed"   : w_i = rad/s,                       T_i = kf w_i^2
+//   input = "rpm"     : w_i = rev/min,                     T_i = kf w_i^2
+//   input = "command" : w_i = speed / speed at command 1,  T_i = thrust_max w_i^2,
+//                       w_i -> sqrt(command) with the first-order lag time_constant
+//                       (steady state: T_i = thrust_max * command).
+#pragma once
+
+#include "quadid/control.hpp"
+#include "quadid/io.hpp"
+#include "quadid/model.hpp"
+
+#include <Eigen/Core>
+#include <nlohmann/json.hpp>
+
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace quadid {
+
+/// What a log holds per rotor.
+enum class RotorInput {
+  kSpeed,    // rotor speed, rad/s
+  kRpm,      // rotor speed, rev/min
+  kCommand,  // normalized motor command 0..1 (before the motor lag)
+};
+std::string to_string(RotorInput k);  // "speed" | "rpm" | "command"
+/// Throws std::invalid_argument listing the choices.
+RotorInput rotor_input_from_string(std::string_view s);
+
+/// Per-sample wrench [Fz tau_phi tau_theta tau_psi] (N, N m), one row per sample.
+using WrenchSeries = Eigen::Matrix<double, Eigen::Dynamic, 4>;
+
+/// Geometry and aerodynamics of the rotors: the [rotors] table of a vehicle file.
+struct RotorModel {
+  RotorInput input = RotorInput::kSpeed;
+  std::vector<std::string> columns;   // log column per rotor
+  std::vector<Vec3> positions;        // m, rotor hub from the centre of mass, body FLU
+  std::vector<int> spin;              // s_i: -1 counter-clockwise, +1 clockwise (seen from above)
+  double kf = 0.0;             // N per input^2 (speed, rpm)
+  double thrust_max = 0.0;     // N per rotor at command 1 (command); the saturation in simulate (all kinds)
+  double torque_ratio = 0.0;   // m, Q_i = torque_ratio * T_i
+  double time_constant = 0.0;  // s, first-order lag of the rotor speed behind the command (0 = none)
+  double rotor_inertia = 0.0;  // kg m^2 per rotor about its axis (not used by the rotor model itself)
+
+  int count() const { return static_cast<int>(columns.size()); }
+  /// Throws std::invalid_argument naming the bad key (rotors.<key>).
+  void validate() const;
+
+  /// k of T = k w^2: kf (speed, rpm) or thrust_max (command).
+  double thrust_coefficient() const { return input == RotorInput::kCommand ? thrust_max : kf; }
+  /// T = k w^2 for one rotor speed w (the rotor state, see the file comment).
+  double thrust(double w) const { return thrust_coefficient() * w * w; }
+  /// Steady-state rotor speed for thrust T >= 0 (inverse of thrust()).
+  double speed_for_thrust(double T) const;
+  /// The logged value that holds thrust T in steady state: the speed (speed, rpm) or the command T / thrust_max.
+  double input_for_thrust(double T) const;
+  /// Largest thrust of one rotor (N), the saturation used by the mixer: thrust_max (0 = not given).
+  double max_thrust() const { return thrust_max; }
+
+  /// The 4 x N allocation matrix B: [Fz tau_phi tau_theta tau_psi]^T = B T (the formulas above).
+  Eigen::Matrix<double, 4, Eigen::Dynamic> allocation() const;
+  /// The mixer: N x 4, the minimum-norm right inverse of allocation() (its inverse for 4 rotors).
+  /// Throws std::invalid_argument when the rotors cannot produce every wrench (rank < 4).
+  Eigen::Matrix<double, Eigen::Dynamic, 4> mixer() const;
+  /// [Fz, tau] from per-rotor thrusts (N).
+  Input wrench(const Eigen::VectorXd& thrusts) const;
+
+  /// Rotor speeds w (samples x N) from the logged inputs (samples x N) at sample period T (s):
+  /// speed, rpm: the inputs themselves; command: w_0 = sqrt(c_0) (steady state at the first
+  /// sample), then the exact discretization of tau w' = sqrt(c) - w with c held between samples,
+  ///   w_{k+1} = sqrt(c_k) + (w_k - sqrt(c_k)) exp(-T / tau)   (w_k = sqrt(c_k) when tau = 0).
+  /// Throws InputError on a negative input, or a command above 1.
+  Eigen::MatrixXd speeds(const Eigen::MatrixXd& inputs, double T) const;
+  /// Per-sample wrench from rotor speeds (samples x N).
+  WrenchSeries wrench_from_speeds(const Eigen::MatrixXd& speeds) const;
+};
+
+/// Optional [controller] table: gains of eqs. (31)-(32) (diagonals, as PidGains) and the
+/// controller (log) rate. A gain absent here comes from vehicle_gains()'s scaling rule.
+struct VehicleController {
+  std::optional<Vec3> Kpp, Kip, Kdp, Kpo, Kio, Kdo;
+  std::optional<double> rate;  // Hz
+};
+
+/// Optional [sensors] table: sensor rates (Hz) and white-noise standard deviations
+/// (SI, as NoiseSigmas). Absent entries keep the simulator's defaults.
+struct VehicleSensors {
+  std::optional<double> mocap_rate, imu_rate;
+  std::optional<double> position, yaw, attitude, gyro;
+  std::optional<double> rotor;  // white noise on the logged rotor speeds, rad/s or rpm (rotor_noise)
+};
+
+/// A vehicle file: what a log cannot say about the vehicle.
+struct Vehicle {
+  std::string name;
+  std::string source;  // the file it came from, or "built-in NAME"
+  Params nominal;      // [nominal]: the reference ("nom") set, GD start, controller model
+  RotorModel rotors;
+  VehicleController controller;
+  VehicleSensors sensors;
+
+  /// Throws std::invalid_argument naming the bad key.
+  void validate() const;
+};
+
+/// The controller gains for a vehicle: the QBall 2 gains of section III-C scaled so that the
+/// linearized closed loop has the same poles as the QBall 2's, then overridden by the gains the
+/// vehicle file gives. Position gains (Kpp, Kip, Kdp: force per error) scale with the mass,
+/// m / 1.79 kg; attitude gains (Kpo, Kio, Kdo: torque per error) per axis with the principal
+/// moment, I_ii / I_ii(QBall 2 nominal, Table 1). A QBall 2 gets the paper's gains unchanged.
+PidGains vehicle_gains(const Vehicle& v);
+
+/// Parses the TOML text of a vehicle file. `source` names it in messages
+/// ("FILE:LINE:COLUMN: key: problem"). Unknown keys, missing required keys,
+/// wrong types, a rotor count not matching `columns`, negative coefficients and
+/// a spin that is not cw/ccw are InputErrors naming the key.
+Vehicle parse_vehicle(std::string_view toml_text, const std::string& source);
+/// A built-in name (builtin_vehicle_names()) or a vehicle file path.
+Vehicle load_vehicle(const std::string& spec);
+std::vector<std::string> builtin_vehicle_names();
+/// The TOML text of a built-in vehicle (with its sources in comments); throws
+/// std::invalid_argument listing the names.
+std::string_view builtin_vehicle_text(std::string_view name);
+
+/// The [rotors] table as JSON (the keys of the vehicle file; spin as "cw"/"ccw"), e.g. for
+/// the metadata of a simulated log, and back (InputError naming `source` and the key).
+nlohmann::json to_json(const RotorModel& m);
+RotorModel rotor_model_from_json(const nlohmann::json& j, const std::string& source);
+
+/// The vehicle's per-rotor columns of `log` (samples x N); InputError naming a missing column.
+Eigen::MatrixXd rotor_inputs(const FlightLog& log, const RotorModel& rotors);
+/// The sample period of a log from its t column (first to last sample over rows - 1).
+double log_sample_period(const FlightLog& log);
+/// `log` with Fz tau_phi tau_theta tau_psi computed from its rotor columns by the
+/// rotor model (replacing them when present, appended otherwise).
+FlightLog with_rotor_wrench(const FlightLog& log, const RotorModel& rotors);
+
+}  // namespace quadid

@@ -1,0 +1,120 @@
+// Built-in vehicle files. Each is the TOML text a user could write to a file
+// (`--vehicle NAME` and `--vehicle FILE` read them the same way); the sources
+// of every figure are in the comments. docs/vehicles.md lists them.
+#include "builtin_vehicles.hpp"
+
+namespace quadid::detail {
+namespace {
+
+constexpr std::string_view kQball2 = R"toml(# Quanser QBall 2, the paper's platform.
+# Mass and inertia: the manufacturer's nominal values, Table 1 of the paper
+# (the same numbers as Params::qball2_nominal()).
+# Rotors: Quanser's QBall 2 model gives the thrust of one rotor as K u and its
+# reaction torque as Ky u, with K = 12 N and Ky = 0.4 N m per unit input
+# u (normalized 0..1), and a distance L = 0.2 m from the centre to each rotor.
+# So thrust_max = K = 12 N and torque_ratio = Ky / K = 0.4 / 12 m.
+# Layout "+" (rotors on the body axes, L = 0.2 m). The spin directions below
+# (front/back counter-clockwise, left/right clockwise) are the usual "+"
+# arrangement, an assumption: the sources above do not state them. The motor
+# lag is not given by these sources; 0 keeps the paper's ideal actuators.
+name = "qball2"
+
+[nominal]
+m = 1.79
+Ixx = 0.03
+Iyy = 0.03
+Izz = 0.04
+
+[rotors]
+input = "command"
+columns = ["u_front", "u_left", "u_back", "u_right"]
+thrust_max = 12.0
+torque_ratio = 0.03333333333333333
+time_constant = 0.0
+positions = [[0.2, 0.0, 0.0], [0.0, 0.2, 0.0], [-0.2, 0.0, 0.0], [0.0, -0.2, 0.0]]
+spin = ["ccw", "cw", "ccw", "cw"]
+)toml";
+
+constexpr std::string_view kCrazyflie21 = R"toml(# Bitcraze Crazyflie 2.1, brushed motors, stock propellers, RPM deck.
+# Facts from ../shared/data/crazyflie-usd/README.md and the sources it cites:
+# - mass 34.7 g with battery and decks (weighed);
+# - X layout, rotors at (+-0.0325, +-0.0325) m (firmware platform_defaults_cf2.h),
+#   M1 front right, M2 back right, M3 back left, M4 front left;
+# - M1 and M3 counter-clockwise, M2 and M4 clockwise; yaw torque
+#   0.005964552 m * (-T1 + T2 - T3 + T4) (firmware power_distribution_quadrotor.c,
+#   THRUST2TORQUE), hence torque_ratio = 0.005964552 m;
+# - T_i = kf rpm_i^2, kf = 2.2164e-10 N/rpm^2 (fit to Bitcraze's CF2.1 thrust-stand
+#   log; known to a few percent only).
+# Inertia: published tensor of a Crazyflie 2.0 without decks (Foerster 2015, ETH
+# bachelor thesis); this vehicle is heavier, its true tensor is only roughly this.
+# Saturation: Bitcraze's step test of a Crazyflie 2.0 motor ("Measuring propeller
+# RPM, part 3", bitcraze.io, 2015) reaches about 25,000 rpm at full power and takes
+# about 180 ms from 0 to 25k rpm. thrust_max = kf * 25000^2 = 0.1385 N;
+# time_constant = 0.06 s is a first-order reading of that rise (3 tau ~ 180 ms),
+# used by `simulate` only (a log of rotor speeds is already after the lag).
+# Columns: the names of the Crazyflie uSD log (rpm.m1 .. rpm.m4).
+name = "crazyflie21"
+
+[nominal]
+m = 0.0347
+Ixx = 16.57e-6
+Iyy = 16.66e-6
+Izz = 29.26e-6
+Ixy = 0.83e-6
+Ixz = 0.72e-6
+Iyz = 1.80e-6
+
+[rotors]
+input = "rpm"
+columns = ["rpm.m1", "rpm.m2", "rpm.m3", "rpm.m4"]
+kf = 2.2164e-10
+thrust_max = 0.1385
+torque_ratio = 0.005964552
+time_constant = 0.06
+positions = [[0.0325, -0.0325, 0.0], [-0.0325, -0.0325, 0.0],
+             [-0.0325, 0.0325, 0.0], [0.0325, 0.0325, 0.0]]
+spin = ["ccw", "cw", "ccw", "cw"]
+)toml";
+
+constexpr std::string_view kJmavsimQuad = R"toml(# PX4's jMAVSim simulated quadrotor (PX4 SITL, SYS_AUTOSTART 10017), as set up in
+# jMAVSim's Simulator.java (../shared/data/px4-ulog/README.md): mass 0.8 kg,
+# I = diag(0.005, 0.005, 0.009) kg m^2, arm 0.165 m in an X, rotor thrust 4.0 N per
+# unit command with a 5 ms lag, rotor torque 0.05 N m per unit command
+# (torque_ratio = 0.05 / 4.0 = 0.0125 m).
+# Motor order and spin: PX4's quadrotor X (Airframe Reference, "Quadrotor x";
+# the 10017_jmavsim_iris airframe's CA_ROTOR* parameters agree): motor 1 front
+# right and motor 2 back left counter-clockwise, motor 3 front left and motor 4
+# back right clockwise. In FLU, with a = 0.165 / sqrt(2) m: M1 (a, -a),
+# M2 (-a, a), M3 (a, a), M4 (-a, -a).
+# Note: jMAVSim lags the thrust behind the command; quadid lags the rotor speed
+# (thrust ~ speed^2). Both have the same steady state T = 4.0 N * command.
+# Columns: the PX4 ULog names of the motor commands (actuator_motors topic).
+name = "jmavsim-quad"
+
+[nominal]
+m = 0.8
+Ixx = 0.005
+Iyy = 0.005
+Izz = 0.009
+
+[rotors]
+input = "command"
+columns = ["actuator_motors.control[0]", "actuator_motors.control[1]",
+           "actuator_motors.control[2]", "actuator_motors.control[3]"]
+thrust_max = 4.0
+torque_ratio = 0.0125
+time_constant = 0.005
+positions = [[0.11667261889578034, -0.11667261889578034, 0.0], [-0.11667261889578034, 0.11667261889578034, 0.0],
+             [0.11667261889578034, 0.11667261889578034, 0.0], [-0.11667261889578034, -0.11667261889578034, 0.0]]
+spin = ["ccw", "ccw", "cw", "cw"]
+)toml";
+
+}  // namespace
+
+const std::vector<BuiltinVehicle>& builtin_vehicles() {
+  static const std::vector<BuiltinVehicle> v = {
+      {"qball2", kQball2}, {"crazyflie21", kCrazyflie21}, {"jmavsim-quad", kJmavsimQuad}};
+  return v;
+}
+
+}  // namespace quadid::detail

@@ -1,0 +1,60 @@
+// RotorModel <-> JSON (the [rotors] keys of a vehicle file), for simulated-log metadata.
+#include "quadid/vehicle.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <iterator>
+#include <stdexcept>
+
+namespace quadid {
+
+nlohmann::json to_json(const RotorModel& m) {
+  nlohmann::json pos = nlohmann::json::array(), spin = nlohmann::json::array();
+  for (const Vec3& p : m.positions) pos.push_back({p(0), p(1), p(2)});
+  for (int s : m.spin) spin.push_back(s > 0 ? "cw" : "ccw");
+  return {{"input", to_string(m.input)},   {"columns", m.columns},
+          {"kf", m.kf},                    {"thrust_max", m.thrust_max},
+          {"torque_ratio", m.torque_ratio}, {"time_constant", m.time_constant},
+          {"rotor_inertia", m.rotor_inertia}, {"positions", pos},
+          {"spin", spin}};
+}
+
+RotorModel rotor_model_from_json(const nlohmann::json& j, const std::string& source) {
+  try {
+    if (!j.is_object()) throw std::invalid_argument("rotors: must be an object");
+    for (const auto& [k, v] : j.items()) {
+      (void)v;
+      static const char* kKeys[] = {"input", "columns", "kf", "thrust_max", "torque_ratio",
+                                    "time_constant", "rotor_inertia", "positions", "spin"};
+      if (std::find(std::begin(kKeys), std::end(kKeys), k) == std::end(kKeys))
+        throw std::invalid_argument(fmt::format("rotors.{}: unknown key", k));
+    }
+    RotorModel m;
+    m.input = rotor_input_from_string(j.at("input").get<std::string>());
+    m.columns = j.at("columns").get<std::vector<std::string>>();
+    m.kf = j.value("kf", 0.0);
+    m.thrust_max = j.value("thrust_max", 0.0);
+    m.torque_ratio = j.at("torque_ratio").get<double>();
+    m.time_constant = j.value("time_constant", 0.0);
+    m.rotor_inertia = j.value("rotor_inertia", 0.0);
+    for (const auto& p : j.at("positions")) {
+      const auto v = p.get<std::vector<double>>();
+      if (v.size() != 3) throw std::invalid_argument("rotors.positions: each must be [x, y, z]");
+      m.positions.emplace_back(v[0], v[1], v[2]);
+    }
+    for (const auto& s : j.at("spin")) {
+      const std::string t = s.get<std::string>();
+      if (t != "cw" && t != "ccw") throw std::invalid_argument("rotors.spin: must be cw or ccw");
+      m.spin.push_back(t == "cw" ? 1 : -1);
+    }
+    m.validate();
+    return m;
+  } catch (const nlohmann::json::exception& e) {
+    throw InputError(fmt::format("{}: rotors: {}", source, e.what()));
+  } catch (const std::invalid_argument& e) {
+    throw InputError(fmt::format("{}: {}", source, e.what()));
+  }
+}
+
+}  // namespace quadid

@@ -1,0 +1,168 @@
+// Rotor model: per-rotor inputs -> rotor speeds (motor lag) -> thrusts ->
+// [Fz, tau] (DESIGN.md "Real vehicles"; formulas in include/quadid/vehicle.hpp).
+#include "quadid/vehicle.hpp"
+
+#include <fmt/format.h>
+
+#include <Eigen/SVD>
+
+#include <cmath>
+#include <stdexcept>
+
+namespace quadid {
+
+std::string to_string(RotorInput k) {
+  switch (k) {
+    case RotorInput::kSpeed: return "speed";
+    case RotorInput::kRpm: return "rpm";
+    case RotorInput::kCommand: return "command";
+  }
+  return "?";
+}
+
+RotorInput rotor_input_from_string(std::string_view s) {
+  if (s == "speed") return RotorInput::kSpeed;
+  if (s == "rpm") return RotorInput::kRpm;
+  if (s == "command") return RotorInput::kCommand;
+  throw std::invalid_argument(fmt::format("'{}' is not a rotor input kind (speed, rpm or command)", s));
+}
+
+void RotorModel::validate() const {
+  const size_t n = columns.size();
+  if (n == 0) throw std::invalid_argument("rotors.columns: at least one rotor is needed");
+  if (positions.size() != n)
+    throw std::invalid_argument(
+        fmt::format("rotors.positions: {} positions for {} rotors in rotors.columns", positions.size(), n));
+  if (spin.size() != n)
+    throw std::invalid_argument(fmt::format("rotors.spin: {} entries for {} rotors in rotors.columns", spin.size(), n));
+  for (size_t i = 0; i < n; ++i) {
+    if (columns[i].empty()) throw std::invalid_argument(fmt::format("rotors.columns[{}]: empty column name", i));
+    for (size_t j = 0; j < i; ++j)
+      if (columns[j] == columns[i])
+        throw std::invalid_argument(fmt::format("rotors.columns: '{}' names two rotors", columns[i]));
+    if (!positions[i].allFinite()) throw std::invalid_argument(fmt::format("rotors.positions[{}]: not finite", i));
+    if (spin[i] != 1 && spin[i] != -1)
+      throw std::invalid_argument(fmt::format("rotors.spin[{}]: must be cw (+1) or ccw (-1)", i));
+  }
+  auto nonneg = [](const char* key, double v) {
+    if (!std::isfinite(v) || v < 0.0)
+      throw std::invalid_argument(fmt::format("rotors.{} = {} must be a finite number >= 0", key, v));
+  };
+  nonneg("kf", kf);
+  nonneg("thrust_max", thrust_max);
+  nonneg("torque_ratio", torque_ratio);
+  nonneg("time_constant", time_constant);
+  nonneg("rotor_inertia", rotor_inertia);
+  if (input == RotorInput::kCommand && !(thrust_max > 0.0))
+    throw std::invalid_argument("rotors.thrust_max must be > 0 when rotors.input = \"command\"");
+  if (input != RotorInput::kCommand && !(kf > 0.0))
+    throw std::invalid_argument(fmt::format("rotors.kf must be > 0 when rotors.input = \"{}\"", to_string(input)));
+}
+
+double RotorModel::speed_for_thrust(double T) const { return std::sqrt(std::max(T, 0.0) / thrust_coefficient()); }
+
+double RotorModel::input_for_thrust(double T) const {
+  if (input == RotorInput::kCommand) return std::max(T, 0.0) / thrust_max;
+  return speed_for_thrust(T);
+}
+
+Eigen::Matrix<double, 4, Eigen::Dynamic> RotorModel::allocation() const {
+  Eigen::Matrix<double, 4, Eigen::Dynamic> B(4, count());
+  for (int i = 0; i < count(); ++i) {
+    const Vec3& r = positions[static_cast<size_t>(i)];
+    B(0, i) = 1.0;                                              // Fz = sum T_i
+    B(1, i) = r(1);                                             // tau_phi = sum y_i T_i
+    B(2, i) = -r(0);                                            // tau_theta = -sum x_i T_i
+    B(3, i) = static_cast<double>(spin[static_cast<size_t>(i)]) * torque_ratio;  // tau_psi = sum s_i Q_i
+  }
+  return B;
+}
+
+Eigen::Matrix<double, Eigen::Dynamic, 4> RotorModel::mixer() const {
+  const Eigen::Matrix<double, 4, Eigen::Dynamic> B = allocation();
+  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(B, Eigen::ComputeThinU | Eigen::ComputeThinV);
+  const Eigen::VectorXd s = svd.singularValues();
+  if (s.size() < 4 || !(s(s.size() - 1) > 1e-9 * s(0)))
+    throw std::invalid_argument(
+        "rotors: the layout cannot produce every thrust and torque (allocation matrix rank < 4: check "
+        "positions, spin and torque_ratio > 0)");
+  // Minimum-norm right inverse B^T (B B^T)^-1 = V S^-1 U^T.
+  return svd.matrixV() * s.cwiseInverse().asDiagonal() * svd.matrixU().transpose();
+}
+
+Input RotorModel::wrench(const Eigen::VectorXd& thrusts) const {
+  const Eigen::Vector4d w = allocation() * thrusts;
+  Input u;
+  u.Fz = w(0);
+  u.tau = w.tail<3>();
+  return u;
+}
+
+Eigen::MatrixXd RotorModel::speeds(const Eigen::MatrixXd& in, double T) const {
+  if (in.cols() != count())
+    throw std::invalid_argument(fmt::format("rotor inputs: {} columns for {} rotors", in.cols(), count()));
+  for (Eigen::Index i = 0; i < in.cols(); ++i)
+    for (Eigen::Index k = 0; k < in.rows(); ++k) {
+      const double v = in(k, i);
+      if (!(v >= 0.0) || (input == RotorInput::kCommand && v > 1.0 + 1e-9))
+        throw InputError(fmt::format("rotor column '{}', sample {}: {} is not a {} ({})",
+                                     columns[static_cast<size_t>(i)], k, v, to_string(input),
+                                     input == RotorInput::kCommand ? "expected 0..1" : "expected >= 0"));
+    }
+  if (input != RotorInput::kCommand) return in;
+  // Normalized speed: w = sqrt(c) in steady state (T = thrust_max c); first-order lag on w.
+  const Eigen::MatrixXd target = in.cwiseMin(1.0).cwiseSqrt();
+  if (!(time_constant > 0.0)) return target;
+  if (!(T > 0.0)) throw std::invalid_argument("rotor speeds: the sample period must be > 0");
+  const double a = std::exp(-T / time_constant);  // exact over one sample with the command held
+  Eigen::MatrixXd w(target.rows(), target.cols());
+  if (w.rows() == 0) return w;
+  w.row(0) = target.row(0);  // steady state at the first sample
+  for (Eigen::Index k = 1; k < w.rows(); ++k) w.row(k) = target.row(k - 1) + (w.row(k - 1) - target.row(k - 1)) * a;
+  return w;
+}
+
+WrenchSeries RotorModel::wrench_from_speeds(const Eigen::MatrixXd& w) const {
+  if (w.cols() != count())
+    throw std::invalid_argument(fmt::format("rotor speeds: {} columns for {} rotors", w.cols(), count()));
+  const Eigen::MatrixXd thrusts = thrust_coefficient() * w.cwiseAbs2();  // T_i = k w_i^2
+  return thrusts * allocation().transpose();
+}
+
+Eigen::MatrixXd rotor_inputs(const FlightLog& log, const RotorModel& rotors) {
+  Eigen::MatrixXd in(log.rows(), rotors.count());
+  for (int i = 0; i < rotors.count(); ++i) {
+    const std::string& c = rotors.columns[static_cast<size_t>(i)];
+    if (!log.has(c))
+      throw InputError(fmt::format("the log has no rotor column '{}' (the vehicle's rotors.columns: {})", c,
+                                   fmt::join(rotors.columns, ", ")));
+    in.col(i) = log.column(c);
+  }
+  return in;
+}
+
+double log_sample_period(const FlightLog& log) {
+  if (log.rows() < 2) throw InputError("the log needs at least 2 samples");
+  const Eigen::VectorXd t = log.column("t");
+  return (t(t.size() - 1) - t(0)) / static_cast<double>(t.size() - 1);
+}
+
+FlightLog with_rotor_wrench(const FlightLog& log, const RotorModel& rotors) {
+  const Eigen::MatrixXd in = rotor_inputs(log, rotors);
+  const double T = rotors.input == RotorInput::kCommand && rotors.time_constant > 0.0 ? log_sample_period(log) : 0.0;
+  const WrenchSeries F = rotors.wrench_from_speeds(rotors.speeds(in, T));
+  FlightLog out = log;
+  static const char* kNames[4] = {"Fz", "tau_phi", "tau_theta", "tau_psi"};
+  for (int j = 0; j < 4; ++j) {
+    int c = out.find(kNames[j]);
+    if (c < 0) {
+      out.columns.emplace_back(kNames[j]);
+      out.data.conservativeResize(Eigen::NoChange, out.data.cols() + 1);
+      c = static_cast<int>(out.data.cols() - 1);
+    }
+    out.data.col(c) = F.col(j);
+  }
+  return out;
+}
+
+}  // namespace quadid

@@ -1,0 +1,297 @@
+// The vehicle file (TOML, DESIGN.md "Real vehicles"), read with toml++:
+// every key checked, errors as "FILE:LINE:COLUMN: table.key: problem".
+#include "quadid/vehicle.hpp"
+
+#include "builtin_vehicles.hpp"
+
+#include <fmt/format.h>
+#include <toml++/toml.h>
+
+#include <cmath>
+#include <filesystem>
+#include <set>
+#include <stdexcept>
+
+namespace quadid {
+namespace {
+
+class Reader {
+ public:
+  explicit Reader(std::string source) : source_(std::move(source)) {}
+
+  [[noreturn]] void fail(const toml::source_region& where, std::string_view key, std::string_view what) const {
+    if (where.begin.line > 0)
+      throw InputError(fmt::format("{}:{}:{}: {}: {}", source_, where.begin.line, where.begin.column, key, what));
+    throw InputError(fmt::format("{}: {}: {}", source_, key, what));
+  }
+
+  // Every key of `t` must be in `allowed`; `prefix` is "" or "rotors." etc.
+  void only(const toml::table& t, std::string_view prefix, const std::set<std::string>& allowed) const {
+    for (auto&& [k, node] : t) {
+      const std::string key(k.str());
+      if (!allowed.count(key)) {
+        std::string list;
+        for (const auto& a : allowed) list += (list.empty() ? "" : ", ") + a;
+        fail(k.source(), fmt::format("{}{}", prefix, key), fmt::format("unknown key (expected one of: {})", list));
+      }
+      (void)node;
+    }
+  }
+
+  const toml::table* table(const toml::table& t, const char* key, bool required) const {
+    const toml::node* n = t.get(key);
+    if (!n) {
+      if (required) fail(t.source(), key, "missing required table [" + std::string(key) + "]");
+      return nullptr;
+    }
+    if (!n->is_table()) fail(n->source(), key, "must be a table");
+    return n->as_table();
+  }
+
+  static double number_of(const toml::node& n, bool& ok) {
+    ok = true;
+    if (const auto* i = n.as_integer()) return static_cast<double>(i->get());
+    if (const auto* f = n.as_floating_point()) return f->get();
+    ok = false;
+    return 0.0;
+  }
+
+  std::optional<double> number(const toml::table& t, std::string_view prefix, const char* key, bool required,
+                               bool nonnegative) const {
+    const std::string name = fmt::format("{}{}", prefix, key);
+    const toml::node* n = t.get(key);
+    if (!n) {
+      if (required) fail(t.source(), name, "missing required key");
+      return std::nullopt;
+    }
+    bool ok = false;
+    const double v = number_of(*n, ok);
+    if (!ok || !std::isfinite(v)) fail(n->source(), name, "must be a finite number");
+    if (nonnegative && v < 0.0) fail(n->source(), name, fmt::format("must be >= 0 (got {})", v));
+    return v;
+  }
+
+  std::optional<std::string> string(const toml::table& t, std::string_view prefix, const char* key,
+                                    bool required) const {
+    const std::string name = fmt::format("{}{}", prefix, key);
+    const toml::node* n = t.get(key);
+    if (!n) {
+      if (required) fail(t.source(), name, "missing required key");
+      return std::nullopt;
+    }
+    if (!n->is_string()) fail(n->source(), name, "must be a string");
+    return std::string(n->as_string()->get());
+  }
+
+  const toml::array& array(const toml::table& t, std::string_view prefix, const char* key) const {
+    const std::string name = fmt::format("{}{}", prefix, key);
+    const toml::node* n = t.get(key);
+    if (!n) fail(t.source(), name, "missing required key");
+    if (!n->is_array()) fail(n->source(), name, "must be an array");
+    return *n->as_array();
+  }
+
+  std::optional<Vec3> vec3(const toml::table& t, std::string_view prefix, const char* key, bool nonnegative) const {
+    if (!t.get(key)) return std::nullopt;
+    const toml::array& a = array(t, prefix, key);
+    const std::string name = fmt::format("{}{}", prefix, key);
+    if (a.size() != 3) fail(a.source(), name, fmt::format("must hold 3 numbers (got {})", a.size()));
+    Vec3 v;
+    for (size_t i = 0; i < 3; ++i) {
+      bool ok = false;
+      v(static_cast<Eigen::Index>(i)) = number_of(*a.get(i), ok);
+      if (!ok || !std::isfinite(v(static_cast<Eigen::Index>(i))))
+        fail(a.get(i)->source(), fmt::format("{}[{}]", name, i), "must be a finite number");
+      if (nonnegative && v(static_cast<Eigen::Index>(i)) < 0.0)
+        fail(a.get(i)->source(), fmt::format("{}[{}]", name, i), "must be >= 0");
+    }
+    return v;
+  }
+
+ private:
+  std::string source_;
+};
+
+Params read_nominal(const Reader& r, const toml::table& t) {
+  r.only(t, "nominal.", {"m", "Ixx", "Ixy", "Ixz", "Iyy", "Iyz", "Izz"});
+  Theta th;
+  for (size_t j = 0; j < 7; ++j) {
+    const char* key = kThetaNames[j];
+    const bool product = j == 2 || j == 3 || j == 5;
+    th(static_cast<Eigen::Index>(j)) = r.number(t, "nominal.", key, !product, !product).value_or(0.0);
+  }
+  Params P = Params::from_theta(th);
+  try {
+    P.validate("nominal");
+  } catch (const std::invalid_argument& e) {
+    r.fail(t.source(), "nominal", e.what());
+  }
+  return P;
+}
+
+RotorModel read_rotors(const Reader& r, const toml::table& t) {
+  r.only(t, "rotors.",
+         {"input", "columns", "kf", "thrust_max", "torque_ratio", "time_constant", "rotor_inertia", "positions",
+          "spin"});
+  RotorModel m;
+  const std::string input = *r.string(t, "rotors.", "input", true);
+  try {
+    m.input = rotor_input_from_string(input);
+  } catch (const std::invalid_argument& e) {
+    r.fail(t.get("input")->source(), "rotors.input", e.what());
+  }
+  const toml::array& cols = r.array(t, "rotors.", "columns");
+  for (size_t i = 0; i < cols.size(); ++i) {
+    const toml::node& n = *cols.get(i);
+    if (!n.is_string() || n.as_string()->get().empty())
+      r.fail(n.source(), fmt::format("rotors.columns[{}]", i), "must be a non-empty string (a log column name)");
+    m.columns.emplace_back(n.as_string()->get());
+  }
+  if (m.columns.empty()) r.fail(cols.source(), "rotors.columns", "must name at least one rotor column");
+  const bool command = m.input == RotorInput::kCommand;
+  m.kf = r.number(t, "rotors.", "kf", !command, true).value_or(0.0);
+  m.thrust_max = r.number(t, "rotors.", "thrust_max", command, true).value_or(0.0);
+  m.torque_ratio = *r.number(t, "rotors.", "torque_ratio", true, true);
+  m.time_constant = r.number(t, "rotors.", "time_constant", false, true).value_or(0.0);
+  m.rotor_inertia = r.number(t, "rotors.", "rotor_inertia", false, true).value_or(0.0);
+
+  const toml::array& pos = r.array(t, "rotors.", "positions");
+  if (pos.size() != m.columns.size())
+    r.fail(pos.source(), "rotors.positions",
+           fmt::format("{} positions for {} rotors in rotors.columns", pos.size(), m.columns.size()));
+  for (size_t i = 0; i < pos.size(); ++i) {
+    const toml::node& n = *pos.get(i);
+    const std::string name = fmt::format("rotors.positions[{}]", i);
+    if (!n.is_array() || n.as_array()->size() != 3) r.fail(n.source(), name, "must be [x, y, z] in metres");
+    Vec3 p;
+    for (size_t c = 0; c < 3; ++c) {
+      bool ok = false;
+      p(static_cast<Eigen::Index>(c)) = Reader::number_of(*n.as_array()->get(c), ok);
+      if (!ok || !std::isfinite(p(static_cast<Eigen::Index>(c)))) r.fail(n.source(), name, "must hold 3 finite numbers");
+    }
+    m.positions.push_back(p);
+  }
+  const toml::array& spin = r.array(t, "rotors.", "spin");
+  if (spin.size() != m.columns.size())
+    r.fail(spin.source(), "rotors.spin",
+           fmt::format("{} entries for {} rotors in rotors.columns", spin.size(), m.columns.size()));
+  for (size_t i = 0; i < spin.size(); ++i) {
+    const toml::node& n = *spin.get(i);
+    const std::string name = fmt::format("rotors.spin[{}]", i);
+    const std::string s = n.is_string() ? std::string(n.as_string()->get()) : std::string();
+    if (s == "cw") m.spin.push_back(1);
+    else if (s == "ccw") m.spin.push_back(-1);
+    else r.fail(n.source(), name, "must be \"cw\" or \"ccw\" (seen from above)");
+  }
+  try {
+    m.validate();
+  } catch (const std::invalid_argument& e) {
+    r.fail(t.source(), "rotors", e.what());
+  }
+  return m;
+}
+
+VehicleController read_controller(const Reader& r, const toml::table& t) {
+  r.only(t, "controller.", {"Kpp", "Kip", "Kdp", "Kpo", "Kio", "Kdo", "rate"});
+  VehicleController c;
+  c.Kpp = r.vec3(t, "controller.", "Kpp", true);
+  c.Kip = r.vec3(t, "controller.", "Kip", true);
+  c.Kdp = r.vec3(t, "controller.", "Kdp", true);
+  c.Kpo = r.vec3(t, "controller.", "Kpo", true);
+  c.Kio = r.vec3(t, "controller.", "Kio", true);
+  c.Kdo = r.vec3(t, "controller.", "Kdo", true);
+  c.rate = r.number(t, "controller.", "rate", false, true);
+  if (c.rate && !(*c.rate > 0.0)) r.fail(t.get("rate")->source(), "controller.rate", "must be > 0 Hz");
+  return c;
+}
+
+VehicleSensors read_sensors(const Reader& r, const toml::table& t) {
+  r.only(t, "sensors.",
+         {"mocap_rate", "imu_rate", "position_noise", "yaw_noise", "attitude_noise", "gyro_noise", "rotor_noise"});
+  VehicleSensors s;
+  s.mocap_rate = r.number(t, "sensors.", "mocap_rate", false, true);
+  s.imu_rate = r.number(t, "sensors.", "imu_rate", false, true);
+  for (const char* k : {"mocap_rate", "imu_rate"})
+    if (const auto v = r.number(t, "sensors.", k, false, true); v && !(*v > 0.0))
+      r.fail(t.get(k)->source(), fmt::format("sensors.{}", k), "must be > 0 Hz");
+  s.position = r.number(t, "sensors.", "position_noise", false, true);
+  s.yaw = r.number(t, "sensors.", "yaw_noise", false, true);
+  s.attitude = r.number(t, "sensors.", "attitude_noise", false, true);
+  s.gyro = r.number(t, "sensors.", "gyro_noise", false, true);
+  s.rotor = r.number(t, "sensors.", "rotor_noise", false, true);
+  return s;
+}
+
+}  // namespace
+
+void Vehicle::validate() const {
+  if (name.empty()) throw std::invalid_argument("name: must not be empty");
+  nominal.validate("nominal");
+  rotors.validate();
+}
+
+PidGains vehicle_gains(const Vehicle& v) {
+  const Params q = Params::qball2_nominal();  // the vehicle the section III-C gains were tuned for
+  PidGains g;
+  const double ms = v.nominal.m / q.m;
+  const Vec3 is = v.nominal.I.diagonal().cwiseQuotient(q.I.diagonal());
+  g.Kpp *= ms;
+  g.Kip *= ms;
+  g.Kdp *= ms;
+  g.Kpo = g.Kpo.cwiseProduct(is);
+  g.Kio = g.Kio.cwiseProduct(is);
+  g.Kdo = g.Kdo.cwiseProduct(is);
+  const VehicleController& c = v.controller;
+  if (c.Kpp) g.Kpp = *c.Kpp;
+  if (c.Kip) g.Kip = *c.Kip;
+  if (c.Kdp) g.Kdp = *c.Kdp;
+  if (c.Kpo) g.Kpo = *c.Kpo;
+  if (c.Kio) g.Kio = *c.Kio;
+  if (c.Kdo) g.Kdo = *c.Kdo;
+  return g;
+}
+
+Vehicle parse_vehicle(std::string_view text, const std::string& source) {
+  toml::table root;
+  try {
+    root = toml::parse(text, source);
+  } catch (const toml::parse_error& e) {
+    const auto& b = e.source().begin;
+    throw InputError(fmt::format("{}:{}:{}: not valid TOML: {}", source, b.line, b.column, e.description()));
+  }
+  const Reader r(source);
+  r.only(root, "", {"name", "nominal", "rotors", "controller", "sensors"});
+  Vehicle v;
+  v.source = source;
+  v.name = *r.string(root, "", "name", true);
+  if (v.name.empty()) r.fail(root.get("name")->source(), "name", "must not be empty");
+  v.nominal = read_nominal(r, *r.table(root, "nominal", true));
+  v.rotors = read_rotors(r, *r.table(root, "rotors", true));
+  if (const auto* c = r.table(root, "controller", false)) v.controller = read_controller(r, *c);
+  if (const auto* s = r.table(root, "sensors", false)) v.sensors = read_sensors(r, *s);
+  return v;
+}
+
+std::vector<std::string> builtin_vehicle_names() {
+  std::vector<std::string> names;
+  for (const auto& b : detail::builtin_vehicles()) names.emplace_back(b.name);
+  return names;
+}
+
+std::string_view builtin_vehicle_text(std::string_view name) {
+  for (const auto& b : detail::builtin_vehicles())
+    if (b.name == name) return b.text;
+  throw std::invalid_argument(fmt::format("unknown built-in vehicle '{}' (built-in: {}; or a vehicle file path)", name,
+                                          fmt::join(builtin_vehicle_names(), ", ")));
+}
+
+Vehicle load_vehicle(const std::string& spec) {
+  for (const auto& b : detail::builtin_vehicles())
+    if (b.name == spec) return parse_vehicle(b.text, "built-in " + spec);
+  if (!std::filesystem::exists(spec))
+    throw InputError(fmt::format("vehicle '{}': neither a built-in vehicle ({}) nor an existing file", spec,
+                                 fmt::join(builtin_vehicle_names(), ", ")));
+  return parse_vehicle(read_file(spec), spec);
+}
+
+}  // namespace quadid

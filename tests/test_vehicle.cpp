@@ -1,0 +1,363 @@
+// Vehicle files and the rotor model (include/quadid/vehicle.hpp). Reference
+// values are closed-form: per-rotor thrusts worked out by hand from the
+// formulas of DESIGN.md "Real vehicles" for an X, a + and an asymmetric layout.
+#include "quadid/simulation.hpp"
+#include "quadid/vehicle.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+
+using namespace quadid;
+
+namespace {
+
+// Relative rounding of a handful of products and sums of doubles.
+constexpr double kRel = 1e-12;
+
+// A minimal valid vehicle file; tests replace one line to make it bad.
+const std::string kGood = R"(name = "test"
+[nominal]
+m = 2.0
+Ixx = 0.02
+Iyy = 0.022
+Izz = 0.04
+[rotors]
+input = "speed"
+columns = ["w1", "w2", "w3", "w4"]
+kf = 1e-5
+torque_ratio = 0.02
+positions = [[0.1, 0.05, 0.02], [-0.2, 0.1, 0.0], [0.05, -0.15, 0.0], [-0.1, -0.1, 0.01]]
+spin = ["cw", "ccw", "ccw", "cw"]
+)";
+
+std::string replace(std::string s, const std::string& from, const std::string& to) {
+  const size_t p = s.find(from);
+  EXPECT_NE(p, std::string::npos) << from;
+  return s.replace(p, from.size(), to);
+}
+
+// The InputError message of parsing `text` ("" if it parses).
+std::string error_of(const std::string& text) {
+  try {
+    parse_vehicle(text, "bad.toml");
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+Eigen::MatrixXd row(std::initializer_list<double> v) {
+  Eigen::MatrixXd m(1, static_cast<Eigen::Index>(v.size()));
+  Eigen::Index i = 0;
+  for (double x : v) m(0, i++) = x;
+  return m;
+}
+
+void expect_wrench(const WrenchSeries& F, double Fz, double tx, double ty, double tz) {
+  ASSERT_EQ(F.rows(), 1);
+  EXPECT_NEAR(F(0, 0), Fz, kRel * std::abs(Fz));
+  EXPECT_NEAR(F(0, 1), tx, kRel * std::abs(Fz));  // torques: relative to the thrust x arm scale
+  EXPECT_NEAR(F(0, 2), ty, kRel * std::abs(Fz));
+  EXPECT_NEAR(F(0, 3), tz, kRel * std::abs(Fz));
+}
+
+}  // namespace
+
+TEST(Vehicle, XLayoutCrazyflieRpmByHand) {
+  // rpm 10000, 12000, 14000, 16000; T = 2.2164e-10 rpm^2 = 0.022164, 0.03191616, 0.04344144, 0.05673984 N.
+  // M1 (+a,-a) ccw, M2 (-a,-a) cw, M3 (-a,+a) ccw, M4 (+a,+a) cw, a = 0.0325 m:
+  // tau_phi = a(-T1 - T2 + T3 + T4), tau_theta = -a(T1 - T2 - T3 + T4), tau_psi = 0.005964552(-T1 + T2 - T3 + T4).
+  const Vehicle v = load_vehicle("crazyflie21");
+  const RotorModel& r = v.rotors;
+  const WrenchSeries F = r.wrench_from_speeds(r.speeds(row({10000, 12000, 14000, 16000}), 0.002));
+  expect_wrench(F, 0.15426144, 0.0014982864, -0.0001152528, 0.00013748626374912);
+}
+
+TEST(Vehicle, PlusLayoutQball2CommandsByHand) {
+  // Commands 0.5 0.4 0.3 0.2 -> T = 12 N x command = 6, 4.8, 3.6, 2.4 N (no lag in the qball2 file).
+  // front (0.2, 0) ccw, left (0, 0.2) cw, back (-0.2, 0) ccw, right (0, -0.2) cw:
+  // Fz = 16.8; tau_phi = 0.2 (4.8 - 2.4) = 0.48; tau_theta = -0.2 (6 - 3.6) = -0.48;
+  // tau_psi = (0.4/12)(-6 + 4.8 - 3.6 + 2.4) = -0.08.
+  const Vehicle v = load_vehicle("qball2");
+  const RotorModel& r = v.rotors;
+  const WrenchSeries F = r.wrench_from_speeds(r.speeds(row({0.5, 0.4, 0.3, 0.2}), 0.002));
+  expect_wrench(F, 16.8, 0.48, -0.48, -0.08);
+  EXPECT_EQ(v.nominal.theta(), Params::qball2_nominal().theta());
+}
+
+TEST(Vehicle, AsymmetricLayoutBySpeedByHand) {
+  // kf = 1e-5, w = 100..400 rad/s -> T = 0.1, 0.4, 0.9, 1.6 N. Positions (x, y):
+  // (0.1, 0.05) (-0.2, 0.1) (0.05, -0.15) (-0.1, -0.1); z offsets do not enter.
+  // tau_phi = 0.005 + 0.04 - 0.135 - 0.16 = -0.25; tau_theta = -(0.01 - 0.08 + 0.045 - 0.16) = 0.185;
+  // spin cw ccw ccw cw, ratio 0.02: tau_psi = 0.02 (0.1 - 0.4 - 0.9 + 1.6) = 0.008.
+  const Vehicle v = parse_vehicle(kGood, "good.toml");
+  const RotorModel& r = v.rotors;
+  expect_wrench(r.wrench_from_speeds(r.speeds(row({100, 200, 300, 400}), 0.002)), 3.0, -0.25, 0.185, 0.008);
+  const Input u = r.wrench(Eigen::Vector4d(0.1, 0.4, 0.9, 1.6));
+  EXPECT_NEAR(u.tau(0), -0.25, 1e-15);
+}
+
+TEST(Vehicle, MixerIsARightInverseOfTheAllocation) {
+  for (const std::string& name : builtin_vehicle_names()) {
+    const RotorModel r = load_vehicle(name).rotors;
+    const Eigen::Matrix4d BM = r.allocation() * r.mixer();
+    EXPECT_LT((BM - Eigen::Matrix4d::Identity()).cwiseAbs().maxCoeff(), 1e-12) << name;
+  }
+  const RotorModel a = parse_vehicle(kGood, "good.toml").rotors;
+  EXPECT_LT((a.allocation() * a.mixer() - Eigen::Matrix4d::Identity()).cwiseAbs().maxCoeff(), 1e-12);
+  // Spin all the same way: no yaw authority, no mixer.
+  RotorModel bad = a;
+  bad.spin = {1, 1, 1, 1};
+  EXPECT_THROW(bad.mixer(), std::invalid_argument);
+}
+
+TEST(Vehicle, MotorLagActsOnTheRotorSpeedExactly) {
+  // Command 0 at sample 0, then 1: w_0 = w_1 = 0 (the step is seen from sample 1 on, held),
+  // w_k = 1 - exp(-(k - 1) T / tau) for k >= 1 (exact first-order step response), T_k = thrust_max w_k^2.
+  RotorModel r = load_vehicle("jmavsim-quad").rotors;
+  const double T = 0.002, tau = r.time_constant;
+  Eigen::MatrixXd c = Eigen::MatrixXd::Ones(20, 4);
+  c.row(0).setZero();
+  const Eigen::MatrixXd w = r.speeds(c, T);
+  EXPECT_EQ(w(0, 0), 0.0);
+  for (Eigen::Index k = 1; k < 20; ++k)
+    EXPECT_NEAR(w(k, 2), 1.0 - std::exp(-static_cast<double>(k - 1) * T / tau), 1e-15) << k;
+  // Steady state: a constant command gives T = thrust_max x command at every sample.
+  const Eigen::MatrixXd hold = Eigen::MatrixXd::Constant(10, 4, 0.36);
+  const WrenchSeries F = r.wrench_from_speeds(r.speeds(hold, T));
+  for (Eigen::Index k = 0; k < 10; ++k) EXPECT_NEAR(F(k, 0), 4 * 4.0 * 0.36, 1e-13);
+  // No lag for logged speeds: they are already after the motor.
+  const RotorModel s = parse_vehicle(kGood, "good.toml").rotors;
+  EXPECT_EQ(s.speeds(row({1, 2, 3, 4}), T), row({1, 2, 3, 4}));
+}
+
+TEST(Vehicle, BadRotorInputsAreNamed) {
+  const RotorModel r = load_vehicle("jmavsim-quad").rotors;
+  try {
+    r.speeds(row({0.5, 1.5, 0.2, 0.2}), 0.002);
+    FAIL() << "a command above 1 was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("actuator_motors.control[1]"), std::string::npos) << e.what();
+  }
+}
+
+TEST(Vehicle, WithRotorWrenchAppendsOrReplacesTheWrench) {
+  FlightLog log;
+  log.columns = {"t", "w1", "w2", "w3", "w4"};
+  log.data.resize(2, 5);
+  log.data << 0.0, 100, 200, 300, 400, 0.01, 100, 200, 300, 400;
+  const RotorModel r = parse_vehicle(kGood, "good.toml").rotors;
+  const FlightLog out = with_rotor_wrench(log, r);
+  ASSERT_TRUE(out.has("Fz") && out.has("tau_psi"));
+  EXPECT_NEAR(out.column("Fz")(1), 3.0, 1e-14);
+  EXPECT_NEAR(out.column("tau_theta")(0), 0.185, 1e-15);
+  const FlightLog again = with_rotor_wrench(out, r);  // replaced, not duplicated
+  EXPECT_EQ(again.columns.size(), out.columns.size());
+  log.columns[2] = "other";
+  try {
+    with_rotor_wrench(log, r);
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("'w2'"), std::string::npos) << e.what();
+  }
+}
+
+TEST(Vehicle, BuiltinsCarryTheirSources) {
+  const std::vector<std::string> names = builtin_vehicle_names();
+  EXPECT_EQ(names, (std::vector<std::string>{"qball2", "crazyflie21", "jmavsim-quad"}));
+  const Vehicle cf = load_vehicle("crazyflie21");
+  EXPECT_EQ(cf.nominal.m, 0.0347);
+  EXPECT_EQ(cf.rotors.kf, 2.2164e-10);
+  EXPECT_EQ(cf.rotors.spin, (std::vector<int>{-1, 1, -1, 1}));  // M1, M3 ccw
+  EXPECT_EQ(cf.rotors.columns[0], "rpm.m1");
+  const Vehicle jm = load_vehicle("jmavsim-quad");
+  EXPECT_EQ(jm.nominal.m, 0.8);
+  EXPECT_EQ(jm.rotors.thrust_max, 4.0);
+  EXPECT_EQ(jm.rotors.time_constant, 0.005);
+  EXPECT_NEAR(jm.rotors.positions[0].head<2>().norm(), 0.165, 1e-15);  // arm 0.165 m
+  EXPECT_EQ(jm.rotors.spin, (std::vector<int>{-1, -1, 1, 1}));  // PX4 quad X: 1, 2 ccw; 3, 4 cw
+  for (const auto& n : names) EXPECT_NE(builtin_vehicle_text(n).find('#'), std::string_view::npos) << n;
+  EXPECT_THROW(load_vehicle("no-such-vehicle"), InputError);
+}
+
+TEST(Vehicle, GainsScaleWithMassAndInertia) {
+  const PidGains paper;
+  const PidGains q = vehicle_gains(load_vehicle("qball2"));  // the paper's own vehicle: unchanged
+  EXPECT_EQ(q.Kpp, paper.Kpp);
+  EXPECT_EQ(q.Kdo, paper.Kdo);
+  const Vehicle jm = load_vehicle("jmavsim-quad");
+  const PidGains j = vehicle_gains(jm);
+  EXPECT_NEAR(j.Kpp(0), 11.5 * 0.8 / 1.79, 1e-14);
+  EXPECT_NEAR(j.Kpo(2), 2.6 * 0.009 / 0.04, 1e-15);
+  Vehicle given = jm;
+  given.controller.Kdo = Vec3(1, 2, 3);
+  EXPECT_EQ(vehicle_gains(given).Kdo, Vec3(1, 2, 3));
+}
+
+// --- one error per bad key: the message names the key and the file:line -------------
+
+TEST(VehicleFile, UnknownKeysAreNamedWithTheirLine) {
+  std::string e = error_of(replace(kGood, "kf = 1e-5", "kff = 1e-5"));
+  EXPECT_NE(e.find("bad.toml:10:"), std::string::npos) << e;  // the line of the key
+  EXPECT_NE(e.find("rotors.kff: unknown key"), std::string::npos) << e;
+  e = error_of(kGood + "colour = \"red\"\n");
+  EXPECT_NE(e.find("colour: unknown key"), std::string::npos) << e;
+  e = error_of(replace(kGood, "Izz = 0.04", "Izz = 0.04\nIzx = 0.0"));
+  EXPECT_NE(e.find("nominal.Izx: unknown key"), std::string::npos) << e;
+  e = error_of(kGood + "[controller]\nKp = [1, 2, 3]\n");
+  EXPECT_NE(e.find("controller.Kp: unknown key"), std::string::npos) << e;
+  e = error_of(kGood + "[sensors]\nimu_hz = 500\n");
+  EXPECT_NE(e.find("sensors.imu_hz: unknown key"), std::string::npos) << e;
+}
+
+TEST(VehicleFile, RotorCountMustMatchColumns) {
+  std::string e = error_of(replace(kGood, ", [-0.1, -0.1, 0.01]]", "]"));
+  EXPECT_NE(e.find("rotors.positions: 3 positions for 4 rotors"), std::string::npos) << e;
+  EXPECT_NE(e.find("bad.toml:12:"), std::string::npos) << e;
+  e = error_of(replace(kGood, R"(spin = ["cw", "ccw", "ccw", "cw"])", R"(spin = ["cw", "ccw", "ccw"])"));
+  EXPECT_NE(e.find("rotors.spin: 3 entries for 4 rotors"), std::string::npos) << e;
+}
+
+TEST(VehicleFile, NegativeCoefficientsAreNamed) {
+  std::string e = error_of(replace(kGood, "kf = 1e-5", "kf = -1e-5"));
+  EXPECT_NE(e.find("bad.toml:10:"), std::string::npos) << e;
+  EXPECT_NE(e.find("rotors.kf: must be >= 0"), std::string::npos) << e;
+  e = error_of(replace(kGood, "torque_ratio = 0.02", "torque_ratio = -0.02"));
+  EXPECT_NE(e.find("rotors.torque_ratio: must be >= 0"), std::string::npos) << e;
+  e = error_of(replace(kGood, "kf = 1e-5", "kf = 1e-5\ntime_constant = -0.01"));
+  EXPECT_NE(e.find("rotors.time_constant: must be >= 0"), std::string::npos) << e;
+  e = error_of(replace(kGood, "kf = 1e-5", "kf = 1e-5\nthrust_max = -3"));
+  EXPECT_NE(e.find("rotors.thrust_max: must be >= 0"), std::string::npos) << e;
+  e = error_of(replace(kGood, "m = 2.0", "m = -2.0"));
+  EXPECT_NE(e.find("nominal.m: must be >= 0"), std::string::npos) << e;
+}
+
+TEST(VehicleFile, SpinMustBeCwOrCcw) {
+  const std::string e = error_of(replace(kGood, R"("cw", "ccw", "ccw", "cw")", R"("cw", "ccw", "left", "cw")"));
+  EXPECT_NE(e.find("rotors.spin[2]: must be \"cw\" or \"ccw\""), std::string::npos) << e;
+}
+
+TEST(VehicleFile, MissingAndMistypedKeysAreNamed) {
+  std::string e = error_of(replace(kGood, "torque_ratio = 0.02\n", ""));
+  EXPECT_NE(e.find("rotors.torque_ratio: missing required key"), std::string::npos) << e;
+  e = error_of(replace(kGood, "kf = 1e-5\n", ""));  // speed input needs kf
+  EXPECT_NE(e.find("rotors.kf: missing required key"), std::string::npos) << e;
+  e = error_of(replace(kGood, R"(input = "speed")", R"(input = "command")"));  // command needs thrust_max
+  EXPECT_NE(e.find("rotors.thrust_max: missing required key"), std::string::npos) << e;
+  e = error_of(replace(kGood, R"(input = "speed")", R"(input = "pwm")"));
+  EXPECT_NE(e.find("rotors.input: 'pwm' is not a rotor input kind"), std::string::npos) << e;
+  e = error_of(replace(kGood, "Iyy = 0.022\n", ""));
+  EXPECT_NE(e.find("nominal.Iyy: missing required key"), std::string::npos) << e;
+  e = error_of(replace(kGood, "name = \"test\"\n", ""));
+  EXPECT_NE(e.find("name: missing required key"), std::string::npos) << e;
+  e = error_of(replace(kGood, "kf = 1e-5", "kf = \"small\""));
+  EXPECT_NE(e.find("rotors.kf: must be a finite number"), std::string::npos) << e;
+  e = error_of(replace(kGood, "[rotors]", "[rotorz]"));
+  EXPECT_NE(e.find("rotorz: unknown key"), std::string::npos) << e;
+  e = error_of(replace(kGood, "m = 2.0", "m = 2.0 2"));
+  EXPECT_NE(e.find("bad.toml:3:"), std::string::npos) << e;
+  EXPECT_NE(e.find("not valid TOML"), std::string::npos) << e;
+  e = error_of(replace(kGood, "Ixx = 0.02", "Ixx = 0.02\nIxy = 0.5"));  // not positive definite
+  EXPECT_NE(e.find("nominal"), std::string::npos) << e;
+}
+
+// --- rotor-level actuation in the simulator ----------------------------------------------
+
+TEST(RotorActuators, SettledRotorsDeliverTheCommandedWrench) {
+  // Within the limits the mixer inverts the allocation: settled rotors produce the command exactly.
+  RotorActuators act(load_vehicle("jmavsim-quad").rotors);
+  Input cmd;
+  cmd.Fz = 8.0;
+  cmd.tau = Vec3(0.05, -0.03, 0.02);
+  act.command(cmd);
+  act.settle();
+  const Input u = act.applied();
+  EXPECT_NEAR(u.Fz, 8.0, 1e-13);
+  EXPECT_LT((u.tau - cmd.tau).cwiseAbs().maxCoeff(), 1e-14);
+  for (bool s : act.saturated()) EXPECT_FALSE(s);
+  // Commands logged for a command-input vehicle: T_i / thrust_max.
+  EXPECT_NEAR(act.logged().sum(), 8.0 / 4.0, 1e-13);
+  // Beyond the limits the rotors clip at thrust_max and say so.
+  cmd.Fz = 20.0;
+  act.command(cmd);
+  int clipped = 0;
+  for (bool s : act.saturated()) clipped += s;
+  EXPECT_GT(clipped, 0);
+  EXPECT_LE(act.logged().maxCoeff(), 1.0);
+}
+
+TEST(RotorActuators, LagFollowsTheExactFirstOrderResponse) {
+  RotorModel m = load_vehicle("jmavsim-quad").rotors;  // tau = 5 ms
+  RotorActuators act(m);
+  Input hover;
+  hover.Fz = 4.0;
+  act.command(hover);
+  act.settle();
+  const double w0 = act.speeds()(0);  // sqrt(1/4) = 0.5
+  EXPECT_NEAR(w0, 0.5, 1e-15);
+  hover.Fz = 9.0;  // new target sqrt(9/16) = 0.75
+  act.command(hover);
+  Input u0, uh, u1;
+  act.step(0.001, u0, uh, u1);
+  const double w1 = 0.75 + (0.5 - 0.75) * std::exp(-0.001 / 0.005);
+  EXPECT_NEAR(act.speeds()(0), w1, 1e-15);
+  EXPECT_NEAR(u0.Fz, 4.0, 1e-13);
+  EXPECT_NEAR(u1.Fz, 4 * 4.0 * w1 * w1, 1e-13);
+}
+
+TEST(RotorActuators, PlantStepIsStepStagesWithItsOwnLag) {
+  // Plant::step (wrench lag) == step_stages with the stage inputs it computes: bit for bit with no lag.
+  const Params P = Params::qball2_virtual();
+  Plant a(P, 9.81), b(P, 9.81);
+  State x;
+  x.p = Vec3(0, 0, 1);
+  x.omega = Vec3(0.1, -0.2, 0.3);
+  State y = x;
+  Input u;
+  u.Fz = 18.0;
+  u.tau = Vec3(0.01, 0.02, -0.01);
+  for (int i = 0; i < 10; ++i) {
+    a.step(x, u, 1e-3);
+    b.step_stages(y, u, u, u, 1e-3);
+  }
+  EXPECT_EQ(x.to_vector(), y.to_vector());
+}
+
+TEST(RotorActuators, TimeScaledTrajectoryIsTheSamePathPlayedFaster) {
+  // q_s(t) = q(S t)  =>  q_s^(k)(t) = S^k q^(k)(S t), for every flat output and derivative order.
+  const FourierTrajectory base = FourierTrajectory::table2();
+  const double S = 1.5;
+  const auto fast = time_scaled(base, S);
+  for (double t : {0.0, 0.7, 3.3, 12.1}) {
+    const FlatOutput a = fast->eval(t), b = base.eval(S * t);
+    for (Eigen::Index k = 0; k < a.cols(); ++k)
+      for (Eigen::Index i = 0; i < a.rows(); ++i)
+        EXPECT_NEAR(a(i, k), std::pow(S, static_cast<double>(k)) * b(i, k), 1e-12 * (1.0 + std::abs(a(i, k))))
+            << "t " << t << " output " << i << " order " << k;
+  }
+  EXPECT_NEAR(fast->period(), base.period() / S, 1e-12);
+  EXPECT_THROW(time_scaled(CircleTrajectory::experiment(1), 2.0), std::invalid_argument);
+  EXPECT_THROW(time_scaled(base, 0.0), std::invalid_argument);
+}
+
+TEST(RotorActuators, RotorNoiseIsForMeasuredSpeedsOnly) {
+  SimulationOptions o;
+  configure_for_vehicle(o, load_vehicle("jmavsim-quad"));  // commands
+  o.rotor_noise = 0.01;
+  EXPECT_THROW(o.validate(), std::invalid_argument);
+  Vehicle v = parse_vehicle(kGood + "thrust_max = 12.0\n[sensors]\nrotor_noise = 3.0\n", "good.toml");
+  SimulationOptions s;
+  configure_for_vehicle(s, v);
+  EXPECT_EQ(s.rotor_noise, 3.0);
+  EXPECT_NO_THROW(s.validate());
+  // Round trip through the log metadata (validate re-flies a vehicle log from it).
+  s.duration = 0.1;
+  const SimulationResult r = simulate(FourierTrajectory::table2(), s);
+  const SimulationOptions back = simulation_options_from_log(r.log);
+  ASSERT_TRUE(back.rotors.has_value());
+  EXPECT_EQ(back.rotors->columns, v.rotors.columns);
+  EXPECT_EQ(back.rotor_noise, 3.0);
+  EXPECT_TRUE(r.log.has("w4"));
+}
