@@ -9,7 +9,7 @@ build:
 	cmake --preset release -DQUADID_BUILD_BENCH=OFF
 	cmake --build build -j $(JOBS) --target quadid
 test:
-	cmake --preset release -DQUADID_BUILD_BENCH=OFF
+	cmake --preset release -DQUADID_BUILD_BENCH=OFF -DQUADID_WERROR=ON
 	cmake --build build -j $(JOBS)
 	cd build && ctest --output-on-failure -j $(JOBS)
 reproduce: build

@@ -38,7 +38,7 @@ void run(const ValidateArgs& a) {
       sets.push_back({name, P});
     }
   if (sets.empty()) throw std::invalid_argument("give at least one --params set");
-  const NamedParams reference{"nom", load_params(a.reference)};
+  const NamedParams reference{reference_name(a.reference), load_params(a.reference)};
 
   PredictionValidationOptions popt;
   popt.processing = a.proc.processing();
@@ -50,6 +50,7 @@ void run(const ValidateArgs& a) {
   sopt.with_noise = a.with_noise;
   popt.validate();
   sopt.validate();
+  if (!a.out.empty()) check_output_file(a.out, "-o/--out");
 
   const FlightLog log = read_flight_log(a.log, a.proc.csv());
 
@@ -76,9 +77,9 @@ void run(const ValidateArgs& a) {
                  "to re-fly its reference with the default controller";
     } else {
       if (!have_metadata) {
+        // The log's own rate; sensors no faster than it, RK4 step ~1 ms dividing its period.
         const auto t = log.column("t");
-        base.controller.rate = static_cast<double>(t.size() - 1) / (t(t.size() - 1) - t(0));
-        base.dt = 1.0 / base.controller.rate / std::max(1.0, std::round(1e-3 * base.controller.rate));
+        base.set_rate(static_cast<double>(t.size() - 1) / (t(t.size() - 1) - t(0)));
         fmt::print(stderr, "quadid validate: re-flying '{}' with the default controller at {:g} Hz\n",
                    traj->describe(), base.controller.rate);
       }
