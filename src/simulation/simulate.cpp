@@ -71,7 +71,7 @@ void SimulationOptions::validate() const {
       throw std::invalid_argument(fmt::format("safety box: min {} must be below max {} on axis {}",
                                               safety.box_min(i), safety.box_max(i), "xyz"[i]));
   if (!(safety.max_tilt > 0.0 && safety.max_tilt < M_PI / 2))
-    throw std::invalid_argument(fmt::format("safety.max_tilt = {} rad must be in (0, pi/2)", safety.max_tilt));
+    throw std::invalid_argument(fmt::format("safety limit max_tilt = {} rad must be in (0, pi/2)", safety.max_tilt));
   if (!(safety.max_rate > 0.0)) throw std::invalid_argument("safety.max_rate must be > 0");
   if (!(safety.max_speed > 0.0)) throw std::invalid_argument("safety.max_speed must be > 0");
   if (!std::isfinite(summary_from) || summary_from < 0.0 || summary_from >= duration)
