@@ -37,9 +37,9 @@ body {{ font-family: Helvetica, Arial, sans-serif; max-width: 1600px; margin: 2e
 h1 {{ font-size: 1.7em; border-bottom: 2px solid #333; padding-bottom: .2em; }}
 h2 {{ font-size: 1.35em; margin-top: 2em; border-bottom: 1px solid #bbb; }}
 h3 {{ font-size: 1.1em; margin-top: 1.5em; }}
-table {{ border-collapse: collapse; margin: .8em 0; font-size: .92em; }}
+table {{ border-collapse: collapse; margin: .8em 0; font-size: .86em; }}
 caption {{ text-align: left; font-weight: bold; padding-bottom: .4em; }}
-th, td {{ border: 1px solid #ccc; padding: .25em .5em; }}
+th, td {{ border: 1px solid #ccc; padding: .25em .35em; }}
 td {{ white-space: nowrap; }}
 td {{ text-align: right; font-variant-numeric: tabular-nums; }}
 thead th {{ background: #f0f0f0; }}

@@ -94,11 +94,20 @@ std::string markdown_escape(const std::string& s) {
 std::string Table::to_markdown() const {
   auto row = [](const std::vector<std::string>& cells) {
     std::string line = "|";
-    for (const auto& c : cells) line += " " + markdown_escape(c) + " |";
-    return line + "\n";
+    for (const auto& c : cells) {
+      line += ' ';
+      line += markdown_escape(c);
+      line += " |";
+    }
+    line += '\n';
+    return line;
   };
   std::string out;
-  if (!title.empty()) out += "**" + markdown_escape(title) + "**\n\n";
+  if (!title.empty()) {
+    out += "**";
+    out += markdown_escape(title);
+    out += "**\n\n";
+  }
   out += row(header) + "|";
   for (size_t c = 0; c < header.size(); ++c) out += c == 0 ? "---|" : "---:|";
   out += "\n";

@@ -152,8 +152,9 @@ Table table4(const SimulationComparison& c, const std::string& title) {
   }
   for (int i = 0; i < 10; ++i) {
     const double s = (i >= 3 && i <= 5) ? kRad2Deg : 1.0;
-    std::vector<std::string> row = {fmt::format("e_{} ({})", kTable4Signals[static_cast<size_t>(i)],
-                                                units[static_cast<size_t>(i)]),
+    std::string unit = units[static_cast<size_t>(i)];
+    if (unit == "N m") unit = "N\u00a0m";  // no line break inside the unit
+    std::vector<std::string> row = {fmt::format("e_{} ({})", kTable4Signals[static_cast<size_t>(i)], unit),
                                     report::fixed(c.reference.rms(i) * s, 5)};
     for (const auto& r : c.rows) {
       row.push_back(r.failure.empty() ? report::fixed(r.rms(i) * s, 5) : "diverged");
