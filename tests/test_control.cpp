@@ -218,10 +218,10 @@ TEST(Control, ValidateNamesTheBadOption) {
   expect_bad(o, "Kpp");
   o = {};
   o.Fz_max = -1.0;
-  expect_bad(o, "Fz_max");
+  expect_bad(o, "--fz-max");  // the command line's spelling (quadid simulate)
   o = {};
   o.rate = 0.0;
-  expect_bad(o, "rate");
+  expect_bad(o, "--rate");
   o = {};
   o.derivative_pole = NAN;
   expect_bad(o, "derivative_pole");
