@@ -14,7 +14,7 @@ python:
 	cmake --build build -j $(JOBS) --target quadid_python
 # ctest runs the GoogleTest suite and the Python module's pytest suite (one CTest test, /usr/bin/python3).
 test:
-	cmake --preset release -DQUADID_BUILD_BENCH=OFF
+	cmake --preset release -DQUADID_BUILD_BENCH=OFF -DQUADID_WERROR=ON
 	cmake --build build -j $(JOBS)
 	cd build && ctest --output-on-failure -j $(JOBS)
 reproduce: build

@@ -66,7 +66,7 @@ TEST_F(CliDesign, CheckRejectsBadTrajectoryFiles) {
   EXPECT_TRUE(r.out.empty());
   r = run("check-trajectory table2 --z-min 1.6");
   EXPECT_NE(r.rc, 0);
-  EXPECT_NE(r.err.find("z_min"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("--z-min"), std::string::npos) << r.err;
 }
 
 TEST_F(CliDesign, DesignRejectsBadOptionsWithoutWriting) {
@@ -74,7 +74,9 @@ TEST_F(CliDesign, DesignRejectsBadOptionsWithoutWriting) {
     std::string args, expect;
   };
   for (const Case& c : {Case{"--harmonics 0", "harmonics"}, Case{"--criterion aopt", "aopt"},
-                        Case{"--z-min 1.6", "z_min"}, Case{"--z0 2.0", "z0"}}) {
+                        Case{"--z-min 1.6", "--z-min"}, Case{"--z0 2.0", "--z0"},
+                        Case{"--wf 1e-300", "--wf = 1e-300 deg/s must be in [0.6, 360] deg/s"}, Case{"--check-dt 1e-9", "--check-dt = 1e-09 s must be in"},
+                        Case{"--cond-dt 1e9", "--cond-dt = 1e+09 s must be in"}}) {
     const auto r = run("design -q " + c.args + " -o " + path("t.json"));
     EXPECT_NE(r.rc, 0) << c.args;
     EXPECT_NE(r.err.find(c.expect), std::string::npos) << c.args << ": " << r.err;
@@ -101,6 +103,28 @@ TEST_F(CliDesign, DesignWritesCheckedTrajectoryReproducibly) {
   // Same seed, same bytes.
   ASSERT_EQ(run(args + path("b.json")).rc, 0);
   EXPECT_EQ(quadid::read_file(path("a.json")), quadid::read_file(path("b.json")));
+}
+
+// Issue 8 item 6: check-trajectory checks a designed file against the limits it
+// was designed for (saved in its "constraints"), not the defaults of section III-B
+// (z in [0.7, 1.5] m, which a design for z in [0.8, 2] m may leave).
+TEST_F(CliDesign, CheckUsesTheLimitsSavedInTheTrajectoryFile) {
+  const auto d = run("design -q --harmonics 3 --starts 1 --seed 5 --max-evals 120 --z-min 0.8 --z-max 2.0 --z0 0.8 -o " +
+                     path("t.json"));
+  ASSERT_EQ(d.rc, 0) << d.err;
+  const auto c = run("check-trajectory --strict --json " + path("t.json"));
+  ASSERT_EQ(c.rc, 0) << c.err << c.out;
+  const auto j = nlohmann::json::parse(c.out);
+  EXPECT_EQ(j["limits_from"], path("t.json"));
+  EXPECT_DOUBLE_EQ(j["limits"]["z_min"].get<double>(), 0.8);
+  EXPECT_DOUBLE_EQ(j["limits"]["z_max"].get<double>(), 2.0);
+  EXPECT_DOUBLE_EQ(j["limits"]["start"]["z"].get<double>(), 0.8);
+  for (const auto& k : j["constraints"]) EXPECT_TRUE(k["holds"].get<bool>()) << k.dump();
+  for (const auto& e : j["endpoints"]) EXPECT_TRUE(e["holds"].get<bool>()) << e.dump();
+  // A limit given on the command line replaces the file's: z0 = 0.7 is not where it starts.
+  const auto o = run("check-trajectory --strict --z-min 0.7 --z0 0.7 " + path("t.json"));
+  EXPECT_EQ(o.rc, 2) << o.err << o.out;
+  EXPECT_NE(o.out.find("with those given on the command line"), std::string::npos) << o.out;
 }
 
 // Issue 2's target: `quadid design --seed 1` (8 starts, the paper's problem)

@@ -129,6 +129,21 @@ TEST_F(CliIdentify, BadInputFailsClearlyAndWritesNothing) {
   EXPECT_NE(run(path("log.csv") + " --nominal nosuch").err.find("nosuch"), std::string::npos);
   EXPECT_NE(run(path("log.csv") + " --cutoff 400").err.find("below Nyquist"), std::string::npos);
   EXPECT_NE(run(path("missing.csv")).rc, 0);
+  // Absurd values name the option and its range (issue 8 item 5).
+  EXPECT_NE(run(path("log.csv") + " --evolution " + path("evo.csv") + " --evolution-interval 1e300")
+                .err.find("--evolution-interval = 1e+300 s must be in [0, 3600] s"),
+            std::string::npos);
+  EXPECT_NE(run(path("log.csv") + " --lambda -3").err.find("--lambda = -3 rad/s"), std::string::npos);
+  // Output paths are checked before the work starts: nothing on stdout, the option named.
+  r = run(path("log.csv") + " -o " + path("no/such/dir/r.json"));
+  EXPECT_EQ(r.rc, 1);
+  EXPECT_NE(r.err.find("-o/--out " + path("no/such/dir/r.json") + ": directory '" + path("no/such/dir") +
+                       "' does not exist"),
+            std::string::npos)
+      << r.err;
+  EXPECT_TRUE(r.out.empty()) << r.out;
+  r = run(path("log.csv") + " --evolution " + dir_.string());
+  EXPECT_NE(r.err.find("--evolution " + dir_.string() + ": is a directory"), std::string::npos) << r.err;
 }
 
 TEST_F(CliIdentify, LiteralGradientDescentReportsDivergence) {

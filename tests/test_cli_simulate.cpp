@@ -94,8 +94,26 @@ TEST_F(CliSimulate, BadInputIsNamed) {
 
   r = run("--trajectory table2 --dt 0.0003");
   EXPECT_NE(r.rc, 0);
-  EXPECT_NE(r.err.find("dt"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("--dt"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(path("log.csv")));
+
+  // Absurd values end at once with the option and its range (issue 8 item 5).
+  r = run("--trajectory table2 --duration 2e5 -o " + path("log.csv"));  // 1e8 samples at 500 Hz
+  EXPECT_NE(r.rc, 0);
+  EXPECT_NE(r.err.find("--duration = 200000 s at --rate 500 Hz makes 1e+08 samples; at most 1e+07"), std::string::npos)
+      << r.err;
+  r = run("--trajectory table2 --dt 1e-9");
+  EXPECT_NE(r.err.find("--dt = 1e-09 s"), std::string::npos) << r.err;
+  r = run("--trajectory table2 --seed -1");
+  EXPECT_NE(r.rc, 0);
+  EXPECT_NE(r.err.find("--seed"), std::string::npos) << r.err;
+  r = run("--trajectory table2 --imu-rate 800");
+  EXPECT_NE(r.err.find("--imu-rate = 800 Hz must be > 0 and at most the controller (log) rate --rate = 500 Hz"),
+            std::string::npos)
+      << r.err;
+  r = run("--trajectory table2 --duration 2 -o " + path("nodir/log.csv"));
+  EXPECT_NE(r.err.find("-o/--out " + path("nodir/log.csv") + ": directory"), std::string::npos) << r.err;
+  EXPECT_TRUE(r.out.empty()) << r.out;
 }
 
 TEST_F(CliSimulate, HelpTeachesUnitsAndDefaults) {

@@ -2,6 +2,7 @@
 #include "cli_fixture.hpp"
 #include "quadid/io.hpp"
 
+#include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
 #include <fstream>
@@ -51,6 +52,47 @@ TEST_F(CliValidate, LogWithoutMetadataSkipsSimulationWithANote) {
   EXPECT_NE(s.out.find("e_x"), std::string::npos);
 }
 
+// Issue 8 item 2: a log from another tool at 100 or 250 Hz, without quadid's
+// metadata. Sensors follow the log's rate, the re-flight keeps a 1 ms step, and
+// every set is flown: every Table 4 number is finite, no row says "diverged".
+TEST_F(CliValidate, SimulateIdentifyAndValidateAtLogRatesWithoutMetadata) {
+  for (const int rate : {100, 250}) {
+    SCOPED_TRACE(rate);
+    const std::string log = path("log" + std::to_string(rate) + ".csv");
+    const std::string plain = path("plain" + std::to_string(rate) + ".csv");
+    const std::string result = path("result" + std::to_string(rate) + ".json");
+    // --rate alone: the IMU (500 Hz by default) is capped at the log rate.
+    const CliRun sim = run("simulate --trajectory table2 --duration 30 --rate " + std::to_string(rate) + " -o " + log);
+    ASSERT_EQ(sim.rc, 0) << sim.err;
+    {
+      std::ifstream in(log);
+      std::ofstream out(plain);
+      for (std::string line; std::getline(in, line);)
+        if (line.empty() || line[0] != '#') out << line << "\n";
+    }
+    const CliRun id = run("identify " + plain + " --window 5:30 -o " + result);
+    ASSERT_EQ(id.rc, 0) << id.err;
+    const CliRun v = run("validate --log " + plain + " --params " + result + " --trajectory table2 --window 5:30 --json");
+    ASSERT_EQ(v.rc, 0) << v.err;
+    EXPECT_NE(v.err.find(fmt::format("at {} Hz", rate)), std::string::npos) << v.err;
+    const auto j = nlohmann::json::parse(v.out);
+    const auto& sim_j = j["simulation"];
+    EXPECT_FALSE(sim_j["reference"].contains("failure")) << sim_j["reference"].dump();
+    ASSERT_EQ(sim_j["rows"].size(), 4u);
+    for (const auto& row : sim_j["rows"]) {
+      EXPECT_FALSE(row.contains("failure")) << row.dump();
+      for (const auto& [signal, v] : row["rms"].items()) EXPECT_TRUE(v.is_number()) << row["name"] << " " << signal;
+      for (const auto& [signal, v] : row["improvement_pct"].items())
+        EXPECT_TRUE(v.is_number()) << row["name"] << " " << signal;
+    }
+    for (const auto& [signal, v] : sim_j["reference"]["rms"].items()) EXPECT_TRUE(v.is_number()) << signal;
+    const CliRun t = run("validate --log " + plain + " --params " + result + " --trajectory table2 --window 5:30");
+    ASSERT_EQ(t.rc, 0) << t.err;
+    EXPECT_EQ(t.out.find("diverged"), std::string::npos) << t.out;
+    EXPECT_EQ(t.out.find("nan"), std::string::npos) << t.out;
+  }
+}
+
 TEST_F(CliValidate, BadInputNamesTheFile) {
   ASSERT_EQ(run("simulate --trajectory table2 --duration 3 -o " + path("log.csv")).rc, 0);
   std::ofstream(path("bad.json")) << "{\"m\": 1.8, \"Ixx\": -0.01, \"Iyy\": 0.01, \"Izz\": 0.02}";
@@ -86,6 +128,12 @@ TEST_F(CliReproduce, Table2RunWritesACompleteReport) {
   for (int f = 1; f <= 9; ++f) EXPECT_NE(html.find("Figure " + std::to_string(f) + "."), std::string::npos) << f;
   EXPECT_EQ(html.find("<script"), std::string::npos);
   EXPECT_EQ(html.find("nan"), std::string::npos);
+  // Issue 8 item 8: the page ends by saying what to conclude, and the desired path is drawn.
+  const auto concl = html.find("<div class=\"conclusions\" id=\"conclusions\">");
+  ASSERT_NE(concl, std::string::npos);
+  EXPECT_NE(html.find("<p><b>Use ", concl), std::string::npos);
+  EXPECT_EQ(html.find("<h2>", concl), std::string::npos);  // the last section
+  EXPECT_NE(html.find(">desired</text>"), std::string::npos);
   const auto s = nlohmann::json::parse(quadid::read_file(path("rep/summary.json")));
   auto all_improve = [](const nlohmann::json& table, const std::string& where) {
     for (const auto& row : table["sets"])

@@ -1,4 +1,4 @@
-// PID tracking controller, eqs. (28)-(32) (ERRATA.md, "Controller").
+// PID tracking controller, eqs. (28)-(32) (docs/method.md, "Corrections to the printed paper").
 #include "quadid/control.hpp"
 #include "quadid/trajectory.hpp"
 
@@ -46,7 +46,7 @@ TEST(Control, AttitudeCommandPointsThrustAlongForce) {
 }
 
 TEST(Control, PrintedFormWithExtraMassWouldTiltWrongly) {
-  // ERRATA.md: eqs. (29)-(30) as printed multiply by m. With m = 1.79 kg that
+  // docs/method.md, "Corrections to the printed paper": eqs. (29)-(30) as printed multiply by m. With m = 1.79 kg that
   // tilts 1.79x too far; our command must not.
   const double m = 1.79, psi = 0.4;
   const Vec3 f(2.0, -1.0, m * 9.81);
@@ -218,10 +218,10 @@ TEST(Control, ValidateNamesTheBadOption) {
   expect_bad(o, "Kpp");
   o = {};
   o.Fz_max = -1.0;
-  expect_bad(o, "Fz_max");
+  expect_bad(o, "--fz-max");  // the command line's spelling (quadid simulate)
   o = {};
   o.rate = 0.0;
-  expect_bad(o, "rate");
+  expect_bad(o, "--rate");
   o = {};
   o.derivative_pole = NAN;
   expect_bad(o, "derivative_pole");

@@ -1,4 +1,4 @@
-// Flight-log CSV reader and writer (DESIGN.md "Flight log"; io.hpp).
+// Flight-log CSV reader and writer (docs/file-formats.md "Flight log"; io.hpp).
 // Every error must name the file, the line and the column; the chunked,
 // column-selective reading must give exactly the numbers in the file.
 #include "quadid/io.hpp"

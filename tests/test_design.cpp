@@ -197,19 +197,41 @@ TEST(Design, OptionsRejectBadInputNamingIt) {
   };
   Constraints c;
   c.z_min = 1.6;
-  EXPECT_NE(msg([&] { c.validate(); }).find("z_min"), std::string::npos);
+  // Messages name the option as the command line spells it.
+  EXPECT_NE(msg([&] { c.validate(); }).find("--z-min"), std::string::npos);
   Constraints s;
   s.x0 = 2.0;
   EXPECT_NE(msg([&] { s.validate(); }).find("x0"), std::string::npos);
   Constraints t;
   t.tilt_max = -1;
-  EXPECT_NE(msg([&] { t.validate(); }).find("tilt_max"), std::string::npos);
+  EXPECT_NE(msg([&] { t.validate(); }).find("--tilt-max"), std::string::npos);
   DesignOptions o;
   o.harmonics = 0;
-  EXPECT_NE(msg([&] { o.validate(); }).find("harmonics"), std::string::npos);
+  EXPECT_NE(msg([&] { o.validate(); }).find("--harmonics"), std::string::npos);
   o = DesignOptions{};
   o.starts = 0;
-  EXPECT_NE(msg([&] { o.validate(); }).find("starts"), std::string::npos);
+  EXPECT_NE(msg([&] { o.validate(); }).find("--starts"), std::string::npos);
+  // Absurd values end with the option and its valid range, not a hang.
+  o = DesignOptions{};
+  o.wf = 1e-300;
+  EXPECT_NE(msg([&] { o.validate(); }).find("--wf = 5.7"), std::string::npos) << msg([&] { o.validate(); });
+  EXPECT_NE(msg([&] { o.validate(); }).find("must be in [0.6, 360] deg/s"), std::string::npos);
+  o = DesignOptions{};
+  o.check_dt = 1e-9;
+  EXPECT_NE(msg([&] { o.validate(); }).find("--check-dt = 1e-09 s must be in [0.0001, "), std::string::npos)
+      << msg([&] { o.validate(); });
+  CheckOptions co;
+  co.cond_dt = 1e9;
+  EXPECT_NE(msg([&] { co.validate(); }).find("--cond-dt = 1e+09 s must be in [0.0001, 1] s"), std::string::npos)
+      << msg([&] { co.validate(); });
+  co = CheckOptions{};
+  co.constraint_dt = 1e-9;
+  EXPECT_NE(msg([&] { co.validate(); }).find("--check-dt"), std::string::npos);
+  co = CheckOptions{};
+  co.cond_dt = 0.9;  // in range, but only 11 samples of W over Table 2's 10 s period
+  EXPECT_NE(msg([&] { check_trajectory(FourierTrajectory::table2(), co); }).find("--cond-dt = 0.9 s must be at most 0.5 s"),
+            std::string::npos)
+      << msg([&] { check_trajectory(FourierTrajectory::table2(), co); });
   EXPECT_NE(msg([] { parse_criterion("aopt"); }).find("aopt"), std::string::npos);
   EXPECT_EQ(parse_criterion("dopt"), Criterion::DOpt);
 }

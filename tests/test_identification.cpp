@@ -224,7 +224,7 @@ TEST(Identification, RecoversThePlantFromPerfectTracking) {
 }
 
 TEST(Identification, PrintedDerivativeFilterBiasesTheInertiasByThreePercent) {
-  // ERRATA: the printed g_D is lambda T/(1 - a) = 1.030 times a derivative of
+  // docs/method.md (corrections): the printed g_D is lambda T/(1 - a) = 1.030 times a derivative of
   // f_D's output, so FMLS's inertias come out ~1/1.03 of the truth; the mass
   // row has no derivative of w... only through w_dot, which is small against g.
   IdentificationOptions o;
@@ -383,6 +383,16 @@ TEST(Identification, HoverOnlyIsRankDeficient) {
   EXPECT_NE(r.warnings.front().find("Ixx"), std::string::npos);
   EXPECT_NEAR(r.estimate("LS").theta(0), truth.m, 1e-9 * truth.m);  // hover determines the mass
   EXPECT_EQ(r.estimate("LS").theta.tail<6>(), Params::qball2_nominal().theta().tail<6>());
+  // The mass keeps a standard error (here 0: a perfect hover fits exactly); the
+  // inertia has none, and the JSON says why instead of printing NaN.
+  EXPECT_TRUE(std::isfinite(r.ls_standard.std_error(0)));
+  for (int j = 1; j < 7; ++j) EXPECT_TRUE(std::isnan(r.ls_standard.std_error(j))) << j;
+  const auto j = to_json(r);
+  const auto& ls = j["least_squares"]["LS"];
+  EXPECT_TRUE(ls["std_error"]["m"].is_number()) << ls.dump();
+  EXPECT_TRUE(ls["std_error"]["Ixx"].is_null()) << ls.dump();
+  EXPECT_NE(ls["std_error_note"].get<std::string>().find("Ixx"), std::string::npos) << ls.dump();
+  EXPECT_EQ(j.dump().find("NaN"), std::string::npos);
 }
 
 TEST(Identification, HoverSeenThroughSensorNoiseWarnsThatTheInertiaIsPoorlyDetermined) {

@@ -1,4 +1,4 @@
-// Model and regressors: physical identities (ERRATA.md, "Regressor matrices").
+// Model and regressors: physical identities (docs/method.md, "Corrections to the printed paper").
 #include "quadid/model.hpp"
 #include "quadid/regressor.hpp"
 #include "quadid/trajectory.hpp"
@@ -89,7 +89,7 @@ TEST(Regressor, PhiTimesThetaEqualsNewtonEuler) {
   }
 }
 
-// Catches the printed misprint of ERRATA.md: the Iyz entry of row 4 is qdot + p r.
+// Catches the printed misprint of docs/method.md, "Corrections to the printed paper": the Iyz entry of row 4 is qdot + p r.
 TEST(Regressor, Row4IyzEntryIsQdotPlusPR) {
   const Vec3 v(0, 0, 0), w(0.7, 0.2, 1.3), eta(0, 0, 0), vd(0, 0, 0), wd(0.1, 0.5, -0.4);
   const auto Phi = regressor<double>(v, w, eta, vd, wd);

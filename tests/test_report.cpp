@@ -20,6 +20,24 @@ TEST(Report, TextTableAlignsColumns) {
   EXPECT_NE(t.to_markdown().find("| m | 1.82 |"), std::string::npos);
 }
 
+TEST(Report, MarkdownEscapesPipesInCells) {
+  Table t;
+  t.header = {"constraint", "|phi| (deg)"};
+  t.rows = {{"a|b", "5.73"}};
+  const std::string md = t.to_markdown();
+  // Every row keeps its two cells: a bare | would split one into two.
+  EXPECT_NE(md.find("| constraint | \\|phi\\| (deg) |\n"), std::string::npos) << md;
+  EXPECT_NE(md.find("| a\\|b | 5.73 |\n"), std::string::npos) << md;
+}
+
+TEST(Report, TextTableKeepsLongNamesApart) {
+  Table t;
+  t.header = {"Error", "e_a-very-long-reference-name", "e_another-long-set-name"};
+  t.rows = {{"e_x", "0.00123", "0.00456"}};
+  const std::string s = t.to_text();
+  EXPECT_NE(s.find("e_a-very-long-reference-name  e_another-long-set-name"), std::string::npos) << s;
+}
+
 TEST(Report, HtmlTableMarksNegativeImprovementRed) {
   Table t;
   t.header = {"e", "P_imp%"};

@@ -40,13 +40,13 @@ TEST_F(ReportBrowser, ChromiumRendersEveryFigureAndTable) {
   std::system((std::string(chrome) + " " + flags + "--dump-dom " + url + " > " + dom_file + " 2>/dev/null").c_str());
   std::system((std::string(chrome) + " " + flags + "--screenshot=" + png + " " + url + " > /dev/null 2>&1").c_str());
   const std::string dom = quadid::read_file(dom_file);
-  // 11 figures of 2 + 1 + 3 + 3 + 1 + 3 + 3 + 3 + 3 + 4 + 3 = 29 plots (trajectory, mass,
+  // 12 figures of 2 + 1 + 3 + 3 + 1 + 3 + 3 + 3 + 3 + 2 + 2 + 3 = 29 plots (trajectory, mass,
   // moments, products, path, position and its differences, attitude and its
-  // differences, inputs, circle paths; see reproduction_html).
+  // differences, inputs in two rows of two, circle paths; see reproduction_html).
   EXPECT_EQ(count(dom, "<svg"), 29u);
-  EXPECT_EQ(count(dom, "<figcaption>"), 11u);
-  // Table 2, the constraint check, and Tables 3 to 12.
-  EXPECT_EQ(count(dom, "<table>"), 12u);
+  EXPECT_EQ(count(dom, "<figcaption>"), 12u);
+  // Table 2, the constraint check, Table 3 and its errors, Tables 4 to 12, and the conclusions.
+  EXPECT_EQ(count(dom, "<table>"), 14u);
   EXPECT_NE(dom.find("time (s)"), std::string::npos);
   ASSERT_TRUE(std::filesystem::exists(png));
   EXPECT_GT(std::filesystem::file_size(png), 100000u);  // a blank 1600x4000 page compresses to a few kB

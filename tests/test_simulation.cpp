@@ -353,22 +353,45 @@ TEST(Simulation, ValidateNamesTheBadOption) {
       EXPECT_NE(std::string(e.what()).find(name), std::string::npos) << e.what();
     }
   };
+  // Names are the command line's (quadid simulate), the spelling a user can act on.
   SimulationOptions o;
   o.dt = 3e-4;  // 2 ms is not a multiple of 0.3 ms
-  expect_bad(o, "dt");
+  expect_bad(o, "--dt");
+  o = {};
+  o.dt = 1e-9;  // 2e6 steps per 2 ms period: absurd, not a silent hour-long run
+  expect_bad(o, "--dt");
   o = {};
   o.sensors.mocap_rate = 1000;
-  expect_bad(o, "mocap_rate");
+  expect_bad(o, "--mocap-rate");
   o = {};
   o.summary_from = 60;
-  expect_bad(o, "summary_from");
+  expect_bad(o, "--summary-from");
   o = {};
   o.sensors.noise.gyro = -1;
-  expect_bad(o, "noise.gyro");
+  expect_bad(o, "--sigma-gyro");
   o = {};
   o.actuator_tau = -0.1;
-  expect_bad(o, "actuator_tau");
+  expect_bad(o, "--actuator-tau");
+  o = {};
+  o.duration = 1e8 / o.controller.rate;  // 1e8 samples: 14 GB of log
+  expect_bad(o, "--duration");
   o = {};
   EXPECT_EQ(o.plant.m, Params::qball2_virtual().m);      // the plant is the virtual QBall 2
   EXPECT_EQ(o.controller.params.m, 1.79);                // the controller believes Table 1
+}
+
+TEST(Simulation, SetRateCapsSensorsAndKeepsAMillisecondStep) {
+  // The step is the whole divisor of the log period nearest 1 ms; sensors never
+  // run faster than the log.
+  struct Case { double hz, dt, imu, mocap; };
+  for (const Case c : {Case{100, 1e-3, 100, 30}, Case{250, 1e-3, 250, 30}, Case{500, 1e-3, 500, 30},
+                       Case{2000, 5e-4, 500, 30}, Case{20, 1e-3, 20, 20}, Case{30, 1.0 / 30 / 33, 30, 30}}) {
+    SimulationOptions o;
+    o.set_rate(c.hz);
+    EXPECT_EQ(o.controller.rate, c.hz);
+    EXPECT_NEAR(o.dt, c.dt, 1e-15) << c.hz << " Hz";
+    EXPECT_EQ(o.sensors.imu_rate, c.imu) << c.hz << " Hz";
+    EXPECT_EQ(o.sensors.mocap_rate, c.mocap) << c.hz << " Hz";
+    EXPECT_NO_THROW(o.validate()) << c.hz << " Hz";
+  }
 }

@@ -26,7 +26,7 @@ TEST(Trajectory, Table2StartConditionsHoldToAbout1e4) {
   EXPECT_NEAR(tr.wf(), 36.0 * M_PI / 180.0, 1e-15);
   EXPECT_NEAR(tr.period(), 10.0, 1e-12);
   const FlatOutput d0 = tr.eval(0.0);
-  // ERRATA.md: with the printed 4-digit coefficients the start holds to ~1e-4.
+  // docs/method.md, "Corrections to the printed paper": with the printed 4-digit coefficients the start holds to ~1e-4.
   EXPECT_NEAR(d0(kX, 0), 0.0, 2e-4);
   EXPECT_NEAR(d0(kY, 0), 0.0, 2e-4);
   EXPECT_NEAR(d0(kZ, 0), 0.7, 2e-4);

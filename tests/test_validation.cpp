@@ -3,6 +3,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 using namespace quadid;
 
 namespace {
@@ -88,4 +90,69 @@ TEST(Validation, BadWindowIsNamed) {
   PredictionValidationOptions p;
   p.lambda = -1;
   EXPECT_THROW(p.validate(), std::invalid_argument);
+}
+
+// Issue 8 item 4: no NaN printed; an undefined P_imp% is said in words.
+TEST(Validation, ImprovementIsUndefinedForAZeroReferenceError) {
+  EXPECT_DOUBLE_EQ(improvement_pct(2.0, 1.0), 50.0);
+  EXPECT_TRUE(improvement_undefined(2.0, 1.0).empty());
+  EXPECT_TRUE(std::isnan(improvement_pct(0.0, 1.0)));
+  EXPECT_NE(improvement_undefined(0.0, 1.0).find("exactly 0"), std::string::npos);
+  EXPECT_TRUE(std::isnan(improvement_pct(std::nan(""), 1.0)));
+
+  // The true plant as the reference reproduces the log exactly (RMS 0): every
+  // P_imp% of another set against it is undefined.
+  const auto tr = FourierTrajectory::table2();
+  const SimulationResult r = fly(tr, 6.0, false);
+  SimulationComparisonOptions opt;
+  opt.window = {1.0, 6.0};
+  const auto c = compare_simulations(r.log, tr, simulation_options_from_log(r.log),
+                                     {{"nominal-set", Params::qball2_nominal()}}, {"truth", Params::qball2_virtual()}, opt);
+  ASSERT_EQ(c.reference.rms(0), 0.0);
+  const std::string table = format_simulation_table(c, "T");
+  EXPECT_EQ(table.find("nan"), std::string::npos) << table;
+  EXPECT_NE(table.find("n/a"), std::string::npos) << table;
+  EXPECT_NE(table.find("P_imp% of nominal-set for x is n/a: the reference set's error is exactly 0"), std::string::npos)
+      << table;
+  EXPECT_NE(table.find("e_truth"), std::string::npos) << table;  // the column is named after the reference set
+  const auto j = to_json(c);
+  EXPECT_TRUE(j["rows"][0]["improvement_pct"]["x"].is_null());
+  EXPECT_NE(j["rows"][0]["improvement_undefined"]["x"].get<std::string>().find("exactly 0"), std::string::npos);
+}
+
+TEST(Validation, FailedReferenceReflightLeavesNoNumberButAReason) {
+  const auto tr = FourierTrajectory::table2();
+  const SimulationResult r = fly(tr, 6.0, false);
+  Params heavy = Params::qball2_virtual();
+  heavy.m = 4.0;  // 39 N of weight: above the 34.4 N thrust limit, it falls
+  SimulationComparisonOptions opt;
+  opt.window = {1.0, 6.0};
+  const auto c = compare_simulations(r.log, tr, simulation_options_from_log(r.log),
+                                     {{"true", Params::qball2_virtual()}}, {"heavy", heavy}, opt);
+  ASSERT_FALSE(c.reference.failure.empty());
+  ASSERT_TRUE(c.rows[0].failure.empty());
+  EXPECT_TRUE(std::isnan(c.rows[0].improvement_pct(0)));
+  const std::string table = format_simulation_table(c, "T");
+  EXPECT_EQ(table.find("nan"), std::string::npos) << table;
+  EXPECT_NE(table.find("heavy (reference): re-flight diverged"), std::string::npos) << table;
+  const auto j = to_json(c);
+  EXPECT_TRUE(j["rows"][0]["improvement_pct"]["z"].is_null());
+  EXPECT_NE(j["rows"][0]["improvement_undefined"]["z"].get<std::string>().find("'heavy' could not be re-flown"),
+            std::string::npos);
+}
+
+// Issue 8 item 2: a configuration error is the caller's, never a "diverged" row.
+TEST(Validation, ConfigurationErrorIsAnErrorNotADivergedRow) {
+  const auto tr = FourierTrajectory::table2();
+  const SimulationResult r = fly(tr, 4.0, false);
+  SimulationOptions base = simulation_options_from_log(r.log);
+  base.sensors.imu_rate = 1000.0;  // faster than the 500 Hz log
+  SimulationComparisonOptions opt;
+  opt.window = {1.0, 4.0};
+  try {
+    compare_simulations(r.log, tr, base, {{"true", Params::qball2_virtual()}}, {"nom", Params::qball2_nominal()}, opt);
+    FAIL() << "expected std::invalid_argument";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("--imu-rate"), std::string::npos) << e.what();
+  }
 }

@@ -7,7 +7,9 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cstdio>
+#include <filesystem>
 #include <memory>
 #include <stdexcept>
 
@@ -32,8 +34,10 @@ void register_check_trajectory(CLI::App& app) {
       "check-trajectory",
       "constraints and conditioning cond(W) of a trajectory (file or built-in table2)");
   sub->footer(
-      "Checks every limit of section III-B on a fine grid (default every 1 ms over one period) and\n"
-      "prints its worst value, where it occurs and whether it holds; then the start and end\n"
+      "Checks every limit on a fine grid (default every 1 ms over one period): the limits a designed\n"
+      "trajectory file records (its \"constraints\"), else those of section III-B; a limit option given\n"
+      "here replaces that one limit. Prints each limit's worst value, where it occurs and whether\n"
+      "it holds; then the start and end\n"
       "conditions (q = q0, zero velocity and acceleration) and cond(W), W the stack of the\n"
       "regressor Phi (eq. 12) on the reference of eqs. (26)-(27), sampled every T = 2 ms over one\n"
       "period (eq. 20). Also prints cond(W S) and the D-optimality criterion (docs/design.md).\n"
@@ -53,16 +57,31 @@ void register_check_trajectory(CLI::App& app) {
   args->limits.add_to(sub);
   sub->callback([args] {
     CheckOptions opt = args->opt;
-    opt.limits = args->limits.constraints();
+    // A designed trajectory file records the limits it was designed for: check
+    // against those, with any limit given here in place of the file's.
+    Constraints base;
+    std::string limits_from = "defaults of section III-B";
+    const std::string& spec = args->trajectory;
+    const auto names = builtin_trajectory_names();
+    if (std::find(names.begin(), names.end(), spec) == names.end() && std::filesystem::is_regular_file(spec)) {
+      const nlohmann::json j = read_json_file(spec);
+      if (j.is_object() && j.contains("constraints")) {
+        base = constraints_from_json(j["constraints"], spec);
+        limits_from = spec;
+      }
+    }
+    opt.limits = args->limits.over(base);
     opt.validate();
-    const auto traj = load_trajectory(args->trajectory);
+    const auto traj = load_trajectory(spec);
     const CheckReport rep = check_trajectory(*traj, opt);
     if (args->json) {
       nlohmann::json j = to_json(rep);
       j["source"] = args->trajectory;
       j["limits"] = to_json(opt.limits);
+      j["limits_from"] = limits_from;
       fmt::print("{}\n", j.dump(2));
     } else {
+      fmt::print("limits: {}{}\n", limits_from, args->limits.any_given() ? ", with those given on the command line" : "");
       fmt::print("{}", format_check_report(rep));
     }
     std::fflush(stdout);

@@ -37,7 +37,7 @@ void register_design(CLI::App& app) {
       "the result is checked on it and cond(W) is reported with T = 2 ms (eq. 20).\n"
       "Criteria: cond (the paper's cond(W)), cond-scaled (cond(W S), parameters scaled by --reference),\n"
       "dopt (-(1/7) log det of the per-sample information matrix; see docs/design.md).\n"
-      "The output is the trajectory JSON of DESIGN.md plus the criterion, the limits, the check\n"
+      "The output is the trajectory JSON of docs/file-formats.md plus the criterion, the limits, the check\n"
       "report, the seed and the starts. Same --seed -> same bytes. Progress goes to stderr.\n"
       "Fails (exit 1, nothing written) if no start meets every limit.\n\n"
       "Examples:\n"
@@ -47,7 +47,9 @@ void register_design(CLI::App& app) {
   sub->add_option("-o,--out", args->out, "write the trajectory JSON here (atomically)");
   sub->add_flag("--json", args->json, "print the trajectory JSON on stdout instead of the tables");
   sub->add_flag("-q,--quiet", args->quiet, "no progress on stderr");
-  sub->add_option("--seed", o.seed, "seed of the random starts (std::mt19937_64)")->capture_default_str();
+  sub->add_option("--seed", o.seed, "seed of the random starts (std::mt19937_64)")
+      ->check(seed_range())
+      ->capture_default_str();
   sub->add_option("--starts", o.starts, "number of random starts")->capture_default_str();
   sub->add_option("--threads", o.threads, "worker threads; 0 = one per core (result does not depend on it)")
       ->capture_default_str();
@@ -71,6 +73,7 @@ void register_design(CLI::App& app) {
     opt.criterion = parse_criterion(args->criterion);
     opt.reference = load_params(args->reference);
     opt.validate();
+    if (!args->out.empty()) check_output_file(args->out, "-o/--out");
     if (!args->quiet)
       fmt::print(stderr, "design: {} starts, criterion {}, N = {}, period {:.4g} s, seed {}\n", opt.starts,
                  criterion_name(opt.criterion), opt.harmonics, 2 * M_PI / opt.wf, opt.seed);

@@ -50,11 +50,14 @@ void run(const IdentifyArgs& a) {
   else throw std::invalid_argument(fmt::format("--gd-discretization {}: expected exact or literal", a.gd_discretization));
   std::optional<Vehicle> vehicle;
   if (!a.vehicle.empty()) vehicle = load_vehicle(a.vehicle);
-  opt.reference = NamedParams{"nom", vehicle && a.nominal_opt->count() == 0 ? vehicle->nominal : load_params(a.nominal)};
+  opt.reference = vehicle && a.nominal_opt->count() == 0 ? NamedParams{"nom", vehicle->nominal}
+                                                          : NamedParams{param_set_name(a.nominal), load_params(a.nominal)};
   if (a.gd_init != "nominal") opt.gd_initial = load_params(a.gd_init);
   opt.allow_rank_deficient = a.allow_rank_deficient;
   opt.evolution_interval = a.evolution_interval;
   opt.validate();
+  if (!a.out.empty()) check_output_file(a.out, "-o/--out");
+  if (!a.evolution.empty()) check_output_file(a.evolution, "--evolution");
 
   CsvReadOptions csv = a.proc.csv();
   csv.keep_extra_columns = false;  // only the 14 standard columns are used
@@ -117,7 +120,7 @@ void register_identify(CLI::App& app) {
       "v = R^T p_dot. Regressions: standard (eq. 34) and filtered (eqs. 35-39). Estimators: least squares\n"
       "(eq. 40) and gradient descent (eq. 41). Prints Table 3 (estimates) and Tables 5-6 (RMS output\n"
       "prediction error, eq. 43, with P_imp% against the nominal set). Units: SI, radians.");
-  sub->add_option("log", a->log, "flight log CSV (DESIGN.md columns: t x y z phi theta psi p q r Fz tau_phi tau_theta tau_psi)")
+  sub->add_option("log", a->log, "flight log CSV (docs/file-formats.md columns: t x y z phi theta psi p q r Fz tau_phi tau_theta tau_psi)")
       ->required();
   sub->add_option("--window", a->window, "estimation window T0:T1, seconds from the log's start ('T0:' = to the end)")
       ->capture_default_str();

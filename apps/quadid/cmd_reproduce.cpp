@@ -1,5 +1,6 @@
 // quadid reproduce: the paper's whole procedure on the virtual QBall 2, with a report.
 #include "commands.hpp"
+#include "common.hpp"
 #include "quadid/reproduce.hpp"
 
 #include <fmt/format.h>
@@ -29,6 +30,7 @@ void run(const ReproduceArgs& a) {
   else if (a.noise == "none") opt.noise = false;
   else throw std::invalid_argument(fmt::format("--noise {}: expected none or default", a.noise));
   opt.validate();
+  check_output_directory(a.out, "-o/--out");
   const Reproduction r = reproduce(opt, [](const std::string& s) { fmt::print(stderr, "quadid reproduce: {}\n", s); });
   write_reproduction(r, a.out);
   fmt::print(stderr, "quadid reproduce: wrote {}/report.html\n", a.out);
@@ -54,6 +56,7 @@ void register_reproduce(CLI::App& app) {
       "and writes DIR/report.html (self-contained, SVG figures) with the JSON and CSV behind it.");
   sub->add_option("-o,--out", a->out, "output folder (created if needed)")->capture_default_str();
   sub->add_option("--seed", a->seed, "seed of the design's random starts and of the sensor noise")
+      ->check(seed_range())
       ->capture_default_str();
   sub->add_option("--trajectory", a->trajectory, "designed (optimize it) or table2 (the paper's coefficients)")
       ->capture_default_str();

@@ -1,5 +1,6 @@
 // quadid simulate: fly a trajectory in closed loop (docs/simulate.md).
 #include "commands.hpp"
+#include "common.hpp"
 #include "quadid/io.hpp"
 #include "quadid/simulation.hpp"
 #include "quadid/vehicle.hpp"
@@ -30,6 +31,8 @@ struct SimulateArgs {
   double speedup = 1.0;
   std::optional<double> sigma_position, sigma_yaw, sigma_attitude, sigma_gyro, sigma_velocity, sigma_yaw_rate;
   std::string velocity_source = "mocap-difference";
+  // Given explicitly, these override what --rate implies (SimulationOptions::set_rate).
+  std::optional<double> rate, mocap_rate, imu_rate, dt;
   SimulationOptions opt;
   bool json = false;
   std::string vehicle;
@@ -69,6 +72,10 @@ std::unique_ptr<Trajectory> make_trajectory(const SimulateArgs& a) {
 
 void run(SimulateArgs& a) {
   SimulationOptions& o = a.opt;
+  if (a.rate) o.set_rate(*a.rate);  // sensors at most at the log rate, RK4 step ~1 ms dividing the period
+  if (a.mocap_rate) o.sensors.mocap_rate = *a.mocap_rate;
+  if (a.imu_rate) o.sensors.imu_rate = *a.imu_rate;
+  if (a.dt) o.dt = *a.dt;
   o.plant = load_params(a.plant);
   o.controller.params = load_params(a.controller_params);
   o.controller.torque_map = torque_map_from_string(a.torque_map);
@@ -88,6 +95,9 @@ void run(SimulateArgs& a) {
   o.record_truth = !a.truth.empty();
 
   const auto traj = make_trajectory(a);
+  o.validate();
+  if (!a.out.empty()) check_output_file(a.out, "-o/--out");
+  if (!a.truth.empty()) check_output_file(a.truth, "--truth");
   const SimulationResult res = simulate(*traj, o);  // SimulationDiverged propagates: exit 1, nothing written
 
   // Truth first, then the log: a failure leaves neither file half-done.
@@ -156,7 +166,7 @@ void register_simulate(CLI::App& app) {
   sub->footer(
       "The plant is eqs. (1)-(4) (RK4, fixed step), the controller eqs. (28)-(32) with the gains of\n"
       "section III-C, sensors as in section IV-A: position and yaw from motion capture at 30 Hz (held),\n"
-      "roll, pitch and body rates from the IMU at 500 Hz. The log (DESIGN.md format, at the controller\n"
+      "roll, pitch and body rates from the IMU at 500 Hz. The log (docs/file-formats.md, at the controller\n"
       "rate) holds what the controller saw and the saturated commands it applied, plus x_d y_d z_d psi_d.\n"
       "Divergence (NaN, leaving the safety box, hitting the floor z < 0) stops the run with exit 1 and\n"
       "writes nothing.\n\n"
@@ -201,11 +211,16 @@ void register_simulate(CLI::App& app) {
                   "controller's velocity and yaw rate: mocap-difference (difference of successive 30 Hz samples) "
                   "or truth (true value sampled at the mocap rate + noise)")
       ->capture_default_str();
-  sub->add_option("--seed", o.sensors.seed, "noise seed; same seed and options -> byte-identical log")->capture_default_str();
-  sub->add_option("--dt", o.dt, "plant RK4 step, s (the controller period must be a multiple)")->capture_default_str();
-  sub->add_option("--rate", o.controller.rate, "controller (and log) rate, Hz")->capture_default_str();
-  sub->add_option("--mocap-rate", o.sensors.mocap_rate, "motion-capture rate for x y z psi, Hz")->capture_default_str();
-  sub->add_option("--imu-rate", o.sensors.imu_rate, "IMU rate for phi theta p q r, Hz")->capture_default_str();
+  sub->add_option("--seed", o.sensors.seed, "noise seed; same seed and options -> byte-identical log")
+      ->check(seed_range())
+      ->capture_default_str();
+  sub->add_option("--rate", args->rate,
+                  "controller (and log) rate, Hz (default 500); the sensor rates are capped at it and the RK4 step "
+                  "becomes the divisor of its period nearest 1 ms");
+  sub->add_option("--dt", args->dt, "plant RK4 step, s (default 0.001, or as --rate implies; the controller period must "
+                                    "be a whole multiple)");
+  sub->add_option("--mocap-rate", args->mocap_rate, "motion-capture rate for x y z psi, Hz (default 30, at most --rate)");
+  sub->add_option("--imu-rate", args->imu_rate, "IMU rate for phi theta p q r, Hz (default 500, at most --rate)");
   sub->add_option("--actuator-tau", o.actuator_tau, "first-order actuator lag time constant, s (0 = ideal)")
       ->capture_default_str();
   sub->add_option("--g", o.g, "gravity, m/s^2 (plant and controller)")->capture_default_str();

@@ -41,6 +41,7 @@ void run(const ValidateArgs& a) {
   req.simulation.with_noise = a.with_noise;
   req.prediction.validate();
   req.simulation.validate();
+  if (!a.out.empty()) check_output_file(a.out, "-o/--out");
 
   logs::LoadOptions load;
   load.csv = a.proc.csv();

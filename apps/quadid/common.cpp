@@ -2,9 +2,21 @@
 
 #include <fmt/format.h>
 
+#include <filesystem>
 #include <stdexcept>
 
 namespace quadid::cli {
+
+CLI::Validator seed_range() {
+  return CLI::Validator(
+      [](std::string& s) -> std::string {
+        const bool digits = !s.empty() && s.size() <= 20 && s.find_first_not_of("0123456789") == std::string::npos;
+        if (digits && (s.size() < 20 || s <= "18446744073709551615")) return {};
+        return "must be a whole number in [0, 18446744073709551615], got '" + s + "'";
+      },
+      "SEED", "seed range");
+}
+
 
 void ProcessingArgs::add_to(CLI::App* sub) {
   sub->add_option("--filter", filter, "zero-phase pre-filter: butter (Butterworth IIR) or fir (31-tap Blackman-Harris)")
@@ -58,18 +70,37 @@ CsvReadOptions ProcessingArgs::csv() const {
 
 void LimitArgs::add_to(CLI::App* sub) {
   auto& L = limits;
-  sub->add_option("--x-max", L.x_max, "|x| limit, m")->capture_default_str();
-  sub->add_option("--y-max", L.y_max, "|y| limit, m")->capture_default_str();
-  sub->add_option("--z-min", L.z_min, "lower z limit, m")->capture_default_str();
-  sub->add_option("--z-max", L.z_max, "upper z limit, m")->capture_default_str();
-  sub->add_option("--psi-max", psi_max_deg, "|psi| limit, deg")->capture_default_str();
-  sub->add_option("--tilt-max", tilt_max_deg, "|phi|, |theta| limit of eqs. (26)-(27), deg")->capture_default_str();
-  sub->add_option("--xdot-max", L.xdot_max, "|x_dot| limit, m/s")->capture_default_str();
-  sub->add_option("--ydot-max", L.ydot_max, "|y_dot| limit, m/s")->capture_default_str();
-  sub->add_option("--zdot-max", L.zdot_max, "|z_dot| limit, m/s")->capture_default_str();
-  sub->add_option("--psidot-max", psidot_max_deg, "|psi_dot| limit, deg/s")->capture_default_str();
-  sub->add_option("--zddot-min", L.zddot_min, "lower z_ddot limit, m/s^2")->capture_default_str();
-  sub->add_option("--z0", L.z0, "start/end height, m")->capture_default_str();
+  options_ = {
+      sub->add_option("--x-max", L.x_max, "|x| limit, m")->capture_default_str(),
+      sub->add_option("--y-max", L.y_max, "|y| limit, m")->capture_default_str(),
+      sub->add_option("--z-min", L.z_min, "lower z limit, m")->capture_default_str(),
+      sub->add_option("--z-max", L.z_max, "upper z limit, m")->capture_default_str(),
+      sub->add_option("--psi-max", psi_max_deg, "|psi| limit, deg")->capture_default_str(),
+      sub->add_option("--tilt-max", tilt_max_deg, "|phi|, |theta| limit of eqs. (26)-(27), deg")->capture_default_str(),
+      sub->add_option("--xdot-max", L.xdot_max, "|x_dot| limit, m/s")->capture_default_str(),
+      sub->add_option("--ydot-max", L.ydot_max, "|y_dot| limit, m/s")->capture_default_str(),
+      sub->add_option("--zdot-max", L.zdot_max, "|z_dot| limit, m/s")->capture_default_str(),
+      sub->add_option("--psidot-max", psidot_max_deg, "|psi_dot| limit, deg/s")->capture_default_str(),
+      sub->add_option("--zddot-min", L.zddot_min, "lower z_ddot limit, m/s^2")->capture_default_str(),
+      sub->add_option("--z0", L.z0, "start/end height, m")->capture_default_str()};
+}
+
+Constraints LimitArgs::over(Constraints c) const {
+  const double given[] = {limits.x_max,    limits.y_max,    limits.z_min,    limits.z_max,
+                          psi_max_deg * kDeg, tilt_max_deg * kDeg, limits.xdot_max, limits.ydot_max,
+                          limits.zdot_max, psidot_max_deg * kDeg, limits.zddot_min, limits.z0};
+  double* const dest[] = {&c.x_max,    &c.y_max,      &c.z_min,   &c.z_max,
+                          &c.psi_max,  &c.tilt_max,   &c.xdot_max, &c.ydot_max,
+                          &c.zdot_max, &c.psidot_max, &c.zddot_min, &c.z0};
+  for (size_t i = 0; i < options_.size(); ++i)
+    if (options_[i]->count() > 0) *dest[i] = given[i];
+  return c;
+}
+
+bool LimitArgs::any_given() const {
+  for (const auto* o : options_)
+    if (o->count() > 0) return true;
+  return false;
 }
 
 Constraints LimitArgs::constraints() const {

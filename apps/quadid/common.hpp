@@ -12,6 +12,11 @@
 
 namespace quadid::cli {
 
+/// Checks a --seed value before CLI11 converts it: a whole number in
+/// [0, 2^64 - 1] (CLI11 would wrap -1 round to 2^64 - 1 silently).
+CLI::Validator seed_range();
+
+
 /// Section II-C processing and the filtered model's filters: --filter, --cutoff,
 /// --order, --taps, --lambda, --derivative-filter, --g, --period-tolerance,
 /// --keep-edges, --map.
@@ -40,7 +45,16 @@ struct LimitArgs {
   double psi_max_deg = 180.0, tilt_max_deg = 5.73, psidot_max_deg = 28.65;
 
   void add_to(CLI::App* sub);
+  /// The limits as given (defaults for the options not given).
   Constraints constraints() const;
+  /// `base` (e.g. the limits a trajectory file records) with the options given
+  /// on the command line in place of its values.
+  Constraints over(Constraints base) const;
+  /// Whether any limit option was given on the command line.
+  bool any_given() const;
+
+ private:
+  std::vector<CLI::Option*> options_;  // in the order of add_to()
 };
 
 }  // namespace quadid::cli

@@ -2,7 +2,7 @@
 // with the gains of section III-C and the actuator limits of section IV-A.
 // See docs/simulate.md.
 //
-// Two deliberate departures from the printed equations (ERRATA.md, "Controller"):
+// Two deliberate departures from the printed equations (docs/method.md, "Corrections to the printed paper"):
 //  * eqs. (29)-(30) are used in their dimensionally consistent form (f_p is a
 //    force already, so the extra factor m is dropped):
 //      theta_c = atan((fx cos psi_d + fy sin psi_d) / fz)
@@ -110,7 +110,7 @@ struct ControllerOutput {
 };
 
 /// Commanded roll and pitch from the inertial force f_p and the desired yaw:
-/// the dimensionally consistent eqs. (29)-(30) (ERRATA.md). Returns [phi_c, theta_c].
+/// the dimensionally consistent eqs. (29)-(30) (docs/method.md, "Corrections to the printed paper"). Returns [phi_c, theta_c].
 /// fz is floored at a tiny positive value so a non-positive demand gives +-90 deg
 /// commands (the thrust saturation then takes over) rather than a division by zero.
 Eigen::Vector2d attitude_command(const Vec3& f_p, double psi_d);

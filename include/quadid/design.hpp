@@ -85,7 +85,12 @@ struct CheckOptions {
   double g = kDefaultGravity;    // m/s^2
   Params reference = Params::qball2_nominal();  // for the scaled criteria
   double product_floor = 0.1;    // see parameter_scales()
-  void validate() const;         // throws std::invalid_argument naming the option
+  /// Ranges validate() accepts: grids of 0.1 ms to 1 s, at most a day checked.
+  static constexpr double kMinStep = 1e-4, kMaxStep = 1.0, kMaxDuration = 86400.0;  // s
+  /// The grids also need >= kMinSamplesPerPeriod points over the trajectory's period
+  /// (checked by check_trajectory(), which knows the period).
+  static constexpr int kMinSamplesPerPeriod = 20;
+  void validate() const;         // throws std::invalid_argument naming the option (CLI spelling)
 };
 
 /// One inequality of eqs. (22)-(27) evaluated over the constraint grid.
@@ -154,7 +159,9 @@ struct DesignOptions {
   double ftol_rel = 1e-8;              // stop when the best feasible criterion improves by less for 40 evaluations
   double start_fill = 0.8;             // random starts use this fraction of the tightest limit
   double g = kDefaultGravity;          // m/s^2
-  void validate() const;               // throws std::invalid_argument naming the option
+  /// Range of wf validate() accepts: periods 2 pi / wf of 1 s to 600 s.
+  static constexpr double kMinPeriod = 1.0, kMaxPeriod = 600.0;  // s
+  void validate() const;               // throws std::invalid_argument naming the option (CLI spelling)
 };
 
 /// What happened to one random start.
@@ -218,9 +225,13 @@ class ExcitationProblem {
 // --- JSON and text ------------------------------------------------------------
 
 nlohmann::json to_json(const Constraints& c);
+/// Inverse of to_json(Constraints): the "constraints" a designed trajectory file
+/// records (null = unbounded; absent fields keep `defaults`). Throws InputError
+/// naming `source` and the bad field.
+Constraints constraints_from_json(const nlohmann::json& j, const std::string& source, Constraints defaults = {});
 nlohmann::json to_json(const CheckReport& r);
 nlohmann::json to_json(const StartSummary& s);
-/// The trajectory JSON of DESIGN.md plus "criterion", "constraints", "check",
+/// The trajectory JSON of docs/file-formats.md plus "criterion", "constraints", "check",
 /// "seed", "starts" (and "start_results").
 nlohmann::json design_to_json(const DesignResult& r, const DesignOptions& opt);
 /// Human-readable tables (degrees for angles, units in the column titles).

@@ -63,7 +63,9 @@ struct LeastSquaresSolution {
   Theta singular_values = Theta::Zero();
   double condition = std::numeric_limits<double>::infinity();
   /// Standard errors from the residual, inflated by sqrt(correlation length)
-  /// because filtered residuals are correlated over many samples.
+  /// because filtered residuals are correlated over many samples. With
+  /// unidentifiable parameters: NaN for those (they stay at the prior) and, for
+  /// the others, the standard error given those fixed at the prior.
   Theta std_error = Theta::Constant(std::numeric_limits<double>::infinity());
   double residual_rms = 0.0;  // per scalar equation, in the output's units
   /// Parameters in the unidentifiable directions (rank deficiency). Their

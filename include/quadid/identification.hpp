@@ -165,6 +165,13 @@ struct PredictionErrorTable {
   std::vector<PredictionErrorRow> rows;
 };
 
+/// P_imp% of section IV-B: (RMS_ref - RMS_set) / RMS_ref * 100. NaN when it is
+/// undefined (a non-finite RMS, or a zero reference RMS); improvement_undefined()
+/// then says why in words.
+double improvement_pct(double rms_ref, double rms_set);
+/// Empty when improvement_pct(rms_ref, rms_set) is defined, else the reason.
+std::string improvement_undefined(double rms_ref, double rms_set);
+
 /// RMS of e = Gamma Theta_i - Upsilon per component over the regression's
 /// window, for every set and for the reference, with
 /// P_imp% = (RMS_ref - RMS_i) / RMS_ref * 100. Works on any log and any sets.
@@ -224,6 +231,7 @@ struct IdentificationOptions {
   /// Choose both cutoffs on held-out time blocks (extended.hpp, select_cutoffs).
   bool auto_cutoffs = false;
   bool extended() const;
+  static constexpr double kMaxEvolutionInterval = 3600.0;  // s (an hour): the largest validate() accepts
   void validate() const;
 };
 
@@ -251,7 +259,7 @@ struct Evolution {
 struct ExtendedResult;
 
 struct IdentificationResult {
-  std::array<SetEstimate, 4> estimates;  // LS, GD, FMLS, FMGD (DESIGN.md names)
+  std::array<SetEstimate, 4> estimates;  // LS, GD, FMLS, FMGD (docs/file-formats.md names)
   LeastSquaresSolution ls_standard, ls_filtered;
   double gd_step_gain_standard = 0.0, gd_step_gain_filtered = 0.0;  // max sigma T lambda_max
   Evolution evolution;

@@ -1,5 +1,5 @@
 // Files: flight logs (CSV) and JSON for trajectories and parameter sets, in
-// the formats of DESIGN.md. The algorithms know nothing of files; this module
+// the formats of docs/file-formats.md. The algorithms know nothing of files; this module
 // converts between files and the library's types.
 #pragma once
 
@@ -25,7 +25,7 @@ class InputError : public std::runtime_error {
 };
 
 /// A flight log: named columns of equal length, one row per sample.
-/// The standard columns (DESIGN.md) are t x y z phi theta psi p q r Fz tau_phi tau_theta tau_psi.
+/// The standard columns (docs/file-formats.md) are t x y z phi theta psi p q r Fz tau_phi tau_theta tau_psi.
 struct FlightLog {
   std::vector<std::string> comments;  // leading '#' lines, without the '#'
   std::vector<std::string> columns;   // column names, in file order
@@ -68,6 +68,12 @@ void write_flight_log(const FlightLog& log, const std::filesystem::path& path);
 
 /// Writes a whole file atomically: a temporary file beside it, then rename.
 void write_file_atomic(const std::filesystem::path& path, std::string_view content);
+/// Checks, before any work, that a file can be written at `path`: its directory
+/// exists and is writable, and `path` is not a directory. Throws InputError
+/// naming `option` (the command line's spelling, e.g. "-o/--out").
+void check_output_file(const std::filesystem::path& path, std::string_view option);
+/// The same for an output folder that is created if absent (its parent must exist).
+void check_output_directory(const std::filesystem::path& path, std::string_view option);
 /// Reads a whole file; throws InputError naming it when it cannot be read.
 std::string read_file(const std::filesystem::path& path);
 
@@ -81,11 +87,15 @@ nlohmann::json to_json(const Params& P);
 Params params_from_json(const nlohmann::json& j, const std::string& source, bool physical = true);
 
 nlohmann::json to_json(const FourierTrajectory& traj);
-/// Reads the trajectory JSON of DESIGN.md; the error names the field that is wrong.
+/// Reads the trajectory JSON of docs/file-formats.md; the error names the field that is wrong.
 FourierTrajectory trajectory_from_json(const nlohmann::json& j, const std::string& source);
 
 /// A trajectory from a built-in name (table2, circle1..3) or a JSON file.
 std::unique_ptr<Trajectory> load_trajectory(const std::string& spec);
+/// The name a parameter set goes by in tables: "nom" for the QBall 2 nominal
+/// preset (the paper's), another preset's own name, or a file's name without
+/// its extension.
+std::string param_set_name(const std::string& spec);
 /// A parameter set from a preset name (qball2-nominal, qball2-virtual) or a JSON file.
 Params load_params(const std::string& spec);
 /// Named parameter sets from a file or preset: a parameters JSON gives one set

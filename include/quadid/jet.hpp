@@ -1,7 +1,7 @@
 // Second-order jets: a value with its first and second time derivatives,
 // propagated exactly by the chain rule. Used for the reference map of
 // eqs. (26)-(27), whose angular rates need the jerk and angular accelerations
-// the snap of the position trajectory (ERRATA.md, "Trajectory").
+// the snap of the position trajectory (docs/method.md, "Corrections to the printed paper").
 #pragma once
 
 #include <cmath>

@@ -1,7 +1,7 @@
 // Rigid-body quadrotor model of paper section II-A, eqs. (1)-(4), with a full
 // symmetric inertia tensor.
 //
-// Frames and units (DESIGN.md): inertial frame z up, gravity (0, 0, -g);
+// Frames and units (docs/conventions.md): inertial frame z up, gravity (0, 0, -g);
 // body frame x forward, y left, z up along the thrust. Euler angles ZYX,
 // R = Rz(psi) Ry(theta) Rx(phi). SI units, radians.
 #pragma once

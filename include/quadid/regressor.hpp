@@ -1,5 +1,5 @@
 // Linear regression forms of the model (paper eqs. 11-17), derived from
-// eqs. (7)-(10) rather than from the garbled printed matrices (ERRATA.md).
+// eqs. (7)-(10) rather than from the garbled printed matrices (docs/method.md, "Corrections to the printed paper").
 //
 //   Phi(v, w, eta, v_dot, w_dot) Theta = F             eq. (11)
 //   [d/dt Phi_a(v, w) + Phi_b(v, w, eta)] Theta = F    eq. (13)

@@ -27,6 +27,7 @@ struct Series {
   std::string color;       // CSS colour; empty = from the palette
   bool dashed = false;
   double width = 1.5;      // stroke width, px
+  int layer = 0;           // drawing order: higher layers are drawn later, on top (the legend keeps series order)
 };
 
 /// A 2-D line plot. Axis labels must carry units, e.g. "time (s)".
@@ -45,6 +46,9 @@ std::string render_svg(const Plot& plot);
 /// Colours of the paper's figures: Exp black, nominal red, LS blue, GD purple,
 /// FMLS green, FMGD orange; other names get distinct palette colours.
 std::string color_for(const std::string& set_name, size_t index);
+
+/// Escapes | and \ for a Markdown table cell (and turns newlines into spaces).
+std::string markdown_escape(const std::string& s);
 
 /// Escapes &, <, >, " for HTML.
 std::string html_escape(const std::string& s);

@@ -1,4 +1,4 @@
-// quadid::signal — filters and differences of paper.md section II-C (eq. 33) and
+// quadid::signal — filters and differences of the paper's section II-C (eq. 33) and
 // of the filtered regression model (eqs. 35-36). Leaf module. See docs/signal.md.
 #pragma once
 
@@ -106,7 +106,7 @@ auto central_difference(const Eigen::MatrixBase<Derived>& x, double T) {
 //   g_D(z) = lambda (z - 1) / (z - a)             eq. (36) as printed
 //   g_D(z) = ((1 - a) / T) (z - 1) / (z - a)      consistent: ((z - 1)/T) f_D(z)
 // Printed g_D = lambda T/(1 - a) (1.030 for lambda = 30, T = 0.002) times the
-// derivative of f_D's output at low frequency (ERRATA); Consistent is the default.
+// derivative of f_D's output at low frequency (docs/method.md, "Corrections to the printed paper"); Consistent is the default.
 enum class GdVariant { Consistent, Printed };
 TransferFunction fD_tf(double lambda, double T);
 TransferFunction gD_tf(double lambda, double T, GdVariant variant = GdVariant::Consistent);

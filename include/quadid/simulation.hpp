@@ -147,6 +147,10 @@ struct SafetyLimits {
 };
 
 struct SimulationOptions {
+  /// Largest log (rows = duration x controller.rate): 1e7 rows of 18 doubles are 1.4 GB.
+  static constexpr double kMaxSamples = 1e7;
+  /// Largest number of RK4 steps per controller period (e.g. 1e4: 1 us steps at 100 Hz).
+  static constexpr double kMaxStepsPerTick = 1e4;
   Params plant = Params::qball2_virtual();  // the "true" vehicle (Table 3, LS)
   ControllerOptions controller;             // nominal params, section III-C gains; controller.rate = log rate
   SensorOptions sensors;
@@ -166,6 +170,13 @@ struct SimulationOptions {
   /// With rotors: standard deviation of the white noise added to each logged rotor column, in
   /// its unit (rad/s or rpm; only measured speeds, not commands). Only the log sees it.
   double rotor_noise = 0.0;
+
+  /// Flies at a log rate of `hz`: controller.rate = hz, each sensor rate capped at
+  /// hz (a sensor cannot be logged faster than the log), and the RK4 step nearest
+  /// 1 ms that is a whole divisor of the log period:
+  /// dt = (1/hz) / max(1, round((1/hz) / 1 ms)), i.e. 1 ms at 100, 250, 500 and
+  /// 1000 Hz, 1.0101 ms at 30 Hz, 0.5 ms at 2 kHz (one step per period).
+  void set_rate(double hz);
 
   /// Throws std::invalid_argument naming the bad option.
   void validate() const;
@@ -191,7 +202,7 @@ struct SimulationSummary {
 };
 
 struct SimulationResult {
-  /// DESIGN.md flight log at the controller rate, t from 0: the measurements as the
+  /// docs/file-formats.md flight log at the controller rate, t from 0: the measurements as the
   /// controller saw them (mocap held at 30 Hz, IMU at 500 Hz, noise included) and
   /// the applied (saturated) commands, then x_d y_d z_d psi_d. Metadata in comments.
   FlightLog log;

@@ -64,7 +64,7 @@ class FourierTrajectory final : public Trajectory {
 
 /// Eq. (44): a circle of radius r in 5 s, z rising from 0.3 m to rho then
 /// oscillating +-0.1 m, psi = 15 deg sin(2 pi t / 5). z_d switches branch at
-/// t = 5 s with a jump in velocity and acceleration (ERRATA.md).
+/// t = 5 s with a jump in velocity and acceleration (docs/method.md, "Corrections to the printed paper").
 class CircleTrajectory final : public Trajectory {
  public:
   CircleTrajectory(double radius, double rho, double period = 5.0, double psi_amplitude = 15.0 * M_PI / 180.0);

@@ -55,6 +55,10 @@ SimulationComparison compare_simulations(const FlightLog& log, const Trajectory&
                                          const SimulationOptions& base, const std::vector<NamedParams>& sets,
                                          const NamedParams& reference, const SimulationComparisonOptions& opt = {});
 
+/// Empty when row `r`'s P_imp% of signal i is defined, else why not, in words
+/// (a failed reference re-flight, a zero reference RMS, ...).
+std::string improvement_undefined(const SimulationComparison& c, const SimulationComparisonRow& r, int i);
+
 /// Table 4 layout: a row per signal (angles in degrees), columns e_ref, then
 /// e_set and P_imp% for each set.
 std::string format_simulation_table(const SimulationComparison& c, std::string_view title);

@@ -40,7 +40,7 @@ void check_gain(const Vec3& k, const char* name, bool allow_zero) {
 }  // namespace
 
 void ControllerOptions::validate() const {
-  params.validate("controller params");
+  params.validate("controller params (--controller-params)");
   // P and D must act (a pure-I loop cannot stabilize the double integrator);
   // a zero integral gain is a legitimate PD controller.
   check_gain(gains.Kpp, "Kpp", false);
@@ -49,15 +49,15 @@ void ControllerOptions::validate() const {
   check_gain(gains.Kpo, "Kpo", false);
   check_gain(gains.Kio, "Kio", true);
   check_gain(gains.Kdo, "Kdo", false);
-  if (!std::isfinite(g) || g <= 0.0) throw std::invalid_argument(fmt::format("controller g = {} must be > 0", g));
+  if (!std::isfinite(g) || g <= 0.0) throw std::invalid_argument(fmt::format("controller gravity --g = {} m/s^2 must be finite and > 0", g));
   if (!std::isfinite(rate) || rate <= 0.0)
-    throw std::invalid_argument(fmt::format("controller rate = {} Hz must be > 0", rate));
+    throw std::invalid_argument(fmt::format("--rate = {} Hz must be finite and > 0", rate));
   if (!std::isfinite(Fz_min) || Fz_min < 0.0)
-    throw std::invalid_argument(fmt::format("controller Fz_min = {} N must be >= 0", Fz_min));
+    throw std::invalid_argument(fmt::format("controller thrust floor Fz_min = {} N must be finite and >= 0", Fz_min));
   if (!std::isfinite(Fz_max) || Fz_max <= Fz_min)
-    throw std::invalid_argument(fmt::format("controller Fz_max = {} N must exceed Fz_min = {} N", Fz_max, Fz_min));
+    throw std::invalid_argument(fmt::format("--fz-max = {} N must be finite and exceed the thrust floor {} N", Fz_max, Fz_min));
   if (!std::isfinite(tau_max) || tau_max <= 0.0)
-    throw std::invalid_argument(fmt::format("controller tau_max = {} N m must be > 0", tau_max));
+    throw std::invalid_argument(fmt::format("--tau-max = {} N m must be finite and > 0", tau_max));
   if (!std::isfinite(derivative_pole) || derivative_pole <= 0.0)
     throw std::invalid_argument(fmt::format("controller derivative_pole = {} rad/s must be > 0", derivative_pole));
 }
@@ -89,7 +89,7 @@ double DerivativeFilter::update(double u) {
 Eigen::Vector2d attitude_command(const Vec3& f, double psi_d) {
   const double fz = std::max(f(2), 1e-9);
   const double c = std::cos(psi_d), s = std::sin(psi_d);
-  // ERRATA.md: eqs. (29)-(30) without the extra factor m; f_p is a force already.
+  // docs/method.md, "Corrections to the printed paper": eqs. (29)-(30) without the extra factor m; f_p is a force already.
   const double theta_c = std::atan((f(0) * c + f(1) * s) / fz);
   const double phi_c = std::atan(std::cos(theta_c) * (f(0) * s - f(1) * c) / fz);
   return {phi_c, theta_c};

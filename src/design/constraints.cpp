@@ -18,55 +18,61 @@ void require(bool ok, const std::string& msg) {
 }
 
 // A positive upper bound; +inf allowed (no constraint), NaN and <= 0 not.
-void positive_limit(double v, const char* name, const char* unit) {
-  require(!std::isnan(v) && v > 0.0, fmt::format("constraint {} = {} {} must be positive (or inf for none)", name, v, unit));
+// `option` is the command line's spelling; angles are shown in degrees as there.
+void positive_limit(double v, const char* option, const char* unit, double shown = 1.0) {
+  require(!std::isnan(v) && v > 0.0,
+          fmt::format("{} = {:g} {} must be positive (or inf for no limit)", option, v * shown, unit));
 }
+
+constexpr double kToDeg = 1.0 / kDeg;
 
 }  // namespace
 
 void Constraints::validate() const {
-  positive_limit(x_max, "x_max", "m");
-  positive_limit(y_max, "y_max", "m");
-  positive_limit(psi_max, "psi_max", "rad");
-  positive_limit(tilt_max, "tilt_max", "rad");
-  positive_limit(xdot_max, "xdot_max", "m/s");
-  positive_limit(ydot_max, "ydot_max", "m/s");
-  positive_limit(zdot_max, "zdot_max", "m/s");
-  positive_limit(psidot_max, "psidot_max", "rad/s");
-  positive_limit(psiddot_max, "psiddot_max", "rad/s^2");
-  require(tilt_max < M_PI / 2, fmt::format("constraint tilt_max = {} rad must be below pi/2", tilt_max));
-  require(!std::isnan(z_min) && !std::isnan(z_max),
-          "constraints z_min and z_max must be numbers");
-  require(z_min < z_max, fmt::format("constraint z_min = {} m must be below z_max = {} m", z_min, z_max));
+  // Names are the command line's (quadid design, check-trajectory); angles in degrees as there.
+  positive_limit(x_max, "--x-max", "m");
+  positive_limit(y_max, "--y-max", "m");
+  positive_limit(psi_max, "--psi-max", "deg", kToDeg);
+  positive_limit(tilt_max, "--tilt-max", "deg", kToDeg);
+  positive_limit(xdot_max, "--xdot-max", "m/s");
+  positive_limit(ydot_max, "--ydot-max", "m/s");
+  positive_limit(zdot_max, "--zdot-max", "m/s");
+  positive_limit(psidot_max, "--psidot-max", "deg/s", kToDeg);
+  positive_limit(psiddot_max, "psiddot_max", "deg/s^2", kToDeg);
+  require(tilt_max < M_PI / 2, fmt::format("--tilt-max = {:g} deg must be below 90 deg", tilt_max * kToDeg));
+  require(!std::isnan(z_min) && !std::isnan(z_max), "--z-min and --z-max must be numbers");
+  require(z_min < z_max, fmt::format("--z-min = {:g} m must be below --z-max = {:g} m", z_min, z_max));
   require(!std::isnan(zddot_min) && !std::isnan(zddot_max) && zddot_min < zddot_max,
-          fmt::format("constraint zddot_min = {} m/s^2 must be below zddot_max = {} m/s^2", zddot_min, zddot_max));
+          fmt::format("--zddot-min = {:g} m/s^2 must be below zddot_max = {:g} m/s^2", zddot_min, zddot_max));
   require(std::isfinite(x0) && std::isfinite(y0) && std::isfinite(z0) && std::isfinite(psi0),
-          "the start point (x0, y0, z0, psi0) must be finite");
-  require(std::abs(x0) <= x_max, fmt::format("start x0 = {} m is outside |x| <= x_max = {} m", x0, x_max));
-  require(std::abs(y0) <= y_max, fmt::format("start y0 = {} m is outside |y| <= y_max = {} m", y0, y_max));
+          "the start point (x0, y0, --z0, psi0) must be finite");
+  require(std::abs(x0) <= x_max, fmt::format("start x0 = {:g} m is outside |x| <= --x-max = {:g} m", x0, x_max));
+  require(std::abs(y0) <= y_max, fmt::format("start y0 = {:g} m is outside |y| <= --y-max = {:g} m", y0, y_max));
   require(z0 >= z_min && z0 <= z_max,
-          fmt::format("start z0 = {} m is outside [z_min, z_max] = [{}, {}] m", z0, z_min, z_max));
-  require(std::abs(psi0) <= psi_max,
-          fmt::format("start psi0 = {} rad is outside |psi| <= psi_max = {} rad", psi0, psi_max));
+          fmt::format("start --z0 = {:g} m is outside [--z-min, --z-max] = [{:g}, {:g}] m", z0, z_min, z_max));
+  require(std::abs(psi0) <= psi_max, fmt::format("start psi0 = {:g} deg is outside |psi| <= --psi-max = {:g} deg",
+                                                 psi0 * kToDeg, psi_max * kToDeg));
   // The start hovers (zero acceleration), so it must satisfy the acceleration limits too.
   require(zddot_min <= 0.0 && zddot_max >= 0.0,
-          fmt::format("the hover start (z_ddot = 0) is outside [zddot_min, zddot_max] = [{}, {}] m/s^2",
+          fmt::format("the hover start (z_ddot = 0) is outside [--zddot-min, zddot_max] = [{:g}, {:g}] m/s^2",
                       zddot_min, zddot_max));
 }
 
 void CheckOptions::validate() const {
+  // Names are quadid check-trajectory's options.
   limits.validate();
-  require(std::isfinite(duration) && duration >= 0.0,
-          fmt::format("duration = {} s must be >= 0 (0 = one period)", duration));
-  require(std::isfinite(constraint_dt) && constraint_dt > 0.0,
-          fmt::format("constraint_dt = {} s must be positive", constraint_dt));
-  require(std::isfinite(cond_dt) && cond_dt > 0.0, fmt::format("cond_dt = {} s must be positive", cond_dt));
+  require(std::isfinite(duration) && duration >= 0.0 && duration <= kMaxDuration,
+          fmt::format("--duration = {:g} s must be in [0, {:g}] s (0 = one period)", duration, kMaxDuration));
+  require(std::isfinite(constraint_dt) && constraint_dt >= kMinStep && constraint_dt <= kMaxStep,
+          fmt::format("--check-dt = {:g} s must be in [{:g}, {:g}] s", constraint_dt, kMinStep, kMaxStep));
+  require(std::isfinite(cond_dt) && cond_dt >= kMinStep && cond_dt <= kMaxStep,
+          fmt::format("--cond-dt = {:g} s must be in [{:g}, {:g}] s", cond_dt, kMinStep, kMaxStep));
   require(std::isfinite(endpoint_tol) && endpoint_tol >= 0.0,
-          fmt::format("endpoint_tol = {} must be >= 0", endpoint_tol));
-  require(std::isfinite(g) && g > 0.0, fmt::format("g = {} m/s^2 must be positive", g));
+          fmt::format("--endpoint-tol = {:g} must be finite and >= 0", endpoint_tol));
+  require(std::isfinite(g) && g > 0.0, fmt::format("--g = {:g} m/s^2 must be positive", g));
   require(std::isfinite(product_floor) && product_floor > 0.0,
-          fmt::format("product_floor = {} must be positive", product_floor));
-  reference.validate("reference parameters");
+          fmt::format("product_floor = {:g} must be positive", product_floor));
+  reference.validate("reference parameters (--reference)");
 }
 
 namespace design_detail {
@@ -142,6 +148,21 @@ CheckReport check_trajectory(const Trajectory& traj, const CheckOptions& opt) {
   CheckReport rep;
   rep.trajectory = traj.describe();
   rep.duration = opt.duration > 0.0 ? opt.duration : traj.period();
+  const double period = traj.period();
+  const double n_min = CheckOptions::kMinSamplesPerPeriod;
+  if (!(period / opt.constraint_dt >= n_min))
+    throw std::invalid_argument(fmt::format("--check-dt = {:g} s must be at most {:g} s ({:g} points over the {:g} s "
+                                            "period of {})", opt.constraint_dt, period / n_min, n_min, period,
+                                            rep.trajectory));
+  if (!(period / opt.cond_dt >= n_min))
+    throw std::invalid_argument(fmt::format("--cond-dt = {:g} s must be at most {:g} s ({:g} samples of W over the "
+                                            "{:g} s period of {})", opt.cond_dt, period / n_min, n_min, period,
+                                            rep.trajectory));
+  constexpr double kMaxPoints = 1e7;  // ~10 s of evaluation
+  if (rep.duration / opt.constraint_dt > kMaxPoints)
+    throw std::invalid_argument(fmt::format("--duration / --check-dt = {:g} s / {:g} s = {:.3g} grid points; at most "
+                                            "{:g}", rep.duration, opt.constraint_dt,
+                                            rep.duration / opt.constraint_dt, kMaxPoints));
   rep.constraint_dt = opt.constraint_dt;
   rep.cond_dt = opt.cond_dt;
 

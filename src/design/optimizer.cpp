@@ -44,35 +44,41 @@ void DesignOptions::validate() const {
   auto require = [](bool ok, const std::string& msg) {
     if (!ok) throw std::invalid_argument(msg);
   };
+  // Names are quadid design's options (CLI spelling); --wf is in deg/s there.
   limits.validate();
-  require(harmonics >= 1, fmt::format("harmonics = {} must be at least 1", harmonics));
-  require(harmonics >= 2, fmt::format("harmonics = {} leaves no freedom: the 12 start conditions fix all "
-                                      "3 coefficients per axis; use at least 2", harmonics));
-  require(harmonics <= 50, fmt::format("harmonics = {} is too many (at most 50)", harmonics));
-  require(std::isfinite(wf) && wf > 0.0, fmt::format("wf = {} rad/s must be positive", wf));
-  require(starts >= 1, fmt::format("starts = {} must be at least 1", starts));
-  require(threads >= 0, fmt::format("threads = {} must be >= 0 (0 = automatic)", threads));
+  require(harmonics >= 1, fmt::format("--harmonics = {} must be at least 1", harmonics));
+  require(harmonics >= 2, fmt::format("--harmonics = {} leaves no freedom: the 12 start conditions fix all "
+                                      "3 coefficients per axis; use 2 to 50", harmonics));
+  require(harmonics <= 50, fmt::format("--harmonics = {} is too many (2 to 50)", harmonics));
+  require(std::isfinite(wf) && wf >= 2.0 * M_PI / kMaxPeriod && wf <= 2.0 * M_PI / kMinPeriod,
+          fmt::format("--wf = {:g} deg/s must be in [{:g}, {:g}] deg/s (a period of {:g} to {:g} s)", wf / kDeg,
+                      360.0 / kMaxPeriod, 360.0 / kMinPeriod, kMinPeriod, kMaxPeriod));
+  require(starts >= 1 && starts <= 10000, fmt::format("--starts = {} must be in [1, 10000]", starts));
+  require(threads >= 0 && threads <= 1024, fmt::format("--threads = {} must be in [0, 1024] (0 = automatic)", threads));
   const double period = 2.0 * M_PI / wf;
-  require(std::isfinite(grid_dt) && grid_dt > 0.0 && grid_dt <= period / (8.0 * harmonics),
-          fmt::format("grid_dt = {} s must be positive and resolve the highest harmonic (<= {} s)", grid_dt,
-                      period / (8.0 * harmonics)));
-  require(std::isfinite(check_dt) && check_dt > 0.0 && check_dt <= period / (8.0 * harmonics),
-          fmt::format("check_dt = {} s must be positive and resolve the highest harmonic (<= {} s)", check_dt,
-                      period / (8.0 * harmonics)));
+  const double resolve = period / (8.0 * harmonics);  // 8 points per period of the highest harmonic
+  require(std::isfinite(grid_dt) && grid_dt >= CheckOptions::kMinStep && grid_dt <= resolve,
+          fmt::format("grid_dt = {:g} s must be in [{:g}, {:g}] s (the upper bound resolves the highest harmonic)",
+                      grid_dt, CheckOptions::kMinStep, resolve));
+  require(std::isfinite(check_dt) && check_dt >= CheckOptions::kMinStep && check_dt <= resolve,
+          fmt::format("--check-dt = {:g} s must be in [{:g}, {:g}] s (the upper bound resolves the highest harmonic)",
+                      check_dt, CheckOptions::kMinStep, resolve));
   require(std::isfinite(cell_dt) && cell_dt >= check_dt && cell_dt <= period / 4.0,
-          fmt::format("cell_dt = {} s must be between check_dt = {} s and a quarter period", cell_dt, check_dt));
-  require(std::isfinite(cond_dt) && cond_dt > 0.0, fmt::format("cond_dt = {} s must be positive", cond_dt));
+          fmt::format("cell_dt = {:g} s must be between --check-dt = {:g} s and a quarter period", cell_dt, check_dt));
+  require(std::isfinite(cond_dt) && cond_dt >= CheckOptions::kMinStep && cond_dt <= resolve,
+          fmt::format("--cond-dt = {:g} s must be in [{:g}, {:g}] s (the upper bound resolves the highest harmonic)",
+                      cond_dt, CheckOptions::kMinStep, resolve));
   require(std::isfinite(margin) && margin >= 1e-8 && margin < 0.1,
-          fmt::format("margin = {} must be in [1e-8, 0.1)", margin));
-  require(max_evals >= 1, fmt::format("max_evals = {} must be at least 1", max_evals));
+          fmt::format("margin = {:g} must be in [1e-8, 0.1)", margin));
+  require(max_evals >= 1 && max_evals <= 1000000, fmt::format("--max-evals = {} must be in [1, 1e6]", max_evals));
   require(refine_rounds >= 0, fmt::format("refine_rounds = {} must be >= 0", refine_rounds));
-  require(std::isfinite(ftol_rel) && ftol_rel > 0.0, fmt::format("ftol_rel = {} must be positive", ftol_rel));
+  require(std::isfinite(ftol_rel) && ftol_rel > 0.0, fmt::format("ftol_rel = {:g} must be positive", ftol_rel));
   require(std::isfinite(start_fill) && start_fill > 0.0 && start_fill <= 1.0,
-          fmt::format("start_fill = {} must be in (0, 1]", start_fill));
-  require(std::isfinite(g) && g > 0.0, fmt::format("g = {} m/s^2 must be positive", g));
+          fmt::format("start_fill = {:g} must be in (0, 1]", start_fill));
+  require(std::isfinite(g) && g > 0.0, fmt::format("--g = {:g} m/s^2 must be positive", g));
   require(std::isfinite(product_floor) && product_floor > 0.0,
-          fmt::format("product_floor = {} must be positive", product_floor));
-  reference.validate("reference parameters");
+          fmt::format("product_floor = {:g} must be positive", product_floor));
+  reference.validate("reference parameters (--reference)");
 }
 
 namespace {

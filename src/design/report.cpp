@@ -67,6 +67,36 @@ json to_json(const Constraints& c) {
           {"units", "SI: m, m/s, m/s^2, rad, rad/s, rad/s^2; null = unbounded"}};
 }
 
+Constraints constraints_from_json(const json& j, const std::string& source, Constraints c) {
+  if (!j.is_object()) throw InputError(fmt::format("{}: \"constraints\" must be an object", source));
+  auto field = [&](const json& obj, const char* key, double& v, const std::string& where) {
+    if (!obj.contains(key)) return;
+    const json& x = obj[key];
+    if (x.is_null()) v = std::string_view(key).ends_with("_min") ? -kInf : kInf;  // null = unbounded
+    else if (x.is_number()) v = x.get<double>();
+    else throw InputError(fmt::format("{}: {}.{} must be a number or null", source, where, key));
+  };
+  const std::pair<const char*, double*> fields[] = {
+      {"x_max", &c.x_max},       {"y_max", &c.y_max},         {"z_min", &c.z_min},
+      {"z_max", &c.z_max},       {"psi_max", &c.psi_max},     {"tilt_max", &c.tilt_max},
+      {"xdot_max", &c.xdot_max}, {"ydot_max", &c.ydot_max},   {"zdot_max", &c.zdot_max},
+      {"psidot_max", &c.psidot_max}, {"zddot_min", &c.zddot_min}, {"zddot_max", &c.zddot_max},
+      {"psiddot_max", &c.psiddot_max}};
+  for (const auto& [k, v] : fields) field(j, k, *v, "constraints");
+  if (j.contains("start")) {
+    const json& s = j["start"];
+    if (!s.is_object()) throw InputError(fmt::format("{}: constraints.start must be an object", source));
+    const std::pair<const char*, double*> start[] = {{"x", &c.x0}, {"y", &c.y0}, {"z", &c.z0}, {"psi", &c.psi0}};
+    for (const auto& [k, v] : start) field(s, k, *v, "constraints.start");
+  }
+  try {
+    c.validate();
+  } catch (const std::invalid_argument& e) {
+    throw InputError(fmt::format("{}: constraints: {}", source, e.what()));
+  }
+  return c;
+}
+
 json to_json(const CheckReport& r) {
   json cons = json::array();
   for (const auto& c : r.constraints)

@@ -1,4 +1,4 @@
-// Gradient descent, eqs. (41)-(42), with a stable discretization (ERRATA.md,
+// Gradient descent, eqs. (41)-(42), with a stable discretization (docs/method.md, "Corrections to the printed paper",
 // "Estimators").
 //
 // With Gamma and Upsilon held over one sample, the error e = Gamma Theta - Upsilon
@@ -46,7 +46,7 @@ inline double psi(double x, double h) {
 
 void GradientDescentOptions::validate() const {
   if (!(sigma > 0.0) || !std::isfinite(sigma))
-    throw std::invalid_argument(fmt::format("GradientDescentOptions: sigma={} must be a positive number", sigma));
+    throw std::invalid_argument(fmt::format("--sigma = {:g} (GD gain) must be finite and positive", sigma));
   if (discretization != GdDiscretization::Exact && discretization != GdDiscretization::ForwardEuler)
     throw std::invalid_argument("GradientDescentOptions: unknown discretization");
   if (!(divergence_factor > 1.0))

@@ -100,25 +100,54 @@ LeastSquaresSolution solve_least_squares(const LeastSquaresAccumulator& acc, con
   const double rss_all = std::max(0.0, th.dot(A * th) - 2.0 * th.dot(acc.rhs()) + acc.output_energy());
   sol.residual_rms = std::sqrt(rss_all / (4.0 * n));
   const bool block = A.row(0).tail<6>().isZero(0.0);
+  // Covariance of the determined parameters. When some are not determined they
+  // stay at the prior, so the others' standard errors are conditional on those
+  // fixed values: the inverse of A restricted to the determined rows and columns.
+  // The undetermined ones get no standard error (NaN; the reports say why).
+  std::vector<Eigen::Index> det;
+  for (int j = 0; j < 7; ++j)
+    if (!flagged[static_cast<size_t>(j)]) det.push_back(j);
+  const auto nd = static_cast<Eigen::Index>(det.size());
+  Mat7 Ainv = Mat7::Constant(kNaN);
+  bool have_cov = false;
   if (sol.full_rank()) {
-    const Mat7 Ainv = d.asDiagonal() * (es.eigenvectors() * lam.cwiseInverse().asDiagonal() *
-                                        es.eigenvectors().transpose()) * d.asDiagonal();
+    Ainv = d.asDiagonal() * (es.eigenvectors() * lam.cwiseInverse().asDiagonal() * es.eigenvectors().transpose()) *
+           d.asDiagonal();
+    have_cov = true;
+  } else if (nd > 0) {
+    Eigen::MatrixXd Asub(nd, nd);
+    for (Eigen::Index a = 0; a < nd; ++a)
+      for (Eigen::Index b = 0; b < nd; ++b) Asub(a, b) = As(det[static_cast<size_t>(a)], det[static_cast<size_t>(b)]);
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> esub(Asub);
+    if (esub.eigenvalues()(0) > cut) {
+      const Eigen::MatrixXd inv =
+          esub.eigenvectors() * esub.eigenvalues().cwiseInverse().asDiagonal() * esub.eigenvectors().transpose();
+      for (Eigen::Index a = 0; a < nd; ++a)
+        for (Eigen::Index b = 0; b < nd; ++b) {
+          const Eigen::Index i = det[static_cast<size_t>(a)], j = det[static_cast<size_t>(b)];
+          Ainv(i, j) = d(i) * inv(a, b) * d(j);
+        }
+      have_cov = true;
+    }
+  }
+  for (int j = 0; j < 7; ++j)
+    if (flagged[static_cast<size_t>(j)]) sol.std_error(j) = kNaN;
+  if (have_cov) {
     const double n_eff = std::max(1.0, n / correlation_length);
+    const double infl = n / n_eff;  // variance inflation by the correlation length
     if (block) {
       const double rss0 = std::max(0.0, th(0) * th(0) * A(0, 0) - 2.0 * th(0) * acc.rhs()(0) + acc.output_energy_components()(0));
       const double rssI = std::max(0.0, rss_all - rss0);
       const double s0 = rss0 / std::max(1.0, n - 1.0), sI = rssI / std::max(1.0, 3.0 * n - 6.0);
-      const double infl = n / n_eff;  // variance inflation by the correlation length
-      sol.std_error(0) = std::sqrt(infl * s0 * Ainv(0, 0));
-      for (int j = 1; j < 7; ++j) sol.std_error(j) = std::sqrt(infl * sI * Ainv(j, j));
+      for (Eigen::Index j : det) sol.std_error(j) = std::sqrt(infl * (j == 0 ? s0 : sI) * Ainv(j, j));
     } else {
       const double s2 = rss_all / std::max(1.0, 4.0 * n - 7.0);
-      for (int j = 0; j < 7; ++j) sol.std_error(j) = std::sqrt(n / n_eff * s2 * Ainv(j, j));
+      for (Eigen::Index j : det) sol.std_error(j) = std::sqrt(infl * s2 * Ainv(j, j));
     }
     const double mscale = std::abs(th(0));
     double iscale = (std::abs(th(1)) + std::abs(th(4)) + std::abs(th(6))) / 3.0;
     if (!(iscale > 0.0)) iscale = (std::abs(prior(1)) + std::abs(prior(4)) + std::abs(prior(6))) / 3.0;
-    for (int j = 0; j < 7; ++j) {
+    for (Eigen::Index j : det) {
       const double scale = (j == 0) ? mscale : iscale;
       if (!(sol.std_error(j) <= opt.poor_fraction * scale))
         sol.poorly_determined.emplace_back(kThetaNames[static_cast<size_t>(j)]);

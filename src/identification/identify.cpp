@@ -72,11 +72,11 @@ bool positive_definite(const Mat3& I) {
 void IdentificationOptions::validate() const {
   processing.validate();
   if (!(window.t0 >= 0.0) || !(window.t1 > window.t0))
-    throw std::invalid_argument(fmt::format("window {}: need 0 <= T0 < T1", window.to_string()));
+    throw std::invalid_argument(fmt::format("--window {}: need 0 <= T0 < T1", window.to_string()));
   if (error_window && (!(error_window->t0 >= 0.0) || !(error_window->t1 > error_window->t0)))
-    throw std::invalid_argument(fmt::format("error_window {}: need 0 <= T0 < T1", error_window->to_string()));
+    throw std::invalid_argument(fmt::format("--error-window {}: need 0 <= T0 < T1", error_window->to_string()));
   if (!(lambda > 0.0) || !std::isfinite(lambda))
-    throw std::invalid_argument(fmt::format("lambda={} must be a positive bandwidth in rad/s", lambda));
+    throw std::invalid_argument(fmt::format("--lambda = {:g} rad/s must be a finite, positive bandwidth", lambda));
   gd.validate();
   ls.validate();
   terms.validate();
@@ -86,8 +86,9 @@ void IdentificationOptions::validate() const {
   reference.params.validate("reference parameter set '" + reference.name + "'");
   if (gd_initial && !gd_initial->theta().allFinite())
     throw std::invalid_argument("gd_initial: the initial guess is not finite");
-  if (!(evolution_interval >= 0.0) || !std::isfinite(evolution_interval))
-    throw std::invalid_argument(fmt::format("evolution_interval={} must be >= 0 s", evolution_interval));
+  if (!(evolution_interval >= 0.0 && evolution_interval <= kMaxEvolutionInterval))
+    throw std::invalid_argument(fmt::format("--evolution-interval = {:g} s must be in [0, {:g}] s (0 = every sample)",
+                                            evolution_interval, kMaxEvolutionInterval));
 }
 
 bool IdentificationOptions::extended() const {

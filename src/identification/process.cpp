@@ -69,9 +69,9 @@ double settling_time(const signal::TransferFunction& tf, double T) {
 
 void ProcessingOptions::validate() const {
   if (!(g > 0.0) || !std::isfinite(g))
-    throw std::invalid_argument(fmt::format("ProcessingOptions: g={} must be positive", g));
+    throw std::invalid_argument(fmt::format("--g = {:g} m/s^2 must be finite and positive", g));
   if (!(period_tolerance >= 0.0 && period_tolerance < 0.5))
-    throw std::invalid_argument(fmt::format("ProcessingOptions: period_tolerance={} must be in [0, 0.5)", period_tolerance));
+    throw std::invalid_argument(fmt::format("--period-tolerance = {:g} must be in [0, 0.5)", period_tolerance));
   // lowpass is validated against the log's sample rate in process_log.
 }
 

@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 
 #include <charconv>
+#include <limits>
 #include <cmath>
 #include <stdexcept>
 
@@ -106,6 +107,18 @@ TimeWindow Regression::window() const {
   return {static_cast<double>(begin_) * sig_->T, static_cast<double>(end_ - 1) * sig_->T};
 }
 
+double improvement_pct(double rms_ref, double rms_set) {
+  if (!improvement_undefined(rms_ref, rms_set).empty()) return std::numeric_limits<double>::quiet_NaN();
+  return (rms_ref - rms_set) / rms_ref * 100.0;  // P_imp%, section IV-B
+}
+
+std::string improvement_undefined(double rms_ref, double rms_set) {
+  if (!std::isfinite(rms_ref)) return "the reference set has no error to compare with";
+  if (!std::isfinite(rms_set)) return "the set has no error to compare";
+  if (rms_ref == 0.0) return "the reference set's error is exactly 0, so no relative improvement exists";
+  return {};
+}
+
 PredictionErrorTable prediction_error(const Regression& reg, const std::vector<NamedParams>& sets,
                                       const NamedParams& reference) {
   const size_t S = sets.size() + 1;  // reference first
@@ -127,8 +140,7 @@ PredictionErrorTable prediction_error(const Regression& reg, const std::vector<N
     PredictionErrorRow row;
     row.name = sets[i].name;
     row.rms = (sse.col(static_cast<Eigen::Index>(i + 1)) / n).cwiseSqrt();
-    // P_imp% as in section IV-B: (RMS_nom - RMS_set) / RMS_nom * 100.
-    row.improvement_pct = 100.0 * (t.reference.rms - row.rms).cwiseQuotient(t.reference.rms);
+    for (int c = 0; c < 4; ++c) row.improvement_pct(c) = improvement_pct(t.reference.rms(c), row.rms(c));
     t.rows.push_back(row);
   }
   return t;

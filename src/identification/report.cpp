@@ -1,5 +1,6 @@
 // Text tables (Table 3, Tables 5-6), JSON and evolution CSV of an identification.
 #include "quadid/identification.hpp"
+#include "quadid/report.hpp"
 
 #include "quadid/extended.hpp"
 
@@ -42,51 +43,64 @@ json window_json(const TimeWindow& w) {
 }
 
 json ls_json(const LeastSquaresSolution& s) {
-  return {{"condition", finite_or_null(s.condition)},
-          {"singular_values", vec_json(s.singular_values)},
-          {"std_error", theta_json(s.std_error)},
-          {"residual_rms", s.residual_rms},
-          {"unidentifiable", s.unidentifiable},
-          {"poorly_determined", s.poorly_determined}};
+  json j = {{"condition", finite_or_null(s.condition)},
+            {"singular_values", vec_json(s.singular_values)},
+            {"std_error", theta_json(s.std_error)},
+            {"residual_rms", s.residual_rms},
+            {"unidentifiable", s.unidentifiable},
+            {"poorly_determined", s.poorly_determined}};
+  if (!s.unidentifiable.empty())
+    j["std_error_note"] = fmt::format(
+        "null for {}: the data do not determine them (kept at the reference values); the other standard errors "
+        "hold them fixed there",
+        fmt::join(s.unidentifiable, ", "));
+  return j;
 }
 
 }  // namespace
 
 std::string format_estimates_table(const IdentificationResult& r) {
-  fmt::memory_buffer out;
-  auto it = std::back_inserter(out);
-  fmt::format_to(it, "Estimated parameters (Table 3): window {} ({} samples at {:g} Hz)\n", r.window.to_string(),
-                 r.window_samples, r.processing.fs);
-  fmt::format_to(it, "{:<10}{:<8}", "Parameter", "Units");
-  for (const auto& e : r.estimates) fmt::format_to(it, "{:>13}", e.name);
-  fmt::format_to(it, "{:>13}\n", r.reference.name);
+  report::Table t;
+  t.title = fmt::format("Estimated parameters (Table 3): window {} ({} samples at {:g} Hz)", r.window.to_string(),
+                        r.window_samples, r.processing.fs);
+  t.header = {"Parameter", "Units"};
+  for (const auto& e : r.estimates) t.header.push_back(e.name);
+  t.header.push_back(r.reference.name);
   const Theta ref = r.reference.params.theta();
   for (int j = 0; j < 7; ++j) {
-    fmt::format_to(it, "{:<10}{:<8}", kThetaNames[static_cast<size_t>(j)], theta_unit(j));
-    for (const auto& e : r.estimates) fmt::format_to(it, "{:>13}", e.valid ? num(e.theta(j)) : "diverged");
-    fmt::format_to(it, "{:>13}\n", num(ref(j)));
+    std::vector<std::string> row = {kThetaNames[static_cast<size_t>(j)], theta_unit(j)};
+    for (const auto& e : r.estimates) row.push_back(e.valid ? num(e.theta(j)) : "diverged");
+    row.push_back(num(ref(j)));
+    t.rows.push_back(std::move(row));
   }
-  return fmt::to_string(out);
+  return t.to_text();
 }
 
 std::string format_prediction_table(const PredictionErrorTable& t, std::string_view title) {
-  fmt::memory_buffer out;
-  auto it = std::back_inserter(out);
-  fmt::format_to(it, "{}: RMS output prediction error of the {} regression model ({}), window {} ({} samples)\n",
-                 title, to_string(t.model), t.model == RegressionModel::Standard ? "eq. 34" : "eq. 38",
-                 t.window.to_string(), t.samples);
-  fmt::format_to(it, "{:<22}{:>12}", "Component", "e_" + t.reference.name);
-  for (const auto& r : t.rows) fmt::format_to(it, "{:>12}{:>9}", "e_" + r.name, "P_imp%");
-  fmt::format_to(it, "\n");
-  for (int i = 0; i < 4; ++i) {
-    fmt::format_to(it, "{:<22}{:>12.5g}",
-                   fmt::format("{} {} [{}]", i + 1, kComponents[static_cast<size_t>(i)],
-                               kComponentUnits[static_cast<size_t>(i)]),
-                   t.reference.rms(i));
-    for (const auto& r : t.rows) fmt::format_to(it, "{:>12.5g}{:>9.2f}", r.rms(i), r.improvement_pct(i));
-    fmt::format_to(it, "\n");
+  report::Table out;
+  out.title = fmt::format("{}: RMS output prediction error of the {} regression model ({}), window {} ({} samples)",
+                          title, to_string(t.model), t.model == RegressionModel::Standard ? "eq. 34" : "eq. 38",
+                          t.window.to_string(), t.samples);
+  out.header = {"Component", "e_" + t.reference.name};
+  for (const auto& r : t.rows) {
+    out.header.push_back("e_" + r.name);
+    out.header.push_back("P_imp%");
   }
-  return fmt::to_string(out);
+  std::vector<std::string> notes;
+  for (int i = 0; i < 4; ++i) {
+    const auto c = static_cast<size_t>(i);
+    std::vector<std::string> row = {fmt::format("{} {} [{}]", i + 1, kComponents[c], kComponentUnits[c]),
+                                    fmt::format("{:.5g}", t.reference.rms(i))};
+    for (const auto& r : t.rows) {
+      row.push_back(fmt::format("{:.5g}", r.rms(i)));
+      const std::string why = improvement_undefined(t.reference.rms(i), r.rms(i));
+      row.push_back(why.empty() ? fmt::format("{:.2f}", r.improvement_pct(i)) : "n/a");
+      if (!why.empty()) notes.push_back(fmt::format("P_imp% of {} for {} is n/a: {}", r.name, kComponents[c], why));
+    }
+    out.rows.push_back(std::move(row));
+  }
+  out.note = fmt::format("{}", fmt::join(notes, "\n"));
+  return out.to_text();
 }
 
 std::string format_evolution_csv(const Evolution& e) {
@@ -106,8 +120,17 @@ std::string format_evolution_csv(const Evolution& e) {
 
 json to_json(const PredictionErrorTable& t) {
   json sets = json::array();
-  for (const auto& r : t.rows)
-    sets.push_back({{"name", r.name}, {"rms", vec_json(r.rms)}, {"improvement_pct", vec_json(r.improvement_pct)}});
+  for (const auto& r : t.rows) {
+    json row = {{"name", r.name}, {"rms", vec_json(r.rms)}, {"improvement_pct", vec_json(r.improvement_pct)}};
+    json why = json::object();
+    for (size_t i = 0; i < 4; ++i) {
+      const std::string w = improvement_undefined(t.reference.rms(static_cast<Eigen::Index>(i)),
+                                                  r.rms(static_cast<Eigen::Index>(i)));
+      if (!w.empty()) why[kComponents[i]] = w;
+    }
+    if (!why.empty()) row["improvement_undefined"] = why;  // why an improvement_pct entry is null
+    sets.push_back(row);
+  }
   return {{"model", to_string(t.model)},
           {"equation", t.model == RegressionModel::Standard ? 34 : 38},
           {"window", window_json(t.window)},

@@ -1,4 +1,4 @@
-// Flight-log CSV (DESIGN.md, "Flight log"): '#' comments, one header line,
+// Flight-log CSV (docs/file-formats.md, "Flight log"): '#' comments, one header line,
 // then one row per sample.
 //
 // Memory: a 20-minute log at 1 kHz is 1.2 million rows, and a simulator log may

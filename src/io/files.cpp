@@ -34,6 +34,45 @@ void write_file_atomic(const std::filesystem::path& path, std::string_view conte
   }
 }
 
+namespace {
+
+void require_writable_directory(const std::filesystem::path& dir, const std::filesystem::path& path,
+                                std::string_view option) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (!fs::exists(dir, ec))
+    throw InputError(fmt::format("{} {}: directory '{}' does not exist", option, path.string(), dir.string()));
+  if (!fs::is_directory(dir, ec))
+    throw InputError(fmt::format("{} {}: '{}' is not a directory", option, path.string(), dir.string()));
+  if (::access(dir.c_str(), W_OK | X_OK) != 0)
+    throw InputError(fmt::format("{} {}: directory '{}' is not writable", option, path.string(), dir.string()));
+}
+
+}  // namespace
+
+void check_output_file(const std::filesystem::path& path, std::string_view option) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (path.empty()) throw InputError(fmt::format("{}: an empty file name", option));
+  if (fs::is_directory(path, ec))
+    throw InputError(fmt::format("{} {}: is a directory; give a file name", option, path.string()));
+  require_writable_directory(path.has_parent_path() ? path.parent_path() : fs::path("."), path, option);
+}
+
+void check_output_directory(const std::filesystem::path& path, std::string_view option) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (path.empty()) throw InputError(fmt::format("{}: an empty folder name", option));
+  if (fs::exists(path, ec)) {
+    require_writable_directory(path, path, option);
+    return;
+  }
+  fs::path p = path.lexically_normal();
+  if (!p.has_filename()) p = p.parent_path();  // "out/" names the folder "out"
+  const fs::path parent = p.has_parent_path() ? p.parent_path() : fs::path(".");
+  require_writable_directory(parent, path, option);
+}
+
 std::string read_file(const std::filesystem::path& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(fmt::format("{}: cannot open file for reading", path.string()));

@@ -162,4 +162,11 @@ std::vector<std::pair<std::string, Params>> load_param_sets(const std::string& s
   return sets;
 }
 
+std::string param_set_name(const std::string& spec) {
+  if (spec == "qball2-nominal") return "nom";
+  for (const auto& n : Params::preset_names())
+    if (spec == n) return spec;
+  return std::filesystem::path(spec).stem().string();
+}
+
 }  // namespace quadid

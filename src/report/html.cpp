@@ -37,9 +37,10 @@ body {{ font-family: Helvetica, Arial, sans-serif; max-width: 1600px; margin: 2e
 h1 {{ font-size: 1.7em; border-bottom: 2px solid #333; padding-bottom: .2em; }}
 h2 {{ font-size: 1.35em; margin-top: 2em; border-bottom: 1px solid #bbb; }}
 h3 {{ font-size: 1.1em; margin-top: 1.5em; }}
-table {{ border-collapse: collapse; margin: .8em 0; font-size: .92em; }}
+table {{ border-collapse: collapse; margin: .8em 0; font-size: .86em; }}
 caption {{ text-align: left; font-weight: bold; padding-bottom: .4em; }}
-th, td {{ border: 1px solid #ccc; padding: .25em .6em; }}
+th, td {{ border: 1px solid #ccc; padding: .25em .35em; }}
+td {{ white-space: nowrap; }}
 td {{ text-align: right; font-variant-numeric: tabular-nums; }}
 thead th {{ background: #f0f0f0; }}
 tbody th {{ text-align: left; font-weight: normal; background: #fafafa; }}
@@ -50,6 +51,7 @@ figure .row {{ display: flex; flex-wrap: wrap; gap: 8px; }}
 figcaption {{ font-size: .92em; color: #444; margin-top: .3em; }}
 p.note {{ font-size: .88em; color: #555; margin-top: -.3em; }}
 code, pre {{ background: #f5f5f5; padding: 0 .2em; }}
+.conclusions {{ border: 2px solid #1f4fd6; background: #f4f7ff; padding: .4em 1.2em; border-radius: 6px; max-width: 1100px; }}
 </style>
 </head>
 <body>

@@ -86,11 +86,25 @@ std::string color_for(const std::string& name, size_t index) {
 std::string render_svg(const Plot& plot) {
   const double W = plot.width, H = plot.height;
   const double ml = 70, mr = 20, mt = plot.title.empty() ? 14 : 30;
-  // Legend rows below the x label: as many entries per row as fit.
+  // Legend rows below the x label: entries as wide as their labels, as many
+  // per row as fit (a sample line of 24 px, 6 px gap, ~6.5 px per character at 12 px).
   const size_t nser = plot.series.size();
-  const double entry_w = 150;
-  const size_t per_row = std::max<size_t>(1, static_cast<size_t>((W - ml - mr) / entry_w));
-  const size_t legend_rows = nser > 1 ? (nser + per_row - 1) / per_row : 0;
+  const double legend_w = W - ml - mr;
+  std::vector<std::pair<double, size_t>> legend_pos(nser);  // x offset, row
+  size_t legend_rows = 0;
+  if (nser > 1) {
+    double x = 0.0;
+    legend_rows = 1;
+    for (size_t k = 0; k < nser; ++k) {
+      const double w = 24 + 6 + 6.5 * static_cast<double>(plot.series[k].label.size()) + 14;
+      if (x > 0.0 && x + w > legend_w) {
+        x = 0.0;
+        ++legend_rows;
+      }
+      legend_pos[k] = {x, legend_rows - 1};
+      x += w;
+    }
+  }
   const double mb = 48 + 18.0 * static_cast<double>(legend_rows);
   const double pw = W - ml - mr, ph = H - mt - mb;
 
@@ -149,7 +163,11 @@ std::string render_svg(const Plot& plot) {
   o += fmt::format("<clipPath id=\"c{}\"><rect x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\"/></clipPath>\n", clip_id,
                    ml, mt, pw, ph);
   o += fmt::format("<g clip-path=\"url(#c{})\" fill=\"none\" stroke-linejoin=\"round\">\n", clip_id);
-  for (size_t k = 0; k < nser; ++k) {
+  std::vector<size_t> order(nser);
+  for (size_t k = 0; k < nser; ++k) order[k] = k;
+  std::stable_sort(order.begin(), order.end(),
+                   [&](size_t a, size_t b) { return plot.series[a].layer < plot.series[b].layer; });
+  for (const size_t k : order) {
     const auto& s = plot.series[k];
     const std::string col = s.color.empty() ? color_for(s.label, k) : s.color;
     std::string d;
@@ -168,8 +186,8 @@ std::string render_svg(const Plot& plot) {
     o += "<g>\n";
     for (size_t k = 0; k < nser; ++k) {
       const auto& s = plot.series[k];
-      const double lx = ml + static_cast<double>(k % per_row) * entry_w;
-      const double ly = mt + ph + 50 + 18.0 * static_cast<double>(k / per_row);
+      const double lx = ml + legend_pos[k].first;
+      const double ly = mt + ph + 50 + 18.0 * static_cast<double>(legend_pos[k].second);
       const std::string col = s.color.empty() ? color_for(s.label, k) : s.color;
       o += fmt::format("<line x1=\"{:.1f}\" y1=\"{:.1f}\" x2=\"{:.1f}\" y2=\"{:.1f}\" stroke=\"{}\" stroke-width=\"{}\"{}/>",
                        lx, ly - 4, lx + 24, ly - 4, col, std::max(2.0, s.width), s.dashed ? " stroke-dasharray=\"6,3\"" : "");

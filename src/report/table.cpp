@@ -81,13 +81,37 @@ std::string Table::to_text() const {
   return out;
 }
 
-std::string Table::to_markdown() const {
+std::string markdown_escape(const std::string& s) {
   std::string out;
-  if (!title.empty()) out += "**" + title + "**\n\n";
-  out += "| " + fmt::format("{}", fmt::join(header, " | ")) + " |\n|";
+  out.reserve(s.size());
+  for (char c : s) {
+    if (c == '|' || c == '\\') out += '\\';  // a bare | would end the cell
+    out += c == '\n' ? ' ' : c;               // a newline would end the row
+  }
+  return out;
+}
+
+std::string Table::to_markdown() const {
+  auto row = [](const std::vector<std::string>& cells) {
+    std::string line = "|";
+    for (const auto& c : cells) {
+      line += ' ';
+      line += markdown_escape(c);
+      line += " |";
+    }
+    line += '\n';
+    return line;
+  };
+  std::string out;
+  if (!title.empty()) {
+    out += "**";
+    out += markdown_escape(title);
+    out += "**\n\n";
+  }
+  out += row(header) + "|";
   for (size_t c = 0; c < header.size(); ++c) out += c == 0 ? "---|" : "---:|";
   out += "\n";
-  for (const auto& r : rows) out += "| " + fmt::format("{}", fmt::join(r, " | ")) + " |\n";
+  for (const auto& r : rows) out += row(r);
   if (!note.empty()) out += "\n" + note + "\n";
   return out;
 }

@@ -5,7 +5,9 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace quadid {
 
@@ -26,6 +28,9 @@ std::vector<double> col(const FlightLog& log, std::string_view name, double scal
   return v;
 }
 
+// The reference the controller tracked (x_d, y_d, z_d, psi_d): light grey, beneath everything.
+constexpr const char* kDesiredColor = "#9a9a9a";
+
 std::string sim_label(const std::string& set) { return set == "Exp" ? "Exp" : fmt::format("Sim({})", set); }
 
 // Experiment (black) and the five re-flights (nominal red, LS blue, GD purple,
@@ -39,14 +44,19 @@ Plot compare_plot(const Reproduction& r, std::string_view signal, const std::str
   p.ylabel = ylabel;
   p.height = 280;
   const auto t = col(r.flight.log, "t");
-  p.series.push_back({"Exp", t, col(r.flight.log, signal, scale), report::color_for("Exp", 0), false, 2.0});
+  // Layers: the desired value (grey) beneath, the re-flights (wide), and the
+  // experiment on top, dashed so that the re-flights show through its gaps.
+  p.series.push_back({"Exp", t, col(r.flight.log, signal, scale), report::color_for("Exp", 0), true, 1.4, 2});
+  const std::string desired = std::string(signal) + "_d";
+  if (r.flight.log.find(desired) >= 0)
+    p.series.push_back({"desired", t, col(r.flight.log, desired, scale), kDesiredColor, false, 1.0, -1});
   std::vector<std::string> names{r.table4.reference.name};
   for (const auto& row : r.table4.rows) names.push_back(row.name);
   for (size_t i = 0; i < r.table4.logs.size() && i < names.size(); ++i) {
     const auto& l = r.table4.logs[i];
     if (l.rows() == 0) continue;
     p.series.push_back({sim_label(names[i]), col(l, "t"), col(l, signal, scale), report::color_for(names[i], i),
-                        false, 1.2});
+                        false, 2.2, 0});
   }
   return p;
 }
@@ -78,29 +88,55 @@ Plot difference_plot(const Reproduction& r, std::string_view signal, const std::
   return p;
 }
 
+// Parameters in one fixed format per row: m in kg with 4 decimals, the
+// inertia entries in 10^-3 kg m^2 with 3 decimals (so 0.01537 reads 15.370).
+std::string param_cell(double v, int j) {
+  return j == 0 ? report::fixed(v, 4) : report::fixed(v * 1e3, 3);
+}
+std::string param_label(int j) {
+  return fmt::format("{} ({})", kThetaNames[static_cast<size_t>(j)], j == 0 ? "kg" : "10⁻³ kg m²");
+}
+double error_pct(double est, double truth) { return (est - truth) / std::abs(truth) * 100.0; }
+// "+0.12", "-3.40", and "0.00" for what rounds to zero (not "-0.00").
+std::string signed_pct(double v) {
+  const std::string s = fmt::format("{:+.2f}", v);
+  return s == "+0.00" || s == "-0.00" ? "0.00" : s;
+}
+
 Table table3(const Reproduction& r) {
   Table t;
   t.title = fmt::format("Table 3. Estimated parameters (window {}), true plant and nominal set",
                         r.identification.window.to_string());
-  t.header = {"Parameter", "Units", "true"};
-  for (const auto& e : r.identification.estimates) {
-    t.header.push_back(e.name);
-    t.header.push_back("error %");
-  }
+  t.header = {"Parameter", "true"};
+  for (const auto& e : r.identification.estimates) t.header.push_back(e.name);
   t.header.push_back("nominal");
   const Theta truth = r.options.plant.theta(), nom = r.options.nominal.theta();
   for (int j = 0; j < 7; ++j) {
-    std::vector<std::string> row = {kThetaNames[static_cast<size_t>(j)], j == 0 ? "kg" : "kg m²",
-                                    report::sig(truth(j), 5)};
-    for (const auto& e : r.identification.estimates) {
-      row.push_back(e.valid ? report::sig(e.theta(j), 5) : "diverged");
-      row.push_back(report::fixed((e.theta(j) - truth(j)) / std::abs(truth(j)) * 100.0, 2));
-    }
-    row.push_back(report::sig(nom(j), 5));
+    std::vector<std::string> row = {param_label(j), param_cell(truth(j), j)};
+    for (const auto& e : r.identification.estimates) row.push_back(e.valid ? param_cell(e.theta(j), j) : "diverged");
+    row.push_back(param_cell(nom(j), j));
     t.rows.push_back(row);
   }
-  t.note = "error % = (estimate − true) / |true| × 100. The products of inertia are 5-100 times smaller than the "
-           "moments, so a small absolute error is a large percentage.";
+  return t;
+}
+
+// Table 3's companion: how far each estimate is from the true plant.
+Table table3_errors(const Reproduction& r) {
+  Table t;
+  t.title = "Error of each estimate against the true plant, % of |true|";
+  t.header = {"Parameter"};
+  for (const auto& e : r.identification.estimates) t.header.push_back(e.name);
+  t.header.push_back("nominal");
+  const Theta truth = r.options.plant.theta(), nom = r.options.nominal.theta();
+  for (int j = 0; j < 7; ++j) {
+    std::vector<std::string> row = {kThetaNames[static_cast<size_t>(j)]};
+    for (const auto& e : r.identification.estimates)
+      row.push_back(e.valid ? signed_pct(error_pct(e.theta(j), truth(j))) : "diverged");
+    row.push_back(signed_pct(error_pct(nom(j), truth(j))));
+    t.rows.push_back(row);
+  }
+  t.note = "(estimate − true) / |true| × 100. The products of inertia are 5-100 times smaller than the moments, so "
+           "a small absolute error is a large percentage.";
   return t;
 }
 
@@ -108,21 +144,31 @@ Table table4(const SimulationComparison& c, const std::string& title) {
   static const std::array<const char*, 10> units = {"m", "m", "m", "deg", "deg", "deg", "N", "N m", "N m", "N m"};
   Table t;
   t.title = fmt::format("{} (window {}, RMS of experiment − simulation)", title, c.window.to_string());
-  t.header = {"Error", "Units", "e_" + c.reference.name};
+  // Units beside the signal's name (one column less: the table fits 800 px).
+  t.header = {"Error (unit)", "e_" + c.reference.name};
   for (const auto& r : c.rows) {
     t.header.push_back("e_" + r.name);
     t.header.push_back("P_imp%");
   }
   for (int i = 0; i < 10; ++i) {
     const double s = (i >= 3 && i <= 5) ? kRad2Deg : 1.0;
-    std::vector<std::string> row = {fmt::format("e_{}", kTable4Signals[static_cast<size_t>(i)]),
-                                    units[static_cast<size_t>(i)], report::fixed(c.reference.rms(i) * s, 5)};
+    std::string unit = units[static_cast<size_t>(i)];
+    if (unit == "N m") unit = "N\u00a0m";  // no line break inside the unit
+    std::vector<std::string> row = {fmt::format("e_{} ({})", kTable4Signals[static_cast<size_t>(i)], unit),
+                                    report::fixed(c.reference.rms(i) * s, 5)};
     for (const auto& r : c.rows) {
       row.push_back(r.failure.empty() ? report::fixed(r.rms(i) * s, 5) : "diverged");
-      row.push_back(r.failure.empty() ? report::fixed(r.improvement_pct(i), 2) : "");
+      const std::string why = improvement_undefined(c, r, i);
+      row.push_back(!r.failure.empty() ? "" : why.empty() ? report::fixed(r.improvement_pct(i), 2) : "n/a");
     }
     t.rows.push_back(row);
   }
+  std::vector<std::string> notes;
+  if (!c.reference.failure.empty())
+    notes.push_back(fmt::format("{} (reference): {}; P_imp% is n/a without it.", c.reference.name, c.reference.failure));
+  for (const auto& r : c.rows)
+    if (!r.failure.empty()) notes.push_back(fmt::format("{}: {}.", r.name, r.failure));
+  t.note = fmt::format("{}", fmt::join(notes, " "));
   return t;
 }
 
@@ -140,7 +186,9 @@ Table prediction_table(const PredictionErrorTable& p, const std::string& title) 
     std::vector<std::string> row = {comp[static_cast<size_t>(i)], report::sig(p.reference.rms(i), 4)};
     for (const auto& r : p.rows) {
       row.push_back(report::sig(r.rms(i), 4));
-      row.push_back(report::fixed(r.improvement_pct(i), 2));
+      const std::string why = improvement_undefined(p.reference.rms(i), r.rms(i));
+      row.push_back(why.empty() ? report::fixed(r.improvement_pct(i), 2) : "n/a");
+      if (!why.empty()) t.note += fmt::format("P_imp% of {} for component {} is n/a: {}. ", r.name, i + 1, why);
     }
     t.rows.push_back(row);
   }
@@ -209,15 +257,125 @@ Plot evolution_plot(const Reproduction& r, int param) {
   const double truth = r.options.plant.theta()(param);
   // Gradient descent tracks the data sample by sample and is noisy: draw it
   // first so that the least-squares curves stay visible on top.
-  for (const size_t s : std::array<size_t, 4>{1, 3, 0, 2}) {
+  // The true value is a wide light-grey band beneath every curve, so that the
+  // LS curve converging onto it stays visible (drawn last, on top); gradient
+  // descent is noisy and goes beneath the least-squares curves. Legend in the
+  // paper's order LS, GD, FMLS, FMGD.
+  constexpr std::array<int, 4> kLayer = {3, 0, 2, 1};  // LS, GD, FMLS, FMGD
+  for (size_t s = 0; s < 4; ++s) {
     const std::string set = r.identification.estimates[s].name;
     const int c = static_cast<int>(1 + 7 * s) + param;
     std::vector<double> y(t.size());
     for (Eigen::Index k = 0; k < ev.data.rows(); ++k) y[static_cast<size_t>(k)] = ev.data(k, c);
-    p.series.push_back({set, t, y, report::color_for(set, s), false, 1.5});
+    p.series.push_back({set, t, y, report::color_for(set, s), false, 1.6, kLayer[s]});
   }
-  if (!t.empty()) p.series.push_back({"true", {t.front(), t.back()}, {truth, truth}, "#000000", true, 1.2});
+  if (!t.empty()) p.series.push_back({"true", {t.front(), t.back()}, {truth, truth}, "#c8c8c8", false, 7.0, -1});
   return p;
+}
+
+// Mean of the finite entries; NaN when there is none.
+double mean_finite(const std::vector<double>& v) {
+  double s = 0.0;
+  int n = 0;
+  for (double x : v)
+    if (std::isfinite(x)) {
+      s += x;
+      ++n;
+    }
+  return n ? s / n : std::numeric_limits<double>::quiet_NaN();
+}
+
+// What one set showed: distance to the truth and the validations' mean P_imp%.
+struct SetVerdict {
+  std::string name;
+  double mass_err = 0.0;      // % of the true mass
+  double moment_err = 0.0;    // max |error| % of Ixx, Iyy, Izz
+  double product_err = 0.0;   // max |error| of Ixy, Ixz, Iyz, 10^-3 kg m^2
+  double reflight_imp = 0.0;  // mean P_imp% over Table 4's ten signals (NaN if not flown)
+  double circle_imp = 0.0;    // mean P_imp% over Tables 7-12 (its own regression model)
+};
+
+std::vector<SetVerdict> verdicts(const Reproduction& r) {
+  const Theta truth = r.options.plant.theta();
+  std::vector<SetVerdict> out;
+  for (const auto& e : r.identification.estimates) {
+    if (!e.valid) continue;
+    SetVerdict v;
+    v.name = e.name;
+    v.mass_err = error_pct(e.theta(0), truth(0));
+    for (int j : {1, 4, 6}) v.moment_err = std::max(v.moment_err, std::abs(error_pct(e.theta(j), truth(j))));
+    for (int j : {2, 3, 5}) v.product_err = std::max(v.product_err, 1e3 * std::abs(e.theta(j) - truth(j)));
+    std::vector<double> imp;
+    for (const auto& row : r.table4.rows)
+      if (row.name == e.name && row.failure.empty())
+        for (int i = 0; i < 10; ++i) imp.push_back(row.improvement_pct(i));
+    v.reflight_imp = mean_finite(imp);
+    imp.clear();
+    for (const auto& c : r.circles)
+      for (const auto& row : (e.model == RegressionModel::Standard ? c.errors.standard : c.errors.filtered).rows)
+        if (row.name == e.name)
+          for (int i = 0; i < 4; ++i) imp.push_back(row.improvement_pct(i));
+    v.circle_imp = mean_finite(imp);
+    out.push_back(v);
+  }
+  return out;
+}
+
+std::string pct_or_words(double v, const char* what) {
+  return std::isfinite(v) ? fmt::format("{:+.1f} %", v) : fmt::format("not available ({})", what);
+}
+
+// The closing box: which set to use, how far each is from the truth, what the validation showed.
+std::string conclusions_html(const Reproduction& r) {
+  const auto vs = verdicts(r);
+  std::string h = "<div class=\"conclusions\" id=\"conclusions\">\n";
+  if (vs.empty()) return h + "<p>No set could be identified: see the warnings of section 2.</p>\n</div>\n";
+  // The recommendation uses only what a user has without the truth: the
+  // prediction error on the circle flights, which the sets were not identified on.
+  const SetVerdict* best = nullptr;
+  for (const auto& v : vs)
+    if (std::isfinite(v.circle_imp) && (!best || v.circle_imp > best->circle_imp)) best = &v;
+  const SetVerdict* closest = &vs.front();
+  for (const auto& v : vs)
+    if (std::max(std::abs(v.mass_err), v.moment_err) < std::max(std::abs(closest->mass_err), closest->moment_err))
+      closest = &v;
+  if (best) {
+    h += fmt::format(
+        "<p><b>Use {0}.</b> On the three circle flights, which no set was identified on, it predicts the thrust and "
+        "torques best: its output prediction error is {1:.1f} % below the nominal set's on average (Tables 7-12). "
+        "Against the true plant (known here, not on a real vehicle) its mass is off by {2} % and its moments of "
+        "inertia by at most {3:.2f} % (Table 3).{4}</p>\n",
+        report::html_escape(best->name), best->circle_imp, signed_pct(best->mass_err), best->moment_err,
+        closest == best ? ""
+                        : fmt::format(" The set closest to the truth is {} (mass {} %, moments within {:.2f} %).",
+                                      report::html_escape(closest->name), signed_pct(closest->mass_err),
+                                      closest->moment_err));
+  }
+  h += "<table><thead><tr><th>set</th><th>mass error</th><th>moments, max |error|</th>"
+       "<th>products, max |error| (10⁻³ kg m²)</th><th>re-flight (Table 4), mean P_imp%</th>"
+       "<th>circles (Tables 7-12), mean P_imp%</th></tr></thead><tbody>\n";
+  for (const auto& v : vs)
+    h += fmt::format("<tr><th>{}</th><td>{} %</td><td>{:.2f} %</td><td>{:.3f}</td><td>{}</td><td>{}</td></tr>\n",
+                     report::html_escape(v.name), signed_pct(v.mass_err), v.moment_err, v.product_err,
+                     report::html_escape(pct_or_words(v.reflight_imp, "re-flight failed")),
+                     report::html_escape(pct_or_words(v.circle_imp, "no prediction error")));
+  h += "</tbody></table>\n";
+  // What the validation showed, in words.
+  int better = 0, flown = 0;
+  for (const auto& row : r.table4.rows) {
+    if (!row.failure.empty()) continue;
+    ++flown;
+    bool all = true;
+    for (int i = 0; i < 10; ++i) all = all && std::isfinite(row.improvement_pct(i)) && row.improvement_pct(i) > 0.0;
+    better += all;
+  }
+  h += fmt::format(
+      "<p>Validation: re-flown in closed loop (Table 4), {} of the {} identified sets that could be flown track the "
+      "experiment more closely than the nominal set on all ten signals; P_imp% &gt; 0 means closer than the nominal "
+      "set, 100 % would be a perfect match. The prediction-error tables (5-12) compare each set with the nominal one "
+      "within its own regression model (standard for LS and GD, filtered for FMLS and FMGD).</p>\n",
+      better, flown);
+  return h + "</div>\n";
 }
 
 }  // namespace
@@ -233,6 +391,8 @@ std::string reproduction_html(const Reproduction& r) {
       "page, byte for byte.",
       o.trajectory == "designed" ? "optimized by quadid design" : "Table 2 of the paper", o.duration,
       o.noise ? "noisy" : "noise-free", o.seed));
+  d.raw("<p>What to conclude (which set to use, how far each is from the true plant, what the validation showed) "
+        "is summed up at the end: <a href=\"#conclusions\">6. Conclusions</a>.</p>\n");
 
   d.heading("1. Excitation trajectory (section III-B, Fig. 3)");
   d.table(coefficient_table(r.trajectory));
@@ -267,7 +427,8 @@ std::string reproduction_html(const Reproduction& r) {
 
   d.heading("2. Identification (section III-D, Table 3, Figs. 4-5)");
   d.table(table3(r));
-  d.figure(evolution_plot(r, 0), "Time evolution of the estimated mass (paper Fig. 4); dashed: true value.");
+  d.table(table3_errors(r));
+  d.figure(evolution_plot(r, 0), "Time evolution of the estimated mass (paper Fig. 4); grey band: the true value.");
   d.figure_row({evolution_plot(r, 1), evolution_plot(r, 4), evolution_plot(r, 6)},
                "Time evolution of the estimated moments of inertia (paper Fig. 5).");
   d.figure_row({evolution_plot(r, 2), evolution_plot(r, 3), evolution_plot(r, 5)},
@@ -284,18 +445,20 @@ std::string reproduction_html(const Reproduction& r) {
     path.equal_aspect = true;
     path.width = 620;
     path.height = 520;
-    path.series.push_back({"Exp", col(r.flight.log, "x"), col(r.flight.log, "y"), "#000000", false, 2.0});
+    path.series.push_back({"Exp", col(r.flight.log, "x"), col(r.flight.log, "y"), "#000000", true, 1.4, 2});
+    path.series.push_back({"desired", col(r.flight.log, "x_d"), col(r.flight.log, "y_d"), kDesiredColor, false, 1.0, -1});
     std::vector<std::string> names{r.table4.reference.name};
     for (const auto& row : r.table4.rows) names.push_back(row.name);
     for (size_t i = 0; i < r.table4.logs.size(); ++i)
       if (r.table4.logs[i].rows() > 0)
         path.series.push_back({sim_label(names[i]), col(r.table4.logs[i], "x"), col(r.table4.logs[i], "y"),
-                               report::color_for(names[i], i), false, 1.2});
-    d.figure(path, "Validation using the identification experiment: path drawn by the quadrotor (paper Fig. 6).");
+                               report::color_for(names[i], i), false, 2.2, 0});
+    d.figure(path, "Validation using the identification experiment: path drawn by the quadrotor (paper Fig. 6); "
+                   "grey: the desired path; dashed black: the experiment, on top of the re-flights.");
   }
   d.figure_row({compare_plot(r, "x", "x (m)", 1.0, "x", 500), compare_plot(r, "y", "y (m)", 1.0, "y", 500),
                 compare_plot(r, "z", "z (m)", 1.0, "z", 500)},
-               "Position in experiment and simulations (paper Fig. 7).");
+               "Position in experiment (dashed black) and simulations, with the desired value in grey (paper Fig. 7).");
   d.figure_row({difference_plot(r, "x", "Δx (m)", 1.0, "x: experiment − simulation", 500),
                 difference_plot(r, "y", "Δy (m)", 1.0, "y: experiment − simulation", 500),
                 difference_plot(r, "z", "Δz (m)", 1.0, "z: experiment − simulation", 500)},
@@ -308,11 +471,14 @@ std::string reproduction_html(const Reproduction& r) {
                 difference_plot(r, "theta", "Δθ (deg)", kRad2Deg, "pitch: experiment − simulation", 500),
                 difference_plot(r, "psi", "Δψ (deg)", kRad2Deg, "yaw: experiment − simulation", 500)},
                "Orientation differences between the experiment and each simulation (what Table 4 summarizes).");
-  d.figure_row({compare_plot(r, "Fz", "F_z (N)", 1.0, "thrust F_z", 372),
-                compare_plot(r, "tau_phi", "τ_φ (N m)", 1.0, "torque τ_φ", 372),
-                compare_plot(r, "tau_theta", "τ_θ (N m)", 1.0, "torque τ_θ", 372),
-                compare_plot(r, "tau_psi", "τ_ψ (N m)", 1.0, "torque τ_ψ", 372)},
-               "Control inputs in experiment and simulations (paper Fig. 9).");
+  // Two rows of two: four panels never leave one alone on a row, and each is
+  // wide enough for its legend to fit in one or two lines.
+  d.figure_row({compare_plot(r, "Fz", "F_z (N)", 1.0, "thrust F_z", 620),
+                compare_plot(r, "tau_phi", "τ_φ (N m)", 1.0, "torque τ_φ", 620)},
+               "Control inputs in experiment (dashed black) and simulations: thrust and roll torque (paper Fig. 9).");
+  d.figure_row({compare_plot(r, "tau_theta", "τ_θ (N m)", 1.0, "torque τ_θ", 620),
+                compare_plot(r, "tau_psi", "τ_ψ (N m)", 1.0, "torque τ_ψ", 620)},
+               "Control inputs in experiment (dashed black) and simulations: pitch and yaw torques (paper Fig. 9).");
   d.table(prediction_table(select_rows(r.identification.errors_standard, {"LS", "GD"}),
                            "Table 5. Identification experiment"));
   d.table(prediction_table(select_rows(r.identification.errors_filtered, {"FMLS", "FMGD"}),
@@ -341,12 +507,15 @@ std::string reproduction_html(const Reproduction& r) {
 
   d.heading("5. Files");
   d.raw("<ul><li><code>summary.json</code>: every number of this page</li>"
-        "<li><code>trajectory.json</code>: the excitation trajectory (DESIGN.md format)</li>"
+        "<li><code>trajectory.json</code>: the excitation trajectory (docs/file-formats.md)</li>"
         "<li><code>identification.json</code>: the identification result (estimates.LS/GD/FMLS/FMGD)</li>"
         "<li><code>evolution.csv</code>: the estimates over time (Figs. 4-5)</li>"
         "<li><code>flight_identification.csv</code>, <code>flight_circle1..3.csv</code>: the flight logs</li>"
         "<li><code>simulation_&lt;set&gt;.csv</code>: the re-flights of Table 4</li>"
         "<li><code>tables.md</code>: Tables 2-12 in Markdown</li></ul>\n");
+
+  d.heading("6. Conclusions");
+  d.raw(conclusions_html(r));
   return d.str();
 }
 
@@ -375,7 +544,8 @@ void write_reproduction(const Reproduction& r, const std::filesystem::path& dir)
 
   std::string md;
   md += coefficient_table(r.trajectory).to_markdown() + "\n" + check_table(r.check).to_markdown() + "\n";
-  md += table3(r).to_markdown() + "\n" + table4(r.table4, "Table 4").to_markdown() + "\n";
+  md += table3(r).to_markdown() + "\n" + table3_errors(r).to_markdown() + "\n";
+  md += table4(r.table4, "Table 4").to_markdown() + "\n";
   md += prediction_table(select_rows(r.identification.errors_standard, {"LS", "GD"}), "Table 5").to_markdown() + "\n";
   md += prediction_table(select_rows(r.identification.errors_filtered, {"FMLS", "FMGD"}), "Table 6").to_markdown() + "\n";
   int table = 7;

@@ -7,10 +7,11 @@
 namespace quadid {
 
 void ReproduceOptions::validate() const {
+  // Names are quadid reproduce's options.
   if (trajectory != "designed" && trajectory != "table2")
-    throw std::invalid_argument(fmt::format("trajectory '{}': expected designed or table2", trajectory));
-  if (!(duration >= 2.0) || !std::isfinite(duration))
-    throw std::invalid_argument(fmt::format("duration = {} s: need at least 2 s", duration));
+    throw std::invalid_argument(fmt::format("--trajectory '{}': expected designed or table2", trajectory));
+  if (!(duration >= 2.0 && duration <= 3600.0))
+    throw std::invalid_argument(fmt::format("--duration = {:g} s must be in [2, 3600] s", duration));
   plant.validate("plant");
   nominal.validate("nominal");
   if (trajectory == "designed") design.validate();

@@ -43,16 +43,16 @@ VelocitySource velocity_source_from_string(std::string_view s) {
 void SensorOptions::validate(double control_rate) const {
   if (!std::isfinite(mocap_rate) || mocap_rate <= 0.0 || mocap_rate > control_rate * (1 + 1e-12))
     throw std::invalid_argument(fmt::format(
-        "sensors.mocap_rate = {} Hz must be > 0 and at most the controller rate {} Hz", mocap_rate, control_rate));
+        "--mocap-rate = {} Hz must be > 0 and at most the controller (log) rate --rate = {} Hz", mocap_rate, control_rate));
   if (!std::isfinite(imu_rate) || imu_rate <= 0.0 || imu_rate > control_rate * (1 + 1e-12))
     throw std::invalid_argument(fmt::format(
-        "sensors.imu_rate = {} Hz must be > 0 and at most the controller rate {} Hz", imu_rate, control_rate));
+        "--imu-rate = {} Hz must be > 0 and at most the controller (log) rate --rate = {} Hz", imu_rate, control_rate));
   const std::pair<const char*, double> sig[] = {{"position", noise.position}, {"yaw", noise.yaw},
                                                 {"attitude", noise.attitude}, {"gyro", noise.gyro},
-                                                {"velocity", noise.velocity}, {"yaw_rate", noise.yaw_rate}};
+                                                {"velocity", noise.velocity}, {"yaw-rate", noise.yaw_rate}};
   for (const auto& [name, v] : sig)
     if (!std::isfinite(v) || v < 0.0)
-      throw std::invalid_argument(fmt::format("sensors.noise.{} = {} must be finite and >= 0", name, v));
+      throw std::invalid_argument(fmt::format("--sigma-{} = {} must be finite and >= 0", name, v));
 }
 
 namespace detail {

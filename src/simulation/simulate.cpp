@@ -4,6 +4,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -33,44 +34,59 @@ Timing timing(const SimulationOptions& o) {
 
 }  // namespace
 
+void SimulationOptions::set_rate(double hz) {
+  constexpr double kPreferredStep = 1e-3;  // s, the default dt: the step every other rate keeps close to
+  controller.rate = hz;
+  sensors.mocap_rate = std::min(sensors.mocap_rate, hz);
+  sensors.imu_rate = std::min(sensors.imu_rate, hz);
+  if (std::isfinite(hz) && hz > 0.0) dt = 1.0 / hz / std::max(1.0, std::round(1.0 / hz / kPreferredStep));
+}
+
 void SimulationOptions::validate() const {
-  plant.validate("plant params");
+  // Messages use the command line's spelling (quadid simulate) of each option.
+  plant.validate("plant params (--plant)");
   controller.validate();
   sensors.validate(controller.rate);
-  if (!std::isfinite(dt) || dt <= 0.0) throw std::invalid_argument(fmt::format("dt = {} s must be > 0", dt));
-  const double spt = 1.0 / (controller.rate * dt);
-  if (std::llround(spt) < 1 || std::abs(spt - static_cast<double>(std::llround(spt))) > 1e-6 * spt)
+  if (!std::isfinite(dt) || dt <= 0.0 || dt > 1.0 / controller.rate)
     throw std::invalid_argument(fmt::format(
-        "dt = {} s: the controller period 1/{} Hz must be a whole multiple of the plant step", dt, controller.rate));
+        "--dt = {} s: the plant step must be > 0 and at most the controller period 1/{} Hz", dt, controller.rate));
+  const double spt = 1.0 / (controller.rate * dt);
+  if (spt > kMaxStepsPerTick ||
+      std::abs(spt - static_cast<double>(std::llround(spt))) > 1e-6 * spt)
+    throw std::invalid_argument(fmt::format(
+        "--dt = {} s: the controller period 1/{} Hz must be a whole multiple (1 to {:g}) of the plant step", dt,
+        controller.rate, kMaxStepsPerTick));
   if (!std::isfinite(duration) || duration * controller.rate < 1.0)
-    throw std::invalid_argument(
-        fmt::format("duration = {} s must cover at least one controller period (1/{} Hz)", duration, controller.rate));
-  if (duration * controller.rate > 1e8)
-    throw std::invalid_argument(fmt::format("duration = {} s is too long for one log at {} Hz", duration, controller.rate));
+    throw std::invalid_argument(fmt::format(
+        "--duration = {} s must cover at least one controller period (1/{} Hz)", duration, controller.rate));
+  if (duration * controller.rate > kMaxSamples)
+    throw std::invalid_argument(fmt::format(
+        "--duration = {} s at --rate {} Hz makes {:.3g} samples; at most {:g} fit one log (--duration x --rate)",
+        duration, controller.rate, duration * controller.rate, kMaxSamples));
   if (!std::isfinite(actuator_tau) || actuator_tau < 0.0)
-    throw std::invalid_argument(fmt::format("actuator_tau = {} s must be >= 0", actuator_tau));
+    throw std::invalid_argument(fmt::format("--actuator-tau = {} s must be finite and >= 0", actuator_tau));
   if (rotors) {
     if (actuator_tau > 0.0)
       throw std::invalid_argument("actuator_tau must be 0 with rotor-level actuation (the rotors' time_constant is the lag)");
     rotors->validate();
   }
   if (!std::isfinite(rotor_noise) || rotor_noise < 0.0)
-    throw std::invalid_argument(fmt::format("rotor_noise = {} must be >= 0", rotor_noise));
+    throw std::invalid_argument(fmt::format("--sigma-rotor = {} must be finite and >= 0", rotor_noise));
   if (rotor_noise > 0.0 && (!rotors || rotors->input == RotorInput::kCommand))
     throw std::invalid_argument(
         "rotor_noise applies to logged rotor speeds (a vehicle with rotors.input = speed or rpm), not to commands");
-  if (!std::isfinite(g) || g <= 0.0) throw std::invalid_argument(fmt::format("g = {} m/s^2 must be > 0", g));
+  if (!std::isfinite(g) || g <= 0.0) throw std::invalid_argument(fmt::format("--g = {} m/s^2 must be finite and > 0", g));
   for (int i = 0; i < 3; ++i)
     if (!(safety.box_min(i) < safety.box_max(i)))
       throw std::invalid_argument(fmt::format("safety box: min {} must be below max {} on axis {}",
                                               safety.box_min(i), safety.box_max(i), "xyz"[i]));
   if (!(safety.max_tilt > 0.0 && safety.max_tilt < M_PI / 2))
-    throw std::invalid_argument(fmt::format("safety.max_tilt = {} rad must be in (0, pi/2)", safety.max_tilt));
+    throw std::invalid_argument(fmt::format("safety limit max_tilt = {} rad must be in (0, pi/2)", safety.max_tilt));
   if (!(safety.max_rate > 0.0)) throw std::invalid_argument("safety.max_rate must be > 0");
   if (!(safety.max_speed > 0.0)) throw std::invalid_argument("safety.max_speed must be > 0");
   if (!std::isfinite(summary_from) || summary_from < 0.0 || summary_from >= duration)
     throw std::invalid_argument(
-        fmt::format("summary_from = {} s must be in [0, duration = {} s)", summary_from, duration));
+        fmt::format("--summary-from = {} s must be in [0, --duration = {} s)", summary_from, duration));
   if (initial_state && !initial_state->to_vector().allFinite())
     throw std::invalid_argument("initial_state has a non-finite entry");
 }

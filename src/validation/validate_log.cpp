@@ -26,7 +26,7 @@ LogValidation validate_log(const FlightLog& log, const ValidateRequest& req,
       sets.push_back({name, P});
     }
   if (sets.empty()) throw std::invalid_argument("give at least one --params set");
-  v.reference = NamedParams{"nom", load_params(req.reference)};
+  v.reference = NamedParams{param_set_name(req.reference), load_params(req.reference)};
   const NamedParams& reference = v.reference;
 
   // Table 4 needs the reference the log was flown with and the controller: a
@@ -49,8 +49,8 @@ LogValidation validate_log(const FlightLog& log, const ValidateRequest& req,
     } else {
       if (!have_metadata) {
         const auto t = log.column("t");
-        base.controller.rate = static_cast<double>(t.size() - 1) / (t(t.size() - 1) - t(0));
-        base.dt = 1.0 / base.controller.rate / std::max(1.0, std::round(1e-3 * base.controller.rate));
+        // The log's own rate; sensors no faster than it, RK4 step ~1 ms dividing its period.
+        base.set_rate(static_cast<double>(t.size() - 1) / (t(t.size() - 1) - t(0)));
         say(fmt::format("re-flying '{}' with the default controller at {:g} Hz", traj->describe(),
                         base.controller.rate));
       }

@@ -1,5 +1,7 @@
 #include "quadid/validation.hpp"
 
+#include "quadid/report.hpp"
+
 #include <fmt/format.h>
 
 #include <cmath>
@@ -76,6 +78,15 @@ SimulationComparison compare_simulations(const FlightLog& log, const Trajectory&
   if (opt.window.t0 >= duration)
     throw InputError(fmt::format("window {} starts after the log ends ({:.3f} s)", opt.window.to_string(), duration));
 
+  // A configuration error (rates, step, controller) is the caller's, not a set's:
+  // it is thrown here, never reported as a "diverged" row.
+  {
+    SimulationOptions o = base;
+    o.plant = Params::qball2_nominal();  // the sets are checked one by one below
+    o.duration = duration;
+    o.validate();
+  }
+
   SimulationComparison out;
   out.window = opt.window;
   std::vector<NamedParams> all;
@@ -91,56 +102,78 @@ SimulationComparison compare_simulations(const FlightLog& log, const Trajectory&
     row.name = all[s].name;
     try {
       all[s].params.validate(all[s].name);
-      SimulationResult r = simulate(traj, o);
-      Eigen::Index n = 0;
-      row.rms = rms_difference(log, r.log, opt.window, &n);
-      out.samples = std::max(out.samples, n);
-      if (opt.keep_logs) out.logs.push_back(std::move(r.log));
-    } catch (const SimulationDiverged& e) {
-      row.failure = fmt::format("re-flight diverged at t = {:.3f} s: {}", e.time(), e.reason());
-      if (opt.keep_logs) out.logs.emplace_back();
     } catch (const std::invalid_argument& e) {
-      row.failure = e.what();
-      if (opt.keep_logs) out.logs.emplace_back();
+      row.failure = fmt::format("cannot be flown: {}", e.what());
     }
+    if (row.failure.empty()) {
+      try {
+        SimulationResult r = simulate(traj, o);
+        Eigen::Index n = 0;
+        row.rms = rms_difference(log, r.log, opt.window, &n);
+        out.samples = std::max(out.samples, n);
+        if (opt.keep_logs) out.logs.push_back(std::move(r.log));
+      } catch (const SimulationDiverged& e) {
+        row.failure = fmt::format("re-flight diverged at t = {:.3f} s: {}", e.time(), e.reason());
+      }
+    }
+    if (opt.keep_logs && !row.failure.empty()) out.logs.emplace_back();
     if (s == 0) out.reference = row; else out.rows.push_back(row);
   }
   for (auto& r : out.rows)
-    for (int i = 0; i < 10; ++i)
-      r.improvement_pct(i) = (out.reference.rms(i) - r.rms(i)) / out.reference.rms(i) * 100.0;  // P_imp%
+    for (int i = 0; i < 10; ++i) r.improvement_pct(i) = improvement_pct(out.reference.rms(i), r.rms(i));
   return out;
+}
+
+std::string improvement_undefined(const SimulationComparison& c, const SimulationComparisonRow& r, int i) {
+  if (!r.failure.empty()) return {};  // the row's failure says it
+  if (!c.reference.failure.empty())
+    return fmt::format("the reference set '{}' could not be re-flown", c.reference.name);
+  return improvement_undefined(c.reference.rms(i), r.rms(i));
 }
 
 std::string format_simulation_table(const SimulationComparison& c, std::string_view title) {
   static const std::array<const char*, 10> units = {"m", "m", "m", "deg", "deg", "deg", "N", "N m", "N m", "N m"};
-  fmt::memory_buffer out;
-  auto it = std::back_inserter(out);
-  fmt::format_to(it, "{}: RMS of experiment - simulation, window {} ({} samples)\n", title, c.window.to_string(),
-                 c.samples);
-  fmt::format_to(it, "{:<12}{:<6}{:>12}", "Error", "Units", "e_" + c.reference.name);
-  for (const auto& r : c.rows) fmt::format_to(it, "{:>12}{:>9}", "e_" + r.name, "P_imp%");
-  fmt::format_to(it, "\n");
-  for (int i = 0; i < 10; ++i) {
-    const double scale = (i >= 3 && i <= 5) ? 180.0 / M_PI : 1.0;
-    fmt::format_to(it, "{:<12}{:<6}{:>12.5f}", fmt::format("e_{}", kTable4Signals[static_cast<size_t>(i)]),
-                   units[static_cast<size_t>(i)], c.reference.rms(i) * scale);
-    for (const auto& r : c.rows) {
-      if (!r.failure.empty())
-        fmt::format_to(it, "{:>12}{:>9}", "diverged", "-");
-      else
-        fmt::format_to(it, "{:>12.5f}{:>9.2f}", r.rms(i) * scale, r.improvement_pct(i));
-    }
-    fmt::format_to(it, "\n");
+  report::Table t;
+  t.title = fmt::format("{}: RMS of experiment - simulation, window {} ({} samples)", title, c.window.to_string(),
+                        c.samples);
+  // The reference column is named after the reference set (e.g. e_nom).
+  t.header = {"Error", "Units", "e_" + c.reference.name};
+  for (const auto& r : c.rows) {
+    t.header.push_back("e_" + r.name);
+    t.header.push_back("P_imp%");
   }
+  std::vector<std::string> notes;
+  for (int i = 0; i < 10; ++i) {
+    const auto k = static_cast<size_t>(i);
+    const double scale = (i >= 3 && i <= 5) ? 180.0 / M_PI : 1.0;
+    std::vector<std::string> row = {fmt::format("e_{}", kTable4Signals[k]), units[k],
+                                    c.reference.failure.empty() ? fmt::format("{:.5f}", c.reference.rms(i) * scale)
+                                                                : "failed"};
+    for (const auto& r : c.rows) {
+      if (!r.failure.empty()) {
+        row.push_back(r.failure.rfind("cannot be flown", 0) == 0 ? "not flown" : "diverged");
+        row.push_back("-");
+        continue;
+      }
+      row.push_back(fmt::format("{:.5f}", r.rms(i) * scale));
+      const std::string why = improvement_undefined(c, r, i);
+      row.push_back(why.empty() ? fmt::format("{:.2f}", r.improvement_pct(i)) : "n/a");
+      if (!why.empty() && c.reference.failure.empty())
+        notes.push_back(fmt::format("P_imp% of {} for {} is n/a: {}", r.name, kTable4Signals[k], why));
+    }
+    t.rows.push_back(std::move(row));
+  }
+  if (!c.reference.failure.empty())
+    notes.push_back(fmt::format("{} (reference): {}; P_imp% is n/a without it", c.reference.name, c.reference.failure));
   for (const auto& r : c.rows)
-    if (!r.failure.empty()) fmt::format_to(it, "{}: {}\n", r.name, r.failure);
-  if (!c.reference.failure.empty()) fmt::format_to(it, "{}: {}\n", c.reference.name, c.reference.failure);
-  return fmt::to_string(out);
+    if (!r.failure.empty()) notes.push_back(fmt::format("{}: {}", r.name, r.failure));
+  t.note = fmt::format("{}", fmt::join(notes, "\n"));
+  return t.to_text();
 }
 
 nlohmann::json to_json(const SimulationComparison& c) {
   using nlohmann::json;
-  auto row_json = [](const SimulationComparisonRow& r, bool with_imp) {
+  auto row_json = [&c](const SimulationComparisonRow& r, bool with_imp) {
     json rms = json::object(), imp = json::object();
     for (int i = 0; i < 10; ++i) {
       const char* k = kTable4Signals[static_cast<size_t>(i)];
@@ -148,7 +181,13 @@ nlohmann::json to_json(const SimulationComparison& c) {
       imp[k] = std::isfinite(r.improvement_pct(i)) ? json(r.improvement_pct(i)) : json(nullptr);
     }
     json j = {{"name", r.name}, {"rms", rms}};
-    if (with_imp) j["improvement_pct"] = imp;
+    if (with_imp) {
+      j["improvement_pct"] = imp;
+      json why = json::object();
+      for (int i = 0; i < 10; ++i)
+        if (const std::string w = improvement_undefined(c, r, i); !w.empty()) why[kTable4Signals[static_cast<size_t>(i)]] = w;
+      if (!why.empty()) j["improvement_undefined"] = why;  // why an improvement_pct entry is null
+    }
     if (!r.failure.empty()) j["failure"] = r.failure;
     return j;
   };

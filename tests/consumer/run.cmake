@@ -1,0 +1,30 @@
+# CTest driver (cmake -P): installs the built quadid into WORK_DIR/prefix, then
+# configures, builds and runs the consumer project against that prefix only.
+foreach(v QUADID_BINARY_DIR CONSUMER_SOURCE_DIR WORK_DIR)
+  if(NOT DEFINED ${v})
+    message(FATAL_ERROR "run.cmake: -D${v}=... is required")
+  endif()
+endforeach()
+file(REMOVE_RECURSE ${WORK_DIR})
+set(prefix ${WORK_DIR}/prefix)
+
+function(step what)
+  execute_process(COMMAND ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "${what} failed (${rc}):\n${out}\n${err}")
+  endif()
+  message(STATUS "${what}: ok\n${out}")
+endfunction()
+
+step("install" ${CMAKE_COMMAND} --install ${QUADID_BINARY_DIR} --prefix ${prefix})
+if(NOT EXISTS ${prefix}/include/quadid/model.hpp)
+  message(FATAL_ERROR "install: no include/quadid/model.hpp under ${prefix}")
+endif()
+set(compiler_arg)
+if(DEFINED CMAKE_CXX_COMPILER)
+  set(compiler_arg -DCMAKE_CXX_COMPILER=${CMAKE_CXX_COMPILER})
+endif()
+step("configure consumer" ${CMAKE_COMMAND} -S ${CONSUMER_SOURCE_DIR} -B ${WORK_DIR}/build
+     -DCMAKE_PREFIX_PATH=${prefix} -DCMAKE_BUILD_TYPE=Release ${compiler_arg})
+step("build consumer" ${CMAKE_COMMAND} --build ${WORK_DIR}/build)
+step("run consumer" ${WORK_DIR}/build/consumer)
