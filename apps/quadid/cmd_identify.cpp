@@ -1,10 +1,10 @@
 // quadid identify LOG: Table 3 and Tables 5-6 from a flight log (docs/identify.md).
 #include "commands.hpp"
 #include "common.hpp"
+#include "quadid/extended.hpp"
 #include "quadid/identification.hpp"
 #include "quadid/io.hpp"
-#include "quadid/logs.hpp"
-#include "quadid/vehicle.hpp"
+#include "quadid/options_json.hpp"
 
 #include <fmt/format.h>
 
@@ -33,8 +33,9 @@ struct IdentifyArgs {
   double evolution_interval = 0.01;
   std::string out;
   bool json = false;
-  std::string vehicle;                 // --vehicle: wrench from the rotor columns, reference from [nominal]
+  RealFlightArgs real;  // --vehicle, --known-mass, --terms, --cutoffs, --cutoff-force, --cutoff-moment
   const CLI::Option* nominal_opt = nullptr;
+  const CLI::Option* window_opt = nullptr;
 };
 
 void run(const IdentifyArgs& a) {
@@ -48,39 +49,26 @@ void run(const IdentifyArgs& a) {
   if (a.gd_discretization == "exact") opt.gd.discretization = GdDiscretization::Exact;
   else if (a.gd_discretization == "literal") opt.gd.discretization = GdDiscretization::ForwardEuler;
   else throw std::invalid_argument(fmt::format("--gd-discretization {}: expected exact or literal", a.gd_discretization));
-  std::optional<Vehicle> vehicle;
-  if (!a.vehicle.empty()) vehicle = load_vehicle(a.vehicle);
-  opt.reference = vehicle && a.nominal_opt->count() == 0 ? NamedParams{"nom", vehicle->nominal}
-                                                          : NamedParams{param_set_name(a.nominal), load_params(a.nominal)};
+  opt.reference = NamedParams{param_set_name(a.nominal), load_params(a.nominal)};
   if (a.gd_init != "nominal") opt.gd_initial = load_params(a.gd_init);
   opt.allow_rank_deficient = a.allow_rank_deficient;
   opt.evolution_interval = a.evolution_interval;
-  opt.validate();
-  if (!a.out.empty()) check_output_file(a.out, "-o/--out");
-  if (!a.evolution.empty()) check_output_file(a.evolution, "--evolution");
 
-  CsvReadOptions csv = a.proc.csv();
-  csv.keep_extra_columns = false;  // only the 14 standard columns are used
-  if (vehicle) {  // the rotor columns instead of the wrench
-    const auto& std_cols = standard_log_columns();  // t x y z phi theta psi p q r, then the wrench
-    csv.required.assign(std_cols.begin(), std_cols.begin() + 10);
-    csv.required.insert(csv.required.end(), vehicle->rotors.columns.begin(), vehicle->rotors.columns.end());
-  }
-  logs::LoadOptions load;
-  load.csv = csv;
-  load.check_required = !vehicle;  // an imported autopilot log has no wrench: the rotor model adds it
-  FlightLog log = logs::load_any_log(a.log, load);  // CSV, or an autopilot log imported
-  if (vehicle) {
-    try {
-      log = with_rotor_wrench(log, vehicle->rotors);
-    } catch (const std::exception& e) {
-      throw InputError(fmt::format("{}: {}", a.log, e.what()));
-    }
-  }
+  IdentifyRequest req;
+  req.options = opt;
+  req.csv = a.proc.csv();
+  req.csv.keep_extra_columns = false;  // only the standard columns (and the rotor columns) are used
+  RealFlightArgs rf = a.real;
+  rf.window_given = a.window_opt->count() > 0;
+  rf.nominal_given = a.nominal_opt->count() > 0;
+  apply_real_flight(req, rf);
+  req.options.validate();
+  const std::optional<Vehicle>& vehicle = req.vehicle;
+  const FlightLog log = load_identification_log(a.log, req);
 
   IdentificationResult res;
   try {
-    res = identify(log, opt);
+    res = identify(log, req.options);
   } catch (const std::exception& e) {
     throw std::runtime_error(fmt::format("{}: {}", a.log, e.what()));
   }
@@ -101,6 +89,7 @@ void run(const IdentifyArgs& a) {
              res.processing.filter_f3db, res.processing.filter_settling,
              opt.processing.exclude_edges ? ", left out at both ends of the log" : "");
   fmt::print("{}\n", format_estimates_table(res));
+  if (res.extended) fmt::print("{}\n", format_real_flight(*res.extended));
   fmt::print("Least squares: column-scaled condition number {:.4g} (standard), {:.4g} (filtered)\n",
              res.ls_standard.condition, res.ls_filtered.condition);
   fmt::print("Gradient descent: sigma = {:g}, {} discretization, max sigma*T*lambda_max = {:.3g}\n\n", opt.gd.sigma,
@@ -122,8 +111,10 @@ void register_identify(CLI::App& app) {
       "prediction error, eq. 43, with P_imp% against the nominal set). Units: SI, radians.");
   sub->add_option("log", a->log, "flight log CSV (docs/file-formats.md columns: t x y z phi theta psi p q r Fz tau_phi tau_theta tau_psi)")
       ->required();
-  sub->add_option("--window", a->window, "estimation window T0:T1, seconds from the log's start ('T0:' = to the end)")
-      ->capture_default_str();
+  a->window_opt = sub->add_option("--window", a->window,
+                                  "estimation window T0:T1, seconds from the log's start ('T0:' = to the end); "
+                                  "default with --vehicle: the whole log")
+                      ->capture_default_str();
   sub->add_option("--error-window", a->error_window,
                   "window of the prediction-error tables (default: the whole log, as the paper's 0-50 s)");
   sub->add_option("--sigma", a->sigma, "gradient-descent gain of eq. (41)")->capture_default_str();
@@ -137,10 +128,26 @@ void register_identify(CLI::App& app) {
                   "reference set of Tables 5-6 (preset qball2-nominal|qball2-virtual or a params JSON); also the "
                   "value kept for unidentifiable parameters (default with --vehicle: the vehicle's [nominal])")
       ->capture_default_str();
-  sub->add_option("--vehicle", a->vehicle,
+  sub->add_option("--vehicle", a->real.vehicle,
                   "vehicle file or built-in (qball2, crazyflie21, jmavsim-quad): compute Fz and the torques from the "
-                  "log's rotor columns with its rotor model, and take its [nominal] as the reference set "
-                  "(docs/vehicles.md)");
+                  "log's rotor columns with its rotor model, take its [nominal] as the reference set, and use the "
+                  "real-flight regression (docs/vehicles.md, docs/real-flights.md)");
+  sub->add_option("--known-mass", a->real.known_mass,
+                  "weighed mass, kg: estimate the thrust scale s (true wrench = s x the rotor model's) with the "
+                  "inertia, instead of the mass (motion alone cannot fix mass, thrust and inertia together)");
+  sub->add_option("--terms", a->real.terms,
+                  "regression terms: auto (real with --vehicle, else paper), paper, real (offsets, flapping, "
+                  "rotor-inertia, weighting), or a comma list of offsets, flapping, damping, rotor-inertia, drag, "
+                  "weighting (docs/real-flights.md)")
+      ->capture_default_str();
+  sub->add_option("--cutoffs", a->real.cutoffs,
+                  "pre-filter cutoffs: auto (held-out with --vehicle, else fixed), held-out (chosen by prediction "
+                  "error on held-out time blocks), or fixed (--cutoff, --cutoff-force, --cutoff-moment)")
+      ->capture_default_str();
+  sub->add_option("--cutoff-force", a->real.cutoff_force,
+                  "pre-filter cutoff of the force row (positions differentiated twice), Hz; default --cutoff");
+  sub->add_option("--cutoff-moment", a->real.cutoff_moment,
+                  "pre-filter cutoff of the moment rows (gyro differentiated once), Hz; default --cutoff");
   sub->add_flag("--allow-rank-deficient", a->allow_rank_deficient,
                 "warn instead of failing when the data do not determine some parameters (they keep the nominal values)");
   a->proc.add_to(sub);

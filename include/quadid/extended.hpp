@@ -26,8 +26,6 @@
 
 namespace quadid {
 
-/// Name of the log column holding Omega_r (rad/s), see above.
-inline constexpr const char* kRotorMomentumColumn = "Omega_r";
 
 /// One estimated set of the real-flight regression.
 struct ExtendedEstimate {
@@ -105,5 +103,8 @@ ExtendedResult identify_extended(const FlightLog& log, const ExtendedOptions& op
 
 /// {"sets": {"LS": {"parameters": {name: {value, std_error}}, row_weight, residual_rms, ...}}, "window", ...}
 nlohmann::json to_json(const ExtendedResult& x);
+/// Text: the cutoffs (and how they were chosen), then every parameter of LS
+/// and FMLS with its standard error, and the rows' residual RMS.
+std::string format_real_flight(const ExtendedResult& x);
 
 }  // namespace quadid

@@ -201,6 +201,11 @@ struct ModelTerms {
   void validate() const;
 };
 
+/// --terms: "paper" (none of the terms), "real" (real_flight()), or a comma
+/// list of offsets, flapping, damping, rotor-inertia, drag, weighting. Throws
+/// std::invalid_argument naming --terms and the choices.
+ModelTerms parse_model_terms(std::string_view spec, bool have_rotor_speeds);
+
 
 struct IdentificationOptions {
   ProcessingOptions processing{};

@@ -39,6 +39,12 @@ struct FlightLog {
   bool has(std::string_view name) const { return find(name) >= 0; }
 };
 
+/// The log column of the signed rotor-speed sum Omega_r = sum_i d_i Omega_i
+/// (rad/s; d_i = +1 for a rotor spinning counter-clockwise seen from above),
+/// made from the rotor columns by a vehicle's rotor model (vehicle.hpp) for the
+/// rotor-inertia term of the real-flight regression (extended.hpp).
+inline constexpr const char* kRotorMomentumColumn = "Omega_r";
+
 /// The required columns of a flight log, in the canonical order.
 const std::vector<std::string>& standard_log_columns();
 

@@ -16,6 +16,7 @@
 
 #include "quadid/design.hpp"
 #include "quadid/identification.hpp"
+#include "quadid/vehicle.hpp"
 #include "quadid/simulation.hpp"
 #include "quadid/validation.hpp"
 
@@ -53,6 +54,8 @@ std::string normalize_option_key(std::string_view key);
 struct IdentifyRequest {
   IdentificationOptions options;
   CsvReadOptions csv;
+  /// --vehicle: the wrench comes from the log's rotor columns by its rotor model.
+  std::optional<Vehicle> vehicle;
 };
 /// Options of `quadid identify` (and `quadid batch`): window, error-window,
 /// sigma, gd-discretization, gd-init, nominal, allow-rank-deficient,
@@ -60,6 +63,27 @@ struct IdentifyRequest {
 /// lambda, derivative-filter, g, period-tolerance, keep-edges, map.
 /// Defaults: those of `quadid identify --help`. Validated.
 IdentifyRequest identify_options_from_json(const nlohmann::json& j);
+
+/// The real-flight choices of `quadid identify` as given (unset = default).
+struct RealFlightArgs {
+  std::string vehicle;                 // --vehicle NAME|FILE
+  std::optional<double> known_mass;    // --known-mass KG
+  std::string terms = "auto";          // --terms auto|paper|real|LIST
+  std::string cutoffs = "auto";        // --cutoffs auto|held-out|fixed
+  std::optional<double> cutoff_force, cutoff_moment;  // --cutoff-force, --cutoff-moment (Hz)
+  bool window_given = false;           // --window was given
+  bool nominal_given = false;          // --nominal was given
+};
+/// Applies them to `req`, with the defaults of docs/real-flights.md: with a
+/// vehicle, the real-flight terms, cutoffs chosen on held-out data, the whole
+/// log as window and the vehicle's nominal set as reference; without one, the
+/// paper's model. Throws std::invalid_argument naming the option.
+void apply_real_flight(IdentifyRequest& req, const RealFlightArgs& a);
+
+/// Reads the log of an identification: any format (load_any_log); with a
+/// vehicle, the rotor columns instead of the wrench, which the rotor model
+/// computes (with_rotor_wrench). InputError names the file.
+FlightLog load_identification_log(const std::string& path, const IdentifyRequest& req);
 
 /// `quadid simulate`: the trajectory (required: table2, circle1..3, circle,
 /// or a trajectory JSON file) and the SimulationOptions.

@@ -29,7 +29,7 @@ FlightLog load_log_file(const std::string& path, const CsvReadOptions& csv) {
 }
 
 nlohmann::json identify_log_file(const std::string& path, const IdentifyRequest& req, Evolution* evolution) {
-  const FlightLog log = load_log_file(path, req.csv);  // InputError names the file
+  const FlightLog log = load_identification_log(path, req);  // InputError names the file
   IdentificationResult res;
   try {
     res = identify(log, req.options);

@@ -115,6 +115,30 @@ ModelTerms ModelTerms::real_flight(bool have_rotor_speeds) {
   return t;
 }
 
+ModelTerms parse_model_terms(std::string_view spec, bool have_rotor_speeds) {
+  if (spec == "paper") return ModelTerms{};
+  if (spec == "real") return ModelTerms::real_flight(have_rotor_speeds);
+  ModelTerms t;
+  std::string_view rest = spec;
+  while (!rest.empty()) {
+    const size_t comma = rest.find(',');
+    const std::string_view item = rest.substr(0, comma);
+    rest = comma == std::string_view::npos ? std::string_view{} : rest.substr(comma + 1);
+    if (item == "offsets") t.torque_offsets = true;
+    else if (item == "flapping") t.flapping = true;
+    else if (item == "damping") t.rate_damping = true;
+    else if (item == "rotor-inertia") t.rotor_inertia = true;
+    else if (item == "drag") t.force_drag = true;
+    else if (item == "weighting") t.weight_rows = true;
+    else
+      throw std::invalid_argument(fmt::format(
+          "--terms {}: '{}' is not a term; expected paper, real, or a comma list of offsets, flapping, damping, "
+          "rotor-inertia, drag, weighting",
+          spec, item));
+  }
+  return t;
+}
+
 void ModelTerms::validate() const {
   if (known_mass && !(*known_mass > 0.0 && std::isfinite(*known_mass)))
     throw std::invalid_argument(fmt::format("--known-mass {}: must be a positive mass in kg", *known_mass));

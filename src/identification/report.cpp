@@ -222,4 +222,29 @@ json to_json(const ExtendedResult& x) {
   return out;
 }
 
+std::string format_real_flight(const ExtendedResult& x) {
+  std::string out = fmt::format("Real-flight regression (docs/real-flights.md), window {:.3f}-{:.3f} s, {} samples\n",
+                                x.window.t0, x.window.t1, x.window_samples);
+  out += fmt::format("  force row: pre-filter {}; moment rows: {}", x.force_processing.filter, x.moment_processing.filter);
+  out += x.cutoff_selection ? " (chosen on held-out time blocks)\n" : "\n";
+  const auto& a = x.estimates[0];
+  const auto& b = x.estimates[1];
+  out += fmt::format("  {:<14} {:>24} {:>24}\n", "parameter", "LS", "FMLS");
+  for (size_t j = 0; j < a.names.size(); ++j) {
+    const auto jj = static_cast<Eigen::Index>(j);
+    out += fmt::format("  {:<14} {:>12.5g} +- {:<9.2g} {:>12.5g} +- {:<9.2g}\n", a.names[j], a.value(jj),
+                       a.std_error(jj), b.value(jj), b.std_error(jj));
+  }
+  out += fmt::format("  residual RMS  Fz {:.3g} N, tau {:.3g} {:.3g} {:.3g} N m (LS)\n", a.residual_rms(0),
+                     a.residual_rms(1), a.residual_rms(2), a.residual_rms(3));
+  for (const auto* e : {&a, &b}) {
+    if (!e->unidentifiable.empty())
+      out += fmt::format("  {}: not determined by these data: {}\n", e->name, fmt::join(e->unidentifiable, ", "));
+    if (!e->poorly_determined.empty())
+      out += fmt::format("  {}: poorly determined (standard error above the threshold): {}\n", e->name,
+                         fmt::join(e->poorly_determined, ", "));
+  }
+  return out;
+}
+
 }  // namespace quadid

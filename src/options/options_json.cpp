@@ -3,6 +3,8 @@
 // command line (apps/quadid/cmd_*.cpp); tests/test_options_json.cpp checks them.
 #include "quadid/options_json.hpp"
 
+#include "quadid/logs.hpp"
+
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
@@ -67,8 +69,12 @@ const std::vector<OptionSpec>& identify_specs() {
           {"nominal", K::String, "reference set: qball2-nominal, qball2-virtual or a params JSON"},
           {"allow-rank-deficient", K::Flag, "warn instead of failing when the data do not determine some parameters"},
           {"evolution-interval", K::Number, "seconds between evolution rows, 0 = every sample (default 0.01)"},
-          // HOOK(vehicle files, DESIGN.md): "vehicle" and "known-mass" join here once the
-          // library reads vehicle files; the Python module passes vehicle=... through unchanged.
+          {"vehicle", K::String, "vehicle file or built-in name: the wrench from the rotor columns (docs/vehicles.md)"},
+          {"known-mass", K::Number, "weighed mass, kg: estimate the thrust scale with the inertia"},
+          {"terms", K::String, "auto, paper, real, or a list of offsets,flapping,damping,rotor-inertia,drag,weighting"},
+          {"cutoffs", K::String, "auto (held-out with a vehicle), held-out, or fixed"},
+          {"cutoff-force", K::Number, "pre-filter cutoff of the force row, Hz"},
+          {"cutoff-moment", K::Number, "pre-filter cutoff of the moment rows, Hz"},
       },
       processing_specs());
   return s;
@@ -412,9 +418,59 @@ IdentifyRequest identify_options_from_json(const nlohmann::json& j) {
   opt.gd_variant = p.gd_variant;
   req.csv = std::move(p.csv);
   req.csv.keep_extra_columns = false;  // identification uses the 14 standard columns only
+  RealFlightArgs rf;
+  rf.vehicle = r.string("vehicle").value_or("");
+  rf.known_mass = r.number("known-mass");
+  rf.terms = r.string("terms").value_or("auto");
+  rf.cutoffs = r.string("cutoffs").value_or("auto");
+  rf.cutoff_force = r.number("cutoff-force");
+  rf.cutoff_moment = r.number("cutoff-moment");
+  rf.window_given = j.contains("window");
+  rf.nominal_given = j.contains("nominal");
   r.finish();
+  validate_as("identify", [&] { apply_real_flight(req, rf); });
   validate_as("identify", [&] { opt.validate(); });
   return req;
+}
+
+void apply_real_flight(IdentifyRequest& req, const RealFlightArgs& a) {
+  IdentificationOptions& opt = req.options;
+  if (!a.vehicle.empty()) {
+    req.vehicle = load_vehicle(a.vehicle);
+    if (!a.nominal_given) opt.reference = NamedParams{"nom", req.vehicle->nominal};
+    if (!a.window_given) opt.window = TimeWindow{};  // the whole log, clear of the filters' edges
+  }
+  const bool vehicle = req.vehicle.has_value();
+  if (a.terms == "auto") opt.terms = vehicle ? ModelTerms::real_flight(true) : ModelTerms{};
+  else opt.terms = parse_model_terms(a.terms, vehicle);
+  if (opt.terms.rotor_inertia && !vehicle)
+    throw std::invalid_argument("--terms rotor-inertia needs the rotor speeds: give --vehicle");
+  opt.terms.known_mass = a.known_mass;
+  opt.force_cutoff_hz = a.cutoff_force;
+  opt.moment_cutoff_hz = a.cutoff_moment;
+  if (a.cutoffs == "auto") opt.auto_cutoffs = vehicle && !a.cutoff_force && !a.cutoff_moment;
+  else if (a.cutoffs == "held-out") opt.auto_cutoffs = true;
+  else if (a.cutoffs == "fixed") opt.auto_cutoffs = false;
+  else throw std::invalid_argument(fmt::format("--cutoffs {}: expected auto, held-out or fixed", a.cutoffs));
+}
+
+FlightLog load_identification_log(const std::string& path, const IdentifyRequest& req) {
+  logs::LoadOptions load;
+  load.csv = req.csv;
+  if (req.vehicle) {  // the rotor columns instead of the wrench
+    const auto& std_cols = standard_log_columns();  // t x y z phi theta psi p q r, then the wrench
+    load.csv.required.assign(std_cols.begin(), std_cols.begin() + 10);
+    const auto& rc = req.vehicle->rotors.columns;
+    load.csv.required.insert(load.csv.required.end(), rc.begin(), rc.end());
+    load.check_required = false;  // an imported autopilot log has no wrench: the rotor model adds it
+  }
+  FlightLog log = logs::load_any_log(path, load);
+  if (!req.vehicle) return log;
+  try {
+    return with_rotor_wrench(log, req.vehicle->rotors);
+  } catch (const std::exception& e) {
+    throw InputError(fmt::format("{}: {}", path, e.what()));
+  }
 }
 
 SimulateRequest simulate_options_from_json(const nlohmann::json& j) {

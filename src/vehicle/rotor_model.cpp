@@ -2,11 +2,13 @@
 // [Fz, tau] (DESIGN.md "Real vehicles"; formulas in include/quadid/vehicle.hpp).
 #include "quadid/vehicle.hpp"
 
+
 #include <fmt/format.h>
 
 #include <Eigen/SVD>
 
 #include <cmath>
+#include <numbers>
 #include <stdexcept>
 
 namespace quadid {
@@ -150,18 +152,28 @@ double log_sample_period(const FlightLog& log) {
 FlightLog with_rotor_wrench(const FlightLog& log, const RotorModel& rotors) {
   const Eigen::MatrixXd in = rotor_inputs(log, rotors);
   const double T = rotors.input == RotorInput::kCommand && rotors.time_constant > 0.0 ? log_sample_period(log) : 0.0;
-  const WrenchSeries F = rotors.wrench_from_speeds(rotors.speeds(in, T));
+  const Eigen::MatrixXd w = rotors.speeds(in, T);
+  const WrenchSeries F = rotors.wrench_from_speeds(w);
+  // Omega_r = sum_i d_i Omega_i, d_i = +1 counter-clockwise (angular momentum
+  // along +z body) = -s_i: the rotor-inertia term of the real-flight
+  // regression (extended.hpp). rpm -> rad/s; commands give the normalised
+  // speed, so the rotor-inertia estimate is then J_r times the speed at command 1.
+  const double to_rad_s = rotors.input == RotorInput::kRpm ? 2.0 * std::numbers::pi / 60.0 : 1.0;
+  Eigen::VectorXd omega_r = Eigen::VectorXd::Zero(w.rows());
+  for (int i = 0; i < rotors.count(); ++i) omega_r -= static_cast<double>(rotors.spin[static_cast<size_t>(i)]) * to_rad_s * w.col(i);
   FlightLog out = log;
-  static const char* kNames[4] = {"Fz", "tau_phi", "tau_theta", "tau_psi"};
-  for (int j = 0; j < 4; ++j) {
-    int c = out.find(kNames[j]);
+  auto set = [&](const char* name, const Eigen::VectorXd& v) {
+    int c = out.find(name);
     if (c < 0) {
-      out.columns.emplace_back(kNames[j]);
+      out.columns.emplace_back(name);
       out.data.conservativeResize(Eigen::NoChange, out.data.cols() + 1);
       c = static_cast<int>(out.data.cols() - 1);
     }
-    out.data.col(c) = F.col(j);
-  }
+    out.data.col(c) = v;
+  };
+  static const char* kNames[4] = {"Fz", "tau_phi", "tau_theta", "tau_psi"};
+  for (int j = 0; j < 4; ++j) set(kNames[j], F.col(j));
+  set(kRotorMomentumColumn, omega_r);
   return out;
 }
 
