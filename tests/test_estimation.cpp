@@ -7,6 +7,7 @@
 #include <unsupported/Eigen/MatrixFunctions>
 
 #include <algorithm>
+#include <limits>
 #include <random>
 
 using namespace quadid;
@@ -211,12 +212,53 @@ TEST(Estimation, ForwardEulerIsEq42AndDivergesAtThePapersGain) {
   EXPECT_LT((a.theta() - b.theta()).norm(), 2e-3 * step);  // relative difference ~ sigma T lambda_max / 2 ~ 1e-3
 }
 
+TEST(Estimation, TinyOrZeroInitialGuessConvergesAndIsNotCalledDiverged) {
+  // Issue 8: the divergence test was relative to the start, so a guess of
+  // 1e-9 (or 0) was "diverged after 0 samples" on the first step toward ~1.8 kg.
+  // With the absolute bound, the exact discretization converges from there.
+  std::mt19937 rng(7);
+  const Theta star = virtual_theta();
+  const double T = 0.002;
+  for (double scale : {0.0, 1e-12, 1e-9}) {
+    GradientDescent gd(Theta::Constant(scale), T);
+    for (int k = 0; k < 2000; ++k) {
+      const Regressor4x7 Gk = random_regressor(rng);
+      gd.step(Gk, Gk * star);
+    }
+    EXPECT_FALSE(gd.diverged()) << scale << ": " << gd.divergence_reason();
+    EXPECT_LT((gd.theta() - star).norm(), 1e-8 * star.norm()) << scale;
+  }
+  // The bound still catches a real divergence (forward Euler at the paper's
+  // gain) from the same tiny start, within tens of samples: |1 - 5.8| ~ 5 per
+  // step takes 1.8 kg past 1e6 in ~9 steps.
+  GradientDescentOptions fe;
+  fe.discretization = GdDiscretization::ForwardEuler;
+  GradientDescent lit(Theta::Constant(1e-9), T, fe);
+  for (int k = 0; k < 200 && !lit.diverged(); ++k) {
+    const Regressor4x7 Gk = random_regressor(rng);
+    lit.step(Gk, Gk * star);
+  }
+  EXPECT_TRUE(lit.diverged());
+  EXPECT_GT(lit.diverged_at(), 0);
+  EXPECT_LT(lit.diverged_at(), 50);
+  EXPECT_NE(lit.divergence_reason().find("grew beyond 1e+06"), std::string::npos) << lit.divergence_reason();
+  // Non-finite data is caught as such, whatever the bound.
+  GradientDescent nan_gd(star, T);
+  const Regressor4x7 G = random_regressor(rng);
+  nan_gd.step(G, Vec4::Constant(std::numeric_limits<double>::quiet_NaN()));
+  EXPECT_TRUE(nan_gd.diverged());
+  EXPECT_EQ(nan_gd.diverged_at(), 0);
+  EXPECT_NE(nan_gd.divergence_reason().find("non-finite"), std::string::npos);
+}
+
 TEST(Estimation, OptionsAreValidated) {
   GradientDescentOptions g;
   g.sigma = -1.0;
   EXPECT_THROW(g.validate(), std::invalid_argument);
   g = {};
-  g.divergence_factor = 0.5;
+  g.divergence_bound = 0.0;
+  EXPECT_THROW(g.validate(), std::invalid_argument);
+  g.divergence_bound = std::numeric_limits<double>::infinity();
   EXPECT_THROW(g.validate(), std::invalid_argument);
   EXPECT_THROW(GradientDescent(Theta::Zero(), 0.0), std::invalid_argument);
   EXPECT_THROW(GradientDescent(Theta::Constant(std::nan("")), 0.002), std::invalid_argument);

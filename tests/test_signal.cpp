@@ -1,22 +1,23 @@
 // Tests of quadid::signal against SciPy golden data (tests/data/signal, made by
 // gen_signal_golden.py) and against closed-form properties.
 //
-// Tolerances. Golden comparisons use 1e-9: relative for coefficients, absolute
-// for the O(1) filtered signals. Both sides compute in IEEE double (unit roundoff
-// 1.1e-16) with the same algorithms, but in different operation orders (LAPACK
-// solve vs a recurrence for lfilter_zi, DF2T vs convolution for FIR). A recursive
-// filter of order 4-8 with poles at |z| ~ 0.95-0.99 remembers ~100 samples and
-// its companion-form state amplifies rounding by up to ~1e4 over the ~2000 steps
-// of a forward-backward pass, so differences up to ~1e-10 are expected (scipy's
-// own filtfilt of the 4 Hz case is 1.2e-10 from an exact-arithmetic result);
-// 1e-9 keeps a margin and is still far below any algorithmic mistake (a
-// different padding or initial state changes edge samples by 1e-3 or more).
+// Tolerances. Golden comparisons of FIR and first-order filters use 1e-9:
+// relative for coefficients, absolute for the O(1) filtered signals. Both sides
+// compute in IEEE double (unit roundoff 1.1e-16) with the same algorithms, but
+// in different operation orders (LAPACK solve vs a recurrence for lfilter_zi,
+// DF2T vs convolution for FIR); 1e-9 is still far below any algorithmic mistake
+// (a different padding or initial state changes edge samples by 1e-3 or more).
+// The Butterworth cases (second-order sections) have their own, tighter,
+// tolerances, derived where they are used.
 #include "quadid/signal.hpp"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
 #include <cmath>
+#include <fmt/format.h>
+#include <iostream>
+#include <limits>
 #include <fstream>
 #include <functional>
 #include <map>
@@ -34,6 +35,7 @@ namespace {
 const std::string kDir = std::string(QUADID_TEST_DATA) + "/signal/";
 constexpr double kGoldenTol = 1e-9;
 constexpr double kPi = std::numbers::pi;
+constexpr double kEps = std::numeric_limits<double>::epsilon();
 
 const nlohmann::json& coeffs() {
   static const nlohmann::json j = [] {
@@ -75,6 +77,24 @@ sig::TransferFunction tf_of(const nlohmann::json& f) {
   return {f.at("b").get<std::vector<double>>(), f.at("a").get<std::vector<double>>()};
 }
 
+MatrixXd matrix_of(const nlohmann::json& j) {
+  const auto rows = j.get<std::vector<std::vector<double>>>();
+  MatrixXd m(static_cast<Eigen::Index>(rows.size()), rows.empty() ? 0 : static_cast<Eigen::Index>(rows[0].size()));
+  for (std::size_t i = 0; i < rows.size(); ++i)
+    for (std::size_t k = 0; k < rows[i].size(); ++k) m(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(k)) = rows[i][k];
+  return m;
+}
+
+sig::Sos sos_of(const nlohmann::json& j) { return matrix_of(j); }
+
+// Sum over sections of the condition number of the DC gain, (1 + |a1| + |a2|) / |1 + a1 + a2|.
+double dc_condition(const sig::Sos& sos) {
+  double kappa = 0.0;
+  for (Eigen::Index i = 0; i < sos.rows(); ++i)
+    kappa += sos.row(i).tail<3>().cwiseAbs().sum() / std::abs(sos.row(i).tail<3>().sum());
+  return kappa;
+}
+
 double max_rel_diff(const std::vector<double>& got, const std::vector<double>& want) {
   EXPECT_EQ(got.size(), want.size());
   double m = 0.0;
@@ -104,18 +124,6 @@ VectorXd sampled(int n, double fs, const std::function<double(double)>& f) {
 
 // ---------------------------------------------------------------- SciPy golden
 
-TEST(SignalGolden, ButterCoefficientsMatchScipy) {
-  int n = 0;
-  for (const auto& [name, f] : coeffs().at("filters").items()) {
-    if (f.at("kind") != "butter") continue;
-    const auto tf = sig::butter_lowpass(f.at("order"), f.at("cutoff_hz"), f.at("fs_hz"));
-    EXPECT_LT(max_rel_diff(tf.b, f.at("b")), kGoldenTol) << name;
-    EXPECT_LT(max_rel_diff(tf.a, f.at("a")), kGoldenTol) << name;
-    ++n;
-  }
-  EXPECT_EQ(n, 6);
-}
-
 TEST(SignalGolden, FirBlackmanHarrisTapsMatchScipyFirwin) {
   int n = 0;
   for (const auto& [name, f] : coeffs().at("filters").items()) {
@@ -127,55 +135,115 @@ TEST(SignalGolden, FirBlackmanHarrisTapsMatchScipyFirwin) {
   EXPECT_EQ(n, 6);
 }
 
-TEST(SignalGolden, LfilterZiMatchesScipyAndExactRational) {
+TEST(SignalGolden, ButterSosMatchesScipyForEveryAllowedOrderAndCutoff) {
+  // Every order LowpassOptions allows (1-8) and cutoffs from 10 mHz to 249.99 Hz
+  // at 500 Hz. Sections: each row compared relative to its largest entry. Both
+  // sides compute the same poles by tan, exp and complex division in double,
+  // rounded differently in the last bit (measured <= 3e-16); 1e-14 keeps a margin
+  // and is far below a wrong pairing or ordering (differences of O(1)).
+  // Initial states: the DC gain sum(b)/sum(a) of a section with poles at distance
+  // d from z = 1 has condition number kappa ~ 4/d^2, so both sides' rounding is
+  // amplified by up to eps kappa: tolerance 1e-12 + 8 eps kappa.
+  int n = 0;
+  for (const auto& d : coeffs().at("butter_sweep")) {
+    const std::string what = fmt::format("order {} cutoff {} Hz", d.at("order").get<int>(), d.at("cutoff_hz").get<double>());
+    const sig::Sos want = sos_of(d.at("sos"));
+    const sig::Sos got = sig::butter_sos(d.at("order"), d.at("cutoff_hz"), d.at("fs_hz"));
+    ASSERT_EQ(got.rows(), want.rows()) << what;
+    for (Eigen::Index i = 0; i < got.rows(); ++i) {
+      const double scale = want.row(i).cwiseAbs().maxCoeff();
+      EXPECT_LT((got.row(i) - want.row(i)).cwiseAbs().maxCoeff(), 1e-14 * scale) << what << " section " << i;
+    }
+    const MatrixXd zi = sig::sosfilt_zi(got);
+    const MatrixXd zi_want = matrix_of(d.at("zi"));
+    double kappa = 0.0;
+    for (Eigen::Index i = 0; i < got.rows(); ++i)
+      kappa += got.row(i).tail<3>().cwiseAbs().sum() / std::abs(got.row(i).tail<3>().sum());
+    EXPECT_LT((zi - zi_want).cwiseAbs().maxCoeff(), 1e-12 + 8 * kEps * kappa) << what;
+    ++n;
+  }
+  EXPECT_EQ(n, 8 * 14);
+}
+
+TEST(SignalGolden, Zpk2SosPairsAndOrdersAsScipy) {
+  int n = 0;
+  for (const auto& c : coeffs().at("zpk2sos")) {
+    sig::Zpk zpk;
+    for (const auto& v : c.at("z")) zpk.z.emplace_back(v[0].get<double>(), v[1].get<double>());
+    for (const auto& v : c.at("p")) zpk.p.emplace_back(v[0].get<double>(), v[1].get<double>());
+    zpk.k = c.at("k");
+    const sig::Sos got = sig::zpk2sos(zpk), want = sos_of(c.at("sos"));
+    ASSERT_EQ(got.rows(), want.rows()) << c.at("name");
+    // Same operations on the same doubles, up to summation order: 1e-14 of the row.
+    for (Eigen::Index i = 0; i < got.rows(); ++i)
+      EXPECT_LT((got.row(i) - want.row(i)).cwiseAbs().maxCoeff(), 1e-14 * want.row(i).cwiseAbs().maxCoeff())
+          << c.at("name") << " section " << i;
+    ++n;
+  }
+  EXPECT_EQ(n, 3);
+}
+
+TEST(SignalGolden, LfilterZiOfFirstOrderFiltersMatchesScipyAndExactRational) {
   int n = 0;
   for (const auto& [name, f] : coeffs().at("filters").items()) {
-    if (!f.contains("zi")) continue;
+    if (f.at("kind") != "first_order") continue;
     const VectorXd zi = sig::lfilter_zi(tf_of(f));
     const auto want = f.at("zi").get<std::vector<double>>();
     const auto exact = f.at("zi_exact").get<std::vector<double>>();
     ASSERT_EQ(zi.size(), static_cast<Eigen::Index>(want.size())) << name;
     for (Eigen::Index i = 0; i < zi.size(); ++i) {
-      // O(1) entries. scipy solves (I - A) zi = B by LAPACK, which for the 4 Hz
-      // filter (sum(a) = 6e-6) is itself off by 1.9e-10; hence 1e-9 against scipy.
-      EXPECT_NEAR(zi(i), want[i], kGoldenTol) << name << " " << i;
-      // Against the exact rational solution for the same doubles, our recurrence
-      // with compensated sums is good to a few ulps.
-      EXPECT_NEAR(zi(i), exact[i], 1e-14) << name << " " << i;
+      EXPECT_NEAR(zi(i), want[i], kGoldenTol * std::max(1.0, std::abs(want[i]))) << name << " " << i;
+      // Against the exact rational solution for the same doubles: a few ulps.
+      EXPECT_NEAR(zi(i), exact[i], 4 * kEps * std::max(1.0, std::abs(exact[i]))) << name << " " << i;
     }
     ++n;
   }
-  EXPECT_EQ(n, 9);
+  EXPECT_EQ(n, 3);
 }
 
-TEST(SignalGolden, LfilterFromRestMatchesScipy) {
-  const VectorXd y = sig::lfilter(tf_of(coeffs().at("filters").at("butter_o4_fc4_fs500")), col("x"));
-  EXPECT_LT((y - col("lfilter_butter_o4_fc4_fs500")).cwiseAbs().maxCoeff(), kGoldenTol);
+TEST(SignalGolden, SosfiltFromRestMatchesScipy) {
+  const sig::Sos sos = sos_of(coeffs().at("filters").at("butter_o4_fc4_fs500").at("sos"));
+  // Same recursion, same operation order: rounding differences only (measured ~1e-16).
+  EXPECT_LT((sig::sosfilt(sos, col("x")) - col("sosfilt_butter_o4_fc4_fs500")).cwiseAbs().maxCoeff(), 1e-13);
 }
 
-TEST(SignalGolden, FiltfiltMatchesScipyWithMatlabPadding) {
+TEST(SignalGolden, ZeroPhaseFiltersMatchScipySosfiltfiltAndMatlabFiltfilt) {
   const VectorXd& x = col("x");
-  for (const auto& name : coeffs().at("filtfilt_cases")) {
-    const auto& f = coeffs().at("filters").at(name.get<std::string>());
-    const VectorXd& want = col("filtfilt_" + name.get<std::string>());
-    // (1) scipy's own coefficients: checks filtfilt alone.
-    const VectorXd y1 = sig::filtfilt(tf_of(f), x);
-    EXPECT_LT((y1 - want).cwiseAbs().maxCoeff(), kGoldenTol) << name;
-    // (2) our designed coefficients: design + filtfilt end to end. Our
-    // coefficients differ from scipy's in the last bit (tan, exp and complex
-    // products rounded differently, <= 6e-16 relative), and a narrow low-pass
-    // amplifies that by the condition number of its DC gain, kappa =
-    // sum|a| / |sum a| (2.7e6 for 4 Hz at 500 Hz; measured 5.8e-10 here). So the
-    // tolerance is 1e-9 or 4 eps kappa max|x|, whichever is larger.
-    const auto a = f.at("a").get<std::vector<double>>();
-    double sa = 0.0, sabs = 0.0;
-    for (double v : a) sa += v, sabs += std::abs(v);
-    const double tol2 = std::max(kGoldenTol, 4 * 2.22e-16 * (sabs / std::abs(sa)) * x.cwiseAbs().maxCoeff());
-    const VectorXd y2 = f.at("kind") == "butter"
-        ? sig::filtfilt(sig::butter_lowpass(f.at("order"), f.at("cutoff_hz"), f.at("fs_hz")), x)
-        : sig::filtfilt(sig::fir_lowpass_blackmanharris(f.at("taps"), f.at("cutoff_hz"), f.at("fs_hz")), x);
-    EXPECT_LT((y2 - want).cwiseAbs().maxCoeff(), tol2) << name;
+  double worst_own = 0.0, worst_scipy = 0.0;
+  for (const auto& name_j : coeffs().at("zero_phase_cases")) {
+    const std::string name = name_j.get<std::string>();
+    const auto& f = coeffs().at("filters").at(name);
+    if (f.at("kind") == "fir") {
+      const VectorXd& want = col("filtfilt_" + name);
+      EXPECT_LT((sig::filtfilt(f.at("b").get<std::vector<double>>(), x) - want).cwiseAbs().maxCoeff(), kGoldenTol)
+          << name;
+      const auto h = sig::fir_lowpass_blackmanharris(f.at("taps"), f.at("cutoff_hz"), f.at("fs_hz"));
+      EXPECT_LT((sig::filtfilt(h, x) - want).cwiseAbs().maxCoeff(), kGoldenTol) << name;
+      continue;
+    }
+    const VectorXd& want = col("sosfiltfilt_" + name);
+    // (1) scipy's own sections: checks the zero-phase filter alone (padding,
+    // initial states, recursion).
+    // (2) our design end to end. Our sections differ from scipy's in the last
+    // bit (<= 3e-16 relative), and scipy's sosfilt_zi (a LAPACK solve) and our
+    // back-substitution round differently; either moves the output by up to
+    // eps times the DC gain's condition number kappa (2.5e6 per section for
+    // 0.1 Hz at 500 Hz; measured 9e-11 there, <= 3e-12 for cutoffs >= 0.5 Hz).
+    // Tolerance: 1e-12 or 8 eps kappa max|x|, whichever is larger.
+    const sig::Sos theirs = sos_of(f.at("sos"));
+    const double tol = std::max(1e-12, 8 * kEps * dc_condition(theirs) * x.cwiseAbs().maxCoeff());
+    const double d1 = (sig::sosfiltfilt(theirs, x) - want).cwiseAbs().maxCoeff();
+    EXPECT_LT(d1, tol) << name;
+    const sig::Sos ours = sig::butter_sos(f.at("order"), f.at("cutoff_hz"), f.at("fs_hz"));
+    const double d2 = (sig::sosfiltfilt(ours, x) - want).cwiseAbs().maxCoeff();
+    EXPECT_LT(d2, tol) << name;
+    std::cout << fmt::format("{}: max |diff| to scipy sosfiltfilt {:.2g} (scipy's sections), {:.2g} (ours)\n", name,
+                             d1, d2);
+    worst_scipy = std::max(worst_scipy, d1);
+    worst_own = std::max(worst_own, d2);
   }
+  std::cout << "max |sosfiltfilt - scipy| over the Butterworth cases: scipy's sections " << worst_scipy
+            << ", our design " << worst_own << "\n";
 }
 
 TEST(SignalGolden, FirstOrderFiltersMatchScipyLfilter) {
@@ -211,17 +279,16 @@ TEST(SignalButter, MinusThreeDbAtCutoffUnityDcZeroAtNyquistMonotone) {
   struct Case { int order; double fc, fs; };
   for (const Case c : {Case{1, 10, 500}, Case{2, 5, 500}, Case{4, 4, 500}, Case{4, 100, 500},
                        Case{6, 20, 500}, Case{8, 30, 500}, Case{3, 10, 100}, Case{5, 240, 500}}) {
-    const auto tf = sig::butter_lowpass(c.order, c.fc, c.fs);
-    ASSERT_EQ(tf.b.size(), static_cast<std::size_t>(c.order + 1));
-    ASSERT_EQ(tf.a.size(), static_cast<std::size_t>(c.order + 1));
-    EXPECT_EQ(tf.a[0], 1.0);
+    const sig::Sos tf = sig::butter_sos(c.order, c.fc, c.fs);
+    ASSERT_EQ(tf.rows(), (c.order + 1) / 2);
+    EXPECT_TRUE((tf.col(3).array() == 1.0).all());
     // Prewarping makes |H| = 1/sqrt(2) exactly at the cutoff (-3.0103 dB).
     EXPECT_NEAR(std::abs(sig::frequency_response(tf, c.fc, c.fs)), 1.0 / std::sqrt(2.0), 1e-9)
         << c.order << " " << c.fc;
     EXPECT_NEAR(std::abs(sig::frequency_response(tf, 0.0, c.fs)), 1.0, 1e-9);
     EXPECT_NEAR(std::abs(sig::frequency_response(tf, c.fs / 2, c.fs)), 0.0, 1e-9);
     // Maximally flat: no ripple. Slack 1e-9: evaluating H near z = 1 divides by
-    // sum(a) ~ 1e-6..1e-2, which costs up to ~1e-10 of the 1e-16 rounding.
+    // each section's 1 + a1 + a2 ~ 1e-4..1, which costs up to ~1e-12 of the 1e-16 rounding.
     double prev = 2.0;
     for (int i = 0; i <= 200; ++i) {
       const double m = std::abs(sig::frequency_response(tf, i * (c.fs / 2) / 200.0, c.fs));
@@ -259,27 +326,27 @@ TEST(SignalFir, BlackmanHarrisSymmetricUnityDcAndWindowShape) {
 TEST(SignalFiltfilt, ZeroLagOnSinusoidBelowCutoff) {
   const double fs = 500.0, f0 = 1.0;
   const VectorXd x = sampled(5000, fs, [&](double t) { return std::sin(2 * kPi * f0 * t + 0.3); });
-  const auto check = [&](const sig::TransferFunction& tf, const VectorXd& y, const char* what) {
+  const auto check = [&](std::complex<double> H, const VectorXd& y, const char* what) {
     // Zero phase: y = |H(f0)|^2 x exactly in the interior (edge transients decay
     // as exp(-9.6 t) for the slowest 4 Hz Butterworth mode: < 1e-8 after 2 s).
-    const double g2 = std::norm(sig::frequency_response(tf, f0, fs));
+    const double g2 = std::norm(H);
     EXPECT_LT((y.segment(1000, 3000) - g2 * x.segment(1000, 3000)).cwiseAbs().maxCoeff(), 1e-7) << what;
   };
-  const auto bw = sig::butter_lowpass(4, 4.0, fs);
-  check(bw, sig::filtfilt(bw, x), "butter");
+  const sig::Sos bw = sig::butter_sos(4, 4.0, fs);
+  check(sig::frequency_response(bw, f0, fs), sig::sosfiltfilt(bw, x), "butter");
   const auto fir = sig::fir_lowpass_blackmanharris(31, 4.0, fs);
-  check({fir, {1.0}}, sig::filtfilt(fir, x), "fir");
+  check(sig::frequency_response(sig::TransferFunction{fir, {1.0}}, f0, fs), sig::filtfilt(fir, x), "fir");
   // The check can see a lag: a single forward pass of the Butterworth is late
   // by ~0.09 s at 1 Hz, which fails it by a wide margin.
-  const VectorXd once = sig::lfilter(bw, x);
+  const VectorXd once = sig::sosfilt(bw, x);
   const double g1 = std::abs(sig::frequency_response(bw, f0, fs));
   EXPECT_GT((once.segment(1000, 3000) - g1 * x.segment(1000, 3000)).cwiseAbs().maxCoeff(), 0.3);
 }
 
 TEST(SignalFiltfilt, ConstantPassesUnchangedAndMatrixIsColumnwise) {
-  const auto tf = sig::butter_lowpass(4, 4.0, 500.0);
+  const sig::Sos tf = sig::butter_sos(4, 4.0, 500.0);
   const VectorXd c = VectorXd::Constant(100, -2.5);
-  EXPECT_LT((sig::filtfilt(tf, c).array() + 2.5).abs().maxCoeff(), 1e-9);  // no edge transient
+  EXPECT_LT((sig::sosfiltfilt(tf, c).array() + 2.5).abs().maxCoeff(), 1e-12);  // no edge transient
   const auto fir = sig::fir_lowpass_blackmanharris(31, 20.0, 500.0);
   EXPECT_LT((sig::filtfilt(fir, c).array() + 2.5).abs().maxCoeff(), 1e-12);
 
@@ -287,10 +354,10 @@ TEST(SignalFiltfilt, ConstantPassesUnchangedAndMatrixIsColumnwise) {
   X.col(0) = col("x").head(700);
   X.col(1) = col("x").segment(900, 700);
   X.col(2) = VectorXd::LinSpaced(700, -1.0, 3.0);
-  const MatrixXd Y = sig::filtfilt(tf, X);
+  const MatrixXd Y = sig::sosfiltfilt(tf, X);
   const MatrixXd Yf = sig::filtfilt(fir, X);
   for (int j = 0; j < 3; ++j) {
-    EXPECT_EQ(Y.col(j), sig::filtfilt(tf, VectorXd(X.col(j)))) << j;
+    EXPECT_EQ(Y.col(j), sig::sosfiltfilt(tf, VectorXd(X.col(j)))) << j;
     EXPECT_EQ(Yf.col(j), sig::filtfilt(fir, X.col(j))) << j;  // expression overload
   }
 }
@@ -301,11 +368,10 @@ TEST(SignalLowpass, FrontEndIsFiltfiltOfTheChosenDesign) {
   EXPECT_EQ(def.kind, sig::LowpassOptions::Kind::Butterworth);
   EXPECT_EQ(def.order, 4);
   EXPECT_EQ(def.cutoff_hz, 4.0);
-  EXPECT_EQ(sig::zero_phase_lowpass(X, 500.0, def), sig::filtfilt(sig::butter_lowpass(4, 4.0, 500.0), X));
-  // Own 4 Hz design vs scipy's: see FiltfiltMatchesScipyWithMatlabPadding for
-  // why this one needs 4 eps kappa max|x| = 5e-9 rather than 1e-9.
-  EXPECT_LT((sig::zero_phase_lowpass(X, 500.0).col(0) - col("filtfilt_butter_o4_fc4_fs500")).cwiseAbs().maxCoeff(),
-            5e-9);
+  EXPECT_EQ(sig::zero_phase_lowpass(X, 500.0, def), sig::sosfiltfilt(sig::butter_sos(4, 4.0, 500.0), X));
+  // Own 4 Hz design vs scipy's sosfiltfilt: see ZeroPhaseFiltersMatchScipy... for the 1e-12.
+  EXPECT_LT((sig::zero_phase_lowpass(X, 500.0).col(0) - col("sosfiltfilt_butter_o4_fc4_fs500")).cwiseAbs().maxCoeff(),
+            1e-12);
   sig::LowpassOptions fir;
   fir.kind = sig::LowpassOptions::Kind::FirBlackmanHarris;
   fir.cutoff_hz = 11.0;
@@ -408,16 +474,18 @@ TEST(SignalFirstOrder, RampSlopeConsistentIsExactPrintedIs1030Percent) {
 // ------------------------------------------------------------------ error cases
 
 TEST(SignalErrors, InvalidArgumentsNameTheField) {
-  const auto tf = sig::butter_lowpass(4, 4.0, 500.0);  // padlen 12
-  expect_invalid([&] { sig::filtfilt(tf, VectorXd::Ones(12)); }, {"length 12", "padding length 12"});
-  EXPECT_NO_THROW(sig::filtfilt(tf, VectorXd::Ones(13)));
+  const sig::Sos sos = sig::butter_sos(4, 4.0, 500.0);  // padlen 3 (2 sections + 1) = 15, as scipy
+  EXPECT_EQ(sig::ZeroPhaseFilter(sos).padlen(), 15);
+  EXPECT_EQ(sig::ZeroPhaseFilter(sig::butter_sos(5, 4.0, 500.0)).padlen(), 18);  // one first-order section
+  expect_invalid([&] { sig::sosfiltfilt(sos, VectorXd::Ones(15)); }, {"length 15", "padding length 15"});
+  EXPECT_NO_THROW(sig::sosfiltfilt(sos, VectorXd::Ones(16)));
   const auto fir = sig::fir_lowpass_blackmanharris(31, 4.0, 500.0);  // padlen 90
   expect_invalid([&] { sig::filtfilt(fir, MatrixXd::Ones(50, 2)); }, {"length 50", "padding length 90"});
 
-  expect_invalid([] { sig::butter_lowpass(0, 4.0, 500.0); }, {"order=0"});
-  expect_invalid([] { sig::butter_lowpass(4, 0.0, 500.0); }, {"cutoff_hz=0"});
-  expect_invalid([] { sig::butter_lowpass(4, 250.0, 500.0); }, {"cutoff_hz=250", "Nyquist 250"});
-  expect_invalid([] { sig::butter_lowpass(4, 4.0, -1.0); }, {"fs_hz=-1"});
+  expect_invalid([] { sig::butter_sos(0, 4.0, 500.0); }, {"order=0"});
+  expect_invalid([] { sig::butter_sos(4, 0.0, 500.0); }, {"cutoff_hz=0"});
+  expect_invalid([] { sig::butter_sos(4, 250.0, 500.0); }, {"cutoff_hz=250", "Nyquist 250"});
+  expect_invalid([] { sig::butter_sos(4, 4.0, -1.0); }, {"fs_hz=-1"});
   expect_invalid([] { sig::fir_lowpass_blackmanharris(2, 4.0, 500.0); }, {"taps=2"});
 
   sig::LowpassOptions o;
@@ -435,27 +503,86 @@ TEST(SignalErrors, InvalidArgumentsNameTheField) {
   expect_invalid([] { sig::central_difference(VectorXd::Ones(2), 0.002); }, {"length 2"});
   expect_invalid([] { sig::central_difference(VectorXd::Ones(5), 0.0); }, {"T=0"});
   const VectorXd bad_zi = VectorXd::Zero(2);
-  expect_invalid([&] { sig::lfilter(tf, VectorXd::Ones(5), &bad_zi); }, {"zi", "size 2"});
+  expect_invalid([&] { sig::lfilter(sig::fD_tf(30.0, 0.002), VectorXd::Ones(5), &bad_zi); }, {"zi", "size 2"});
+  const MatrixXd bad_sos_zi = MatrixXd::Zero(3, 2);
+  expect_invalid([&] { sig::sosfilt(sos, VectorXd::Ones(5), &bad_sos_zi); }, {"zi", "3x2", "2x2"});
   expect_invalid([] { sig::lfilter({{1.0}, {0.0}}, VectorXd::Ones(5)); }, {"a[0]"});
   expect_invalid([] { sig::fD_tf(-1.0, 0.002); }, {"lambda=-1"});
   expect_invalid([] { sig::gD_tf(30.0, 0.0); }, {"T=0"});
 }
 
-// The in-place filter of long logs runs the same code as filtfilt and
-// central_difference, so the results are equal bit for bit.
+TEST(SignalErrors, UnrealisableButterworthIsRefusedNamingTheFilter) {
+  // Too close to Nyquist: scipy's own design of order 8 at 249.999999 Hz rounds
+  // to a pole at |z| = 1.0000000026 (measured in numpy); ours is refused too.
+  // At 249.999 Hz the poles are inside but 1.3e-5 from z = -1, where they
+  // nearly cancel the zeros: refused as well.
+  expect_invalid([] { sig::butter_sos(8, 249.999999, 500.0); },
+                 {"Butterworth order 8, 249.999999 Hz at 500 Hz cannot be realised"});
+  expect_invalid([] { sig::butter_sos(4, 249.999, 500.0); }, {"order 4, 249.999 Hz", "too close to Nyquist"});
+  // Too close to 0 Hz: order 2 at 1 mHz has its pole pair 1.3e-5 from z = 1;
+  // rounding can move the gain at 0 Hz by 5.6e-6 > 1e-6.
+  expect_invalid([] { sig::butter_sos(2, 0.001, 500.0); }, {"order 2, 0.001 Hz at 500 Hz", "gain at 0 Hz"});
+  // Far below any useful cutoff the poles round to z = 1 itself.
+  expect_invalid([] { sig::butter_sos(4, 1e-300, 500.0); }, {"unit circle"});
+  // The limits are the documented ones: 10 mHz (order 8) and 249.99 Hz are fine.
+  EXPECT_NO_THROW(sig::butter_sos(8, 0.01, 500.0));
+  EXPECT_NO_THROW(sig::butter_sos(8, 249.99, 500.0));
+  // Through the pre-filter options, the message names the filter as the user set it.
+  sig::LowpassOptions o;
+  o.order = 8;
+  o.cutoff_hz = 0.001;
+  expect_invalid([&] { sig::ZeroPhaseFilter(o, 500.0); }, {"Butterworth order 8, 0.001 Hz at 500 Hz"});
+  expect_invalid([&] { sig::zero_phase_lowpass(MatrixXd::Ones(100, 1), 500.0, o); }, {"order 8, 0.001 Hz"});
+  // Hand-made sections: an unstable one is refused by check_realizable.
+  sig::Sos bad(1, 6);
+  bad << 1, 0, 0, 1, -2.0, 1.0;  // double pole at z = 1
+  expect_invalid([&] { sig::check_realizable(bad); }, {"section 1", "|z| = 1"});
+}
+
+// Every order and cutoff the options allow either gives a stable filter whose
+// zero-phase response is |H|^2 (unity at DC, 1/2 at the cutoff) or is refused.
+TEST(SignalButter, EveryAllowedOrderIsStableAndZeroPhaseGainIsRightOrRefused) {
+  const double fs = 500.0;
+  int accepted = 0, refused = 0;
+  for (int order = 1; order <= 8; ++order)
+    for (double fc : {1e-6, 1e-4, 1e-3, 3e-3, 0.01, 0.1, 0.5, 1.0, 2.0, 4.0, 30.0, 200.0, 249.9, 249.999, 249.9999999}) {
+      sig::Sos sos;
+      try {
+        sos = sig::butter_sos(order, fc, fs);
+      } catch (const std::invalid_argument& e) {
+        ++refused;
+        EXPECT_NE(std::string(e.what()).find(fmt::format("order {}, {} Hz", order, fc)), std::string::npos) << e.what();
+        EXPECT_TRUE(fc < 0.01 || fc > 249.99) << "refused in the documented range: " << e.what();
+        continue;
+      }
+      ++accepted;
+      for (Eigen::Index i = 0; i < sos.rows(); ++i) {  // stability triangle |a2| < 1, |a1| < 1 + a2
+        EXPECT_LT(std::abs(sos(i, 5)), 1.0) << order << " " << fc;
+        EXPECT_LT(std::abs(sos(i, 4)), 1.0 + sos(i, 5)) << order << " " << fc;
+      }
+      // DC gain 1 within the documented rounding bound; -3 dB at the cutoff.
+      EXPECT_NEAR(std::abs(sig::frequency_response(sos, 0.0, fs)), 1.0, sig::kMaxDcGainError) << order << " " << fc;
+      EXPECT_NEAR(std::abs(sig::frequency_response(sos, fc, fs)), 1.0 / std::sqrt(2.0), 1e-6) << order << " " << fc;
+    }
+  EXPECT_GE(accepted, 8 * 10);
+  EXPECT_GE(refused, 8);  // at least 1e-6 Hz at every order but the first... and near Nyquist
+}
+
+// The in-place filter of long logs runs the same code as sosfiltfilt, filtfilt
+// and central_difference, so the results are equal bit for bit.
 TEST(SignalInPlace, ZeroPhaseFilterAndDifferenceEqualTheCopyingVersions) {
   std::mt19937 rng(12);
   std::normal_distribution<double> N(0.0, 1.0);
   Eigen::VectorXd x(3001);
   for (Eigen::Index k = 0; k < x.size(); ++k) x(k) = std::sin(0.01 * static_cast<double>(k)) + 0.1 * N(rng);
-  const sig::TransferFunction butter = sig::butter_lowpass(4, 4.0, 500.0);
-  const sig::TransferFunction fir{sig::fir_lowpass_blackmanharris(31, 4.0, 500.0), {1.0}};
-  for (const auto& tf : {butter, fir}) {
-    sig::ZeroPhaseFilter zf(tf);
+  const sig::Sos butter = sig::butter_sos(4, 4.0, 500.0);
+  const std::vector<double> fir = sig::fir_lowpass_blackmanharris(31, 4.0, 500.0);
+  for (int kind = 0; kind < 2; ++kind) {
+    sig::ZeroPhaseFilter zf = kind == 0 ? sig::ZeroPhaseFilter(butter) : sig::ZeroPhaseFilter(fir);
     for (int call = 0; call < 2; ++call) {  // the reused work space must not leak into the next call
       Eigen::VectorXd y = x;
       zf.apply(y.data(), y.size());
-      EXPECT_EQ(y, sig::filtfilt(tf, x));
+      EXPECT_EQ(y, kind == 0 ? sig::sosfiltfilt(butter, x) : sig::filtfilt(fir, x));
     }
     Eigen::VectorXd short_x = x.head(zf.padlen());
     EXPECT_THROW(zf.apply(short_x.data(), short_x.size()), std::invalid_argument);

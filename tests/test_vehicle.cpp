@@ -1,6 +1,6 @@
 // Vehicle files and the rotor model (include/quadid/vehicle.hpp). Reference
 // values are closed-form: per-rotor thrusts worked out by hand from the
-// formulas of DESIGN.md "Real vehicles" for an X, a + and an asymmetric layout.
+// formulas of docs/vehicles.md for an X, a + and an asymmetric layout.
 #include "quadid/simulation.hpp"
 #include "quadid/vehicle.hpp"
 

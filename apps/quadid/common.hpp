@@ -28,7 +28,7 @@ struct ProcessingArgs {
   double lambda = 30.0;
   std::string derivative_filter = "consistent";
   double g = kDefaultGravity;
-  double period_tolerance = 1e-3;
+  double period_tolerance = signal::kDefaultPeriodTolerance;
   bool keep_edges = false;
   std::vector<std::string> map;
 

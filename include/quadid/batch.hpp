@@ -15,8 +15,8 @@
 
 namespace quadid {
 
-/// Reads a flight log file the way every command does (CSV today; the hook for
-/// the autopilot formats of DESIGN.md is in src/batch/batch.cpp).
+/// Reads a flight log file the way every command does: CSV, PX4 ULog or
+/// Crazyflie uSD, recognised by the first bytes (logs::load_any_log).
 FlightLog load_log_file(const std::string& path, const CsvReadOptions& csv);
 
 /// `quadid identify --json` for one file: read, identify, to_json(result) plus

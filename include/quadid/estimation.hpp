@@ -99,9 +99,15 @@ enum class GdDiscretization {
 struct GradientDescentOptions {
   double sigma = 30.0;  // adaptation gain of eq. (41), the paper's value
   GdDiscretization discretization = GdDiscretization::Exact;
-  /// Divergence: a non-finite estimate, or |Theta - Theta0| above this factor
-  /// times max(|Theta0|, 1e-12). The update then stops and the state is reported.
-  double divergence_factor = 1e6;
+  /// Divergence: a non-finite estimate, or an entry of Theta whose magnitude
+  /// exceeds this bound in SI units (kg for m, kg m^2 for the inertias). The
+  /// default, 1e6, is far beyond any multirotor (a 1 t vehicle has inertias of
+  /// order 1e3 kg m^2) yet reached within tens of samples by an unstable
+  /// iteration (forward Euler above its limit multiplies the error by
+  /// |1 - sigma T lambda| > 1 per sample) and far from overflow. Being absolute,
+  /// it does not depend on the initial guess: a guess of 0 converges like any
+  /// other. The update then stops and the state is reported.
+  double divergence_bound = 1e6;
   void validate() const;
 };
 
@@ -123,7 +129,7 @@ class GradientDescent {
   double max_step_gain() const { return max_gain_; }
 
  private:
-  Theta theta_, theta0_;
+  Theta theta_;
   double sigma_T_;
   GradientDescentOptions opt_;
   bool diverged_ = false;

@@ -47,8 +47,9 @@ struct ProcessingOptions {
   double g = kDefaultGravity;  // m/s^2
   /// Unwrap psi (remove 2 pi jumps) before filtering; harmless on an unwrapped log.
   bool unwrap_yaw = true;
-  /// Relative tolerance on the uniformity of the log's sample period.
-  double period_tolerance = 1e-3;
+  /// Relative tolerance of each time step against the median step
+  /// (signal::check_sample_period, the same check as the CSV reader's).
+  double period_tolerance = signal::kDefaultPeriodTolerance;
   /// Leave out of every regression window the samples whose filtered values
   /// still depend on how the filters started: the pre-filter's settling time at
   /// both ends of the log (0.57 s for the default) and, for the filtered model,
@@ -310,14 +311,9 @@ void Regression::for_each(F&& f) const {
   Vec4 y;
   if (model_ == RegressionModel::Standard) {
     // eq. (33) on [w p q r]; second-order one-sided at the log's two ends.
-    const double h = 0.5 / T;
+    const auto awpqr = [&X](Eigen::Index i) -> Vec4 { return X.row(i).template head<4>().transpose(); };
     for (Eigen::Index k = begin_; k < end_; ++k) {
-      if (k == 0)
-        a = (-3.0 * X.row(0).head<4>() + 4.0 * X.row(1).head<4>() - X.row(2).head<4>()).transpose() * h;
-      else if (k == n - 1)
-        a = (3.0 * X.row(n - 1).head<4>() - 4.0 * X.row(n - 2).head<4>() + X.row(n - 3).head<4>()).transpose() * h;
-      else
-        a = (X.row(k + 1).head<4>() - X.row(k - 1).head<4>()).transpose() * h;
+      a = signal::central_difference_at(awpqr, k, n, T);
       b = X.row(k).segment<7>(4).transpose();
       y = X.row(k).tail<4>().transpose();
       f(k, assemble_regressor(a, b), y);

@@ -4,6 +4,7 @@
 #pragma once
 
 #include "quadid/model.hpp"
+#include "quadid/signal.hpp"
 #include "quadid/trajectory.hpp"
 
 #include <filesystem>
@@ -54,8 +55,9 @@ struct CsvReadOptions {
   std::map<std::string, std::string> map;
   /// Columns that must be present (default: the standard ones).
   std::vector<std::string> required = standard_log_columns();
-  /// Relative tolerance on the uniformity of the sample period.
-  double period_tolerance = 1e-3;
+  /// Relative tolerance of each time step against the median step
+  /// (signal::check_sample_period; 1 % by default, see docs/file-formats.md).
+  double period_tolerance = signal::kDefaultPeriodTolerance;
   /// false: keep only the `required` columns (the others are skipped unparsed,
   /// which saves time and memory on wide logs; the field count is still checked).
   bool keep_extra_columns = true;

@@ -1,6 +1,6 @@
 // quadid::logs — autopilot logs read natively: PX4 ULog (.ulg) and the
 // Crazyflie uSD-card deck's event-based binary log; import of either into a
-// flight log (DESIGN.md, "Autopilot logs"): frame conversion, resampling onto
+// flight log (docs/import.md): frame conversion, resampling onto
 // one uniform grid with an anti-aliasing filter, gaps reported. See
 // docs/log-info.md, docs/import.md and docs/file-formats.md.
 //
@@ -224,7 +224,7 @@ struct RotorGeometry {
 /// InputError naming the parameter when CA_ROTOR_COUNT or a rotor's PX/PY is absent.
 RotorGeometry px4_rotor_geometry(const ULog& log);
 
-/// A flight log (DESIGN.md columns, z up / FLU) as a PX4 ULog in PX4's topics
+/// A flight log (docs/file-formats.md columns, z up / FLU) as a PX4 ULog in PX4's topics
 /// and frames: vehicle_local_position (NED: x, -y, -z), vehicle_attitude
 /// (quaternion FRD->NED: q0, q1, -q2, -q3 of the ZYX Euler angles),
 /// vehicle_angular_velocity (FRD: p, -q, -r) and, when `motor_columns` are
@@ -294,7 +294,7 @@ std::string format_usd_info(const UsdLog& log);
 nlohmann::json usd_info_json(const UsdLog& log);
 
 // ============================================================================
-// Import: autopilot log -> flight log (DESIGN.md columns t x y z phi theta psi p q r
+// Import: autopilot log -> flight log (docs/file-formats.md columns t x y z phi theta psi p q r
 // plus the per-rotor signals under the log's own names; no wrench columns).
 // ============================================================================
 

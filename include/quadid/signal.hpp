@@ -6,11 +6,15 @@
 
 #include <complex>
 #include <memory>
+#include <string>
+#include <type_traits>
 #include <vector>
 
 namespace quadid::signal {
 
 // H(z) = (b0 + b1 z^-1 + ...) / (a0 + a1 z^-1 + ...); returned normalized, a[0] == 1.
+// Used for FIR filters (a = [1]) and the first-order filters of eqs. (35)-(36);
+// recursive filters of higher order are kept in second-order sections (Sos).
 struct TransferFunction {
   std::vector<double> b, a;
 };
@@ -18,10 +22,43 @@ struct TransferFunction {
 // H(e^{j 2 pi f / fs}) evaluated from the coefficients.
 std::complex<double> frequency_response(const TransferFunction& tf, double f_hz, double fs_hz);
 
-// As scipy.signal.butter(order, cutoff_hz, fs=fs_hz): prewarped bilinear transform
-// of the analog prototype (zeros/poles/gain), expanded to polynomials.
-// 1 <= order <= 20, 0 < cutoff_hz < fs_hz/2, else std::invalid_argument naming it.
-TransferFunction butter_lowpass(int order, double cutoff_hz, double fs_hz);
+// Zeros, poles and gain of a digital filter: H(z) = k prod(z - z_i) / prod(z - p_i).
+struct Zpk {
+  std::vector<std::complex<double>> z, p;
+  double k = 1.0;
+};
+
+// Second-order sections, one per row [b0 b1 b2 1 a1 a2] (scipy's sos layout):
+// H(z) = prod_i (b0 + b1 z^-1 + b2 z^-2) / (1 + a1 z^-1 + a2 z^-2).
+using Sos = Eigen::Matrix<double, Eigen::Dynamic, 6, Eigen::RowMajor>;
+
+// As scipy.signal.butter(order, cutoff_hz, fs=fs_hz, output='zpk'): prewarped
+// bilinear transform of the analog prototype. 1 <= order <= 20,
+// 0 < cutoff_hz < fs_hz/2, else std::invalid_argument naming the argument.
+Zpk butter_zpk(int order, double cutoff_hz, double fs_hz);
+
+// As scipy.signal.zpk2sos(z, p, k) (digital, pairing='nearest'): poles closest
+// to the unit circle go last, each paired with its nearest zeros; the gain is
+// in the first section. Poles and zeros must come in conjugate pairs.
+Sos zpk2sos(const Zpk& zpk);
+
+// As scipy.signal.butter(order, cutoff_hz, fs=fs_hz, output='sos'), then
+// check_realizable: a design whose rounded coefficients are not a stable,
+// accurate filter (cutoff too close to 0 Hz or to Nyquist) is refused.
+Sos butter_sos(int order, double cutoff_hz, double fs_hz);
+
+// Throws std::invalid_argument saying why, when the sections (as rounded to
+// double) have a pole on or outside the unit circle, or when rounding the
+// coefficients can move the DC gain by more than kMaxDcGainError (the
+// condition sum_i eps (1 + |a1| + |a2|) / |1 + a1 + a2|: a pole pair at
+// distance d from z = 1 costs ~4 eps / d^2; at 500 Hz the limit is near
+// 5 mHz for order 8), or the denominator at Nyquist likewise (poles near
+// z = -1, where they nearly cancel the zeros: a cutoff within ~5 mHz of Nyquist).
+inline constexpr double kMaxDcGainError = 1e-6;
+void check_realizable(const Sos& sos);
+
+// Product of the sections' responses at f_hz.
+std::complex<double> frequency_response(const Sos& sos, double f_hz, double fs_hz);
 
 // As scipy.signal.firwin(taps, cutoff_hz, window='blackmanharris', fs=fs_hz):
 // windowed sinc, symmetric 4-term window, unity DC gain. taps >= 3.
@@ -35,38 +72,64 @@ Eigen::VectorXd lfilter(const TransferFunction& tf, const Eigen::VectorXd& x,
 // Steady-state initial state for a unit step input, as scipy.signal.lfilter_zi.
 Eigen::VectorXd lfilter_zi(const TransferFunction& tf);
 
-// Zero-phase filtering as MATLAB's filtfilt: odd reflection of padlen =
-// 3*(max(len(a), len(b)) - 1) samples at both ends, state lfilter_zi * (first
-// sample) on each pass; = scipy filtfilt(b, a, x, padtype='odd', padlen=that).
-// Needs x.size() > padlen. Matrix versions filter each column.
-Eigen::VectorXd filtfilt(const TransferFunction& tf, const Eigen::VectorXd& x);
+// The cascade of sections, each in direct form II transposed, as
+// scipy.signal.sosfilt(sos, x, zi); zi (optional) is sections x 2.
+Eigen::VectorXd sosfilt(const Sos& sos, const Eigen::VectorXd& x, const Eigen::MatrixXd* zi = nullptr);
+// Steady state of every section for a unit step input, as scipy.signal.sosfilt_zi.
+Eigen::MatrixXd sosfilt_zi(const Sos& sos);
+
+// Zero-phase forward-backward filtering. Both pad the signal at each end by odd
+// reflection (2 x[0] - x[padlen..1], 2 x[n-1] - x[n-2..n-1-padlen]) and start
+// each pass in the steady state for its first sample (zi * first value).
+// sosfiltfilt = scipy.signal.sosfiltfilt(sos, x) (padlen = 3 (2 sections + 1 -
+// the sections with b2 = a2 = 0), 15 for order 4); filtfilt of an FIR = MATLAB's
+// filtfilt (padlen = 3 (taps - 1)). Needs x.size() > padlen. Matrix versions
+// filter each column.
+Eigen::VectorXd sosfiltfilt(const Sos& sos, const Eigen::VectorXd& x);
+Eigen::MatrixXd sosfiltfilt(const Sos& sos, const Eigen::MatrixXd& columns);
 Eigen::VectorXd filtfilt(const std::vector<double>& fir_taps, const Eigen::VectorXd& x);
-Eigen::MatrixXd filtfilt(const TransferFunction& tf, const Eigen::MatrixXd& columns);
 Eigen::MatrixXd filtfilt(const std::vector<double>& fir_taps, const Eigen::MatrixXd& columns);
 // Other Eigen expressions (e.g. m.col(2)): column vectors -> vector version.
 template <class Derived>
-auto filtfilt(const TransferFunction& tf, const Eigen::MatrixBase<Derived>& x) {
+auto sosfiltfilt(const Sos& sos, const Eigen::MatrixBase<Derived>& x) {
   if constexpr (Derived::ColsAtCompileTime == 1)
-    return filtfilt(tf, Eigen::VectorXd(x));
+    return sosfiltfilt(sos, Eigen::VectorXd(x));
   else
-    return filtfilt(tf, Eigen::MatrixXd(x));
+    return sosfiltfilt(sos, Eigen::MatrixXd(x));
 }
 template <class Derived>
 auto filtfilt(const std::vector<double>& fir_taps, const Eigen::MatrixBase<Derived>& x) {
-  return filtfilt(TransferFunction{fir_taps, {1.0}}, x);
+  if constexpr (Derived::ColsAtCompileTime == 1)
+    return filtfilt(fir_taps, Eigen::VectorXd(x));
+  else
+    return filtfilt(fir_taps, Eigen::MatrixXd(x));
 }
 
-// filtfilt in place on x[0..n), with work space kept across calls: for long
-// logs, where a fresh copy of every column costs more than the filtering. The
-// result equals filtfilt(tf, x) bit for bit. Needs n > padlen().
+struct LowpassOptions;
+
+// A zero-phase filter (second-order sections or FIR), applied in place on
+// x[0..n) with work space kept across calls: for long logs, where a fresh
+// copy of every column costs more than the filtering. The one implementation
+// behind sosfiltfilt, filtfilt and zero_phase_lowpass (equal bit for bit).
 class ZeroPhaseFilter {
  public:
-  explicit ZeroPhaseFilter(const TransferFunction& tf);
+  explicit ZeroPhaseFilter(const Sos& sos);
+  explicit ZeroPhaseFilter(const std::vector<double>& fir_taps);
+  // The pre-filter of `options` at fs_hz; std::invalid_argument naming the
+  // filter ("Butterworth order 8, 0.001 Hz at 500 Hz: ...") when it is invalid
+  // or cannot be realised.
+  ZeroPhaseFilter(const LowpassOptions& options, double fs_hz);
   ~ZeroPhaseFilter();
+  ZeroPhaseFilter(ZeroPhaseFilter&&) noexcept;
+  ZeroPhaseFilter& operator=(ZeroPhaseFilter&&) noexcept;
   ZeroPhaseFilter(const ZeroPhaseFilter&) = delete;
   ZeroPhaseFilter& operator=(const ZeroPhaseFilter&) = delete;
   int padlen() const;
+  // Needs n > padlen(); throws std::invalid_argument otherwise.
   void apply(double* x, Eigen::Index n);
+  // One (forward) pass: its response at f_hz and its impulse response from rest.
+  std::complex<double> frequency_response(double f_hz, double fs_hz) const;
+  Eigen::VectorXd impulse_response(Eigen::Index samples) const;
 
  private:
   struct Impl;
@@ -83,12 +146,48 @@ struct LowpassOptions {
   // Throws std::invalid_argument naming the field,
   // e.g. "cutoff_hz=300 must be below Nyquist 250 Hz".
   void validate(double fs_hz) const;
+  // "Butterworth order 4, 4 Hz" or "FIR 31 taps Blackman-Harris, 4 Hz".
+  std::string name() const;
 };
 Eigen::MatrixXd zero_phase_lowpass(const Eigen::MatrixXd& columns, double fs_hz,
                                    const LowpassOptions& options = {});
 
-// Eq. (33), (x[k+1] - x[k-1]) / (2T), in the interior; second-order one-sided
-// differences at the two ends (exact for quadratics). Needs >= 3 samples, T > 0.
+// Uniform sampling, the one check behind the CSV reader and the
+// identification. The reference is the median step of t (robust: a gap or an
+// outlier does not move it, so the first bad step is the one reported); a step
+// passes when it is positive and within tolerance * median of it. Default 1 %:
+// it accepts logger clock jitter of a fraction of a percent (and timestamps
+// printed with few digits, e.g. 0.003333/0.003334 s at 300 Hz: 0.03 %), and
+// refuses a dropped sample (a step of 2T, +100 %) or a rate change.
+inline constexpr double kDefaultPeriodTolerance = 0.01;
+struct SamplePeriodCheck {
+  double median = 0.0;      // s, median of t[k] - t[k-1]
+  double mean = 0.0;        // s, (t[n-1] - t[0]) / (n - 1): the period the filters use
+  Eigen::Index bad = -1;    // first k whose step t[k] - t[k-1] fails, or -1
+  double step = 0.0;        // that step, s
+  bool ok() const { return bad < 0; }
+};
+// Needs t.size() >= 2 and tolerance in [0, 0.5); std::invalid_argument otherwise.
+SamplePeriodCheck check_sample_period(const Eigen::Ref<const Eigen::VectorXd>& t,
+                                      double tolerance = kDefaultPeriodTolerance);
+
+// Eq. (33) at sample k of n samples: (x[k+1] - x[k-1]) / (2T) in the interior;
+// at the two ends the second-order one-sided (-3 x[0] + 4 x[1] - x[2]) / (2T)
+// and (3 x[n-1] - 4 x[n-2] + x[n-3]) / (2T) (exact for quadratics, like the
+// interior). `x(i)` returns sample i (a number or a fixed-size Eigen vector);
+// the result has its type. The one formula behind central_difference and the
+// regressions' derivatives (Regression::for_each). Needs n >= 3.
+template <class Sample>
+auto central_difference_at(const Sample& x, Eigen::Index k, Eigen::Index n, double T) {
+  using V = std::decay_t<decltype(x(k))>;
+  const double h = 0.5 / T;
+  if (k == 0) return V((-3.0 * x(0) + 4.0 * x(1) - x(2)) * h);
+  if (k == n - 1) return V((3.0 * x(n - 1) - 4.0 * x(n - 2) + x(n - 3)) * h);
+  return V((x(k + 1) - x(k - 1)) * h);
+}
+
+// Eq. (33) on a whole signal (central_difference_at at every sample).
+// Needs >= 3 samples, T > 0.
 Eigen::VectorXd central_difference(const Eigen::VectorXd& x, double T);
 Eigen::MatrixXd central_difference(const Eigen::MatrixXd& columns, double T);
 // The same, in place on x[0..n) (equal to central_difference bit for bit).

@@ -6,6 +6,7 @@
 #include "quadid/jet.hpp"
 #include "quadid/model.hpp"
 
+#include <array>
 #include <memory>
 #include <string>
 #include <string_view>
@@ -86,6 +87,23 @@ class CircleTrajectory final : public Trajectory {
 std::unique_ptr<Trajectory> builtin_trajectory(std::string_view name);
 std::vector<std::string> builtin_trajectory_names();
 
+/// Roll and pitch that align the body z axis (the thrust) with the force
+/// direction (fx, fy, fz), for yaw psi given by its cosine and sine:
+///   theta = atan((fx cos psi + fy sin psi) / fz),            eqs. (26), (29)
+///   phi   = atan(cos(theta) (fx sin psi - fy cos psi) / fz),  eqs. (27), (30)
+/// with f = p_ddot + g e_z for the reference (eqs. 26-27) and f = f_p for the
+/// controller's commands (eqs. 29-30). Returns {phi, theta}. Needs fz > 0. Any
+/// scalar with sin, cos, atan (double, Jet2, design's dual numbers): the one
+/// implementation of these formulas.
+template <class S>
+std::array<S, 2> tilt_from_force(const S& fx, const S& fy, const S& fz, const S& cpsi, const S& spsi) {
+  using std::atan;
+  using std::cos;
+  const S theta = atan((cpsi * fx + spsi * fy) / fz);
+  const S phi = atan((cos(theta) * (spsi * fx - cpsi * fy)) / fz);
+  return {phi, theta};
+}
+
 /// The full reference implied by the flat outputs (eqs. 26-27, section II-B2).
 template <class S>
 struct ReferenceT {
@@ -111,8 +129,7 @@ ReferenceT<S> reference_from_flat(const Eigen::Matrix<S, 4, 5>& d, double g = kD
   const J az(d(2, 2) + S(g), d(2, 3), d(2, 4));
   const J psi(d(3, 0), d(3, 1), d(3, 2));
   const J cpsi = cos(psi), spsi = sin(psi);
-  const J theta = atan((cpsi * ax + spsi * ay) / az);                // eq. (26)
-  const J phi = atan((cos(theta) * (spsi * ax - cpsi * ay)) / az);   // eq. (27)
+  const auto [phi, theta] = tilt_from_force(ax, ay, az, cpsi, spsi);  // eqs. (26)-(27)
 
   const J eta_j[3] = {phi, theta, psi};
   for (int i = 0; i < 3; ++i) {

@@ -1,9 +1,9 @@
-// Real vehicles: the vehicle file (TOML, DESIGN.md "Real vehicles") and the
+// Real vehicles: the vehicle file (TOML, docs/vehicles.md) and the
 // rotor model that turns per-rotor log columns into the total thrust and body
 // torques of eqs. (1)-(2). See docs/vehicles.md.
 //
 // Frames and units: body FLU (x forward, y left, z up along the thrust), SI.
-// Rotor model (DESIGN.md):
+// Rotor model (docs/vehicles.md):
 //   Fz        = sum T_i
 //   tau_phi   = sum y_i T_i
 //   tau_theta = -sum x_i T_i

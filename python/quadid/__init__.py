@@ -17,9 +17,9 @@ one implementation in the C++ library reads both. A bad option raises
 ValueError naming it; bad data raises quadid.InputError (a ValueError) with
 the library's message (file, line, column).
 
-Vehicle files (DESIGN.md, `--vehicle FILE|NAME`): pass vehicle="crazyflie21" or
-vehicle="my.toml" (and known_mass=...) to identify/simulate/validate once the
-library reads them; until then the library rejects the option by name.
+Vehicle files (docs/vehicles.md, `--vehicle FILE|NAME`): pass vehicle="crazyflie21" or
+vehicle="my.toml" to identify (with known_mass=..., terms=..., cutoffs=... as the
+command line's --known-mass, --terms, --cutoffs; docs/real-flights.md).
 """
 
 from __future__ import annotations

@@ -90,8 +90,7 @@ Eigen::Vector2d attitude_command(const Vec3& f, double psi_d) {
   const double fz = std::max(f(2), 1e-9);
   const double c = std::cos(psi_d), s = std::sin(psi_d);
   // docs/method.md, "Corrections to the printed paper": eqs. (29)-(30) without the extra factor m; f_p is a force already.
-  const double theta_c = std::atan((f(0) * c + f(1) * s) / fz);
-  const double phi_c = std::atan(std::cos(theta_c) * (f(0) * s - f(1) * c) / fz);
+  const auto [phi_c, theta_c] = tilt_from_force(f(0), f(1), fz, c, s);  // eqs. (29)-(30)
   return {phi_c, theta_c};
 }
 

@@ -78,19 +78,14 @@ template <int N> Dual<N> sin(const Dual<N>& a) { return Dual<N>::chain(a, std::s
 template <int N> Dual<N> cos(const Dual<N>& a) { return Dual<N>::chain(a, std::cos(a.v), -std::sin(a.v)); }
 template <int N> Dual<N> atan(const Dual<N>& a) { return Dual<N>::chain(a, std::atan(a.v), 1.0 / (1.0 + a.v * a.v)); }
 
-/// Roll and pitch of eqs. (26)-(27) from the accelerations and yaw; the same
-/// formulas as reference_from_flat, written once more so that the tilt limits
+/// Roll and pitch of eqs. (26)-(27) from the accelerations and yaw
+/// (tilt_from_force of trajectory.hpp), on their own so that the tilt limits
 /// can be differentiated with respect to only four inputs.
 template <class S>
 std::array<S, 2> tilt_angles(const S& ax, const S& ay, const S& az, const S& psi, double g) {
-  using std::atan;
   using std::cos;
   using std::sin;
-  const S cpsi = cos(psi), spsi = sin(psi);
-  const S den = az + g;
-  const S theta = atan((cpsi * ax + spsi * ay) / den);             // eq. (26)
-  const S phi = atan((cos(theta) * (spsi * ax - cpsi * ay)) / den);  // eq. (27)
-  return {phi, theta};
+  return tilt_from_force(ax, ay, S(az + g), S(cos(psi)), S(sin(psi)));
 }
 
 /// One inequality over time. Linear families read derivative `order` of flat

@@ -49,13 +49,13 @@ void GradientDescentOptions::validate() const {
     throw std::invalid_argument(fmt::format("--sigma = {:g} (GD gain) must be finite and positive", sigma));
   if (discretization != GdDiscretization::Exact && discretization != GdDiscretization::ForwardEuler)
     throw std::invalid_argument("GradientDescentOptions: unknown discretization");
-  if (!(divergence_factor > 1.0))
-    throw std::invalid_argument(
-        fmt::format("GradientDescentOptions: divergence_factor={} must be > 1", divergence_factor));
+  if (!(divergence_bound > 0.0) || !std::isfinite(divergence_bound))
+    throw std::invalid_argument(fmt::format(
+        "GradientDescentOptions: divergence_bound={} must be a positive finite number (kg, kg m^2)", divergence_bound));
 }
 
 GradientDescent::GradientDescent(const Theta& initial, double T, const GradientDescentOptions& opt)
-    : theta_(initial), theta0_(initial), opt_(opt) {
+    : theta_(initial), opt_(opt) {
   opt.validate();
   if (!(T > 0.0) || !std::isfinite(T))
     throw std::invalid_argument(fmt::format("GradientDescent: sample period T={} must be positive", T));
@@ -120,18 +120,20 @@ void GradientDescent::step(const Regressor4x7& G, const Vec4& Y) {
   }
   max_gain_ = std::max(max_gain_, h * lmax);
   const Theta next = theta_ - G.transpose() * pe;
-  const double limit = opt_.divergence_factor * std::max(theta0_.norm(), 1e-12);
-  if (!next.allFinite() || (next - theta0_).norm() > limit) {
+  // Divergence: non-finite, or an entry beyond the absolute bound (see the option).
+  const bool finite = next.allFinite();
+  if (!finite || next.cwiseAbs().maxCoeff() > opt_.divergence_bound) {
     diverged_ = true;
     diverged_at_ = steps_;
+    const std::string what =
+        finite ? fmt::format("grew beyond {:g} (kg, kg m^2)", opt_.divergence_bound) : std::string("became non-finite");
     if (opt_.discretization == GdDiscretization::ForwardEuler)
       reason_ = fmt::format(
-          "the estimate {} after {} samples (|Theta - Theta0| > {:g} |Theta0|): sigma T lambda_max(Gamma^T Gamma) "
-          "reached {:.3g}, above the forward-Euler stability limit 2",
-          next.allFinite() ? "grew without bound" : "became non-finite", steps_, opt_.divergence_factor, max_gain_);
+          "the estimate {} after {} samples: sigma T lambda_max(Gamma^T Gamma) reached {:.3g}, above the "
+          "forward-Euler stability limit 2",
+          what, steps_, max_gain_);
     else
-      reason_ = fmt::format("the estimate {} after {} samples (non-finite or huge regression data?)",
-                            next.allFinite() ? "grew without bound" : "became non-finite", steps_);
+      reason_ = fmt::format("the estimate {} after {} samples (non-finite or huge regression data?)", what, steps_);
     return;
   }
   theta_ = next;

@@ -3,10 +3,8 @@
 //
 // Memory: everything is computed inside the 15-column RegressionSignals, with
 // one reusable work buffer (signal::ZeroPhaseFilter): for 1.2 million samples
-// that is 144 MB + 10 MB beside the log, each page touched once.
+// that is 144 MB + 10 MB beside the log.
 #include "quadid/identification.hpp"
-
-#include "../common/memory.hpp"
 
 #include <fmt/format.h>
 
@@ -16,12 +14,6 @@
 
 namespace quadid {
 namespace {
-
-std::string filter_name(const signal::LowpassOptions& lp) {
-  if (lp.kind == signal::LowpassOptions::Kind::Butterworth)
-    return fmt::format("Butterworth order {}, {:g} Hz", lp.order, lp.cutoff_hz);
-  return fmt::format("FIR {} taps Blackman-Harris, {:g} Hz", lp.taps, lp.cutoff_hz);
-}
 
 // Removes 2 pi jumps (as numpy.unwrap), for a yaw logged in (-pi, pi].
 void unwrap(double* a, Eigen::Index n) {
@@ -40,23 +32,21 @@ void unwrap(double* a, Eigen::Index n) {
 
 // Frequency where the zero-phase (squared-magnitude) response falls to -3 dB,
 // |H|^2 = 1/sqrt(2), by bisection: both filters are monotone in their pass band.
-double zero_phase_f3db(const signal::TransferFunction& tf, double fs) {
+double zero_phase_f3db(const signal::ZeroPhaseFilter& zf, double fs) {
   double lo = 0.0, hi = 0.5 * fs;
   const double target = std::pow(0.5, 0.25);
   for (int i = 0; i < 60; ++i) {
     const double mid = 0.5 * (lo + hi);
-    (std::abs(signal::frequency_response(tf, mid, fs)) > target ? lo : hi) = mid;
+    (std::abs(zf.frequency_response(mid, fs)) > target ? lo : hi) = mid;
   }
   return 0.5 * (lo + hi);
 }
 
 // How long the filter's impulse response stays above 1% of its peak: the
 // time over which an edge of the log (where filtfilt pads) disturbs its output.
-double settling_time(const signal::TransferFunction& tf, double T) {
+double settling_time(const signal::ZeroPhaseFilter& zf, double T) {
   for (Eigen::Index len = 4096;; len *= 4) {  // long enough when the tail is quiet
-    Eigen::VectorXd imp = Eigen::VectorXd::Zero(len);
-    imp(0) = 1.0;
-    const Eigen::VectorXd h = signal::lfilter(tf, imp);
+    const Eigen::VectorXd h = zf.impulse_response(len);
     const double peak = h.cwiseAbs().maxCoeff();
     Eigen::Index last = 0;
     for (Eigen::Index i = 0; i < len; ++i)
@@ -92,42 +82,44 @@ std::shared_ptr<const RegressionSignals> process_log(const FlightLog& log, const
   for (size_t i = 0; i < names.size(); ++i)
     if (!log.data.col(col[i]).allFinite())
       throw InputError(fmt::format("flight log: column '{}' contains NaN or infinite values", names[i]));
-  const double T = (t(n - 1) - t(0)) / static_cast<double>(n - 1);
-  if (!(T > 0.0)) throw InputError("flight log: column 't' does not increase");
-  for (Eigen::Index k = 1; k < n; ++k) {
-    const double dt = t(k) - t(k - 1);
-    if (!(dt > 0.0) || std::abs(dt - T) > opt.period_tolerance * T + 1e-12)
-      throw InputError(fmt::format(
-          "flight log: sample {} (t = {}): period {} s differs from the mean {} s; the log must be uniformly sampled",
-          k + 1, t(k), dt, T));
+  const signal::SamplePeriodCheck chk = signal::check_sample_period(t, opt.period_tolerance);
+  if (!chk.ok()) {
+    const Eigen::Index k = chk.bad;
+    if (!(chk.step > 0.0))
+      throw InputError(fmt::format("flight log: sample {} (t = {}): time does not increase (previous t = {})", k + 1,
+                                   t(k), t(k - 1)));
+    throw InputError(fmt::format(
+        "flight log: sample {} (t = {:.9g}): period {:.6g} s where the log's period is {:.6g} s (its median step): {:+.3g}%, "
+        "more than the {:g}% tolerated; the log must be uniformly sampled",
+        k + 1, t(k), chk.step, chk.median, 100.0 * (chk.step / chk.median - 1.0), 100.0 * opt.period_tolerance));
   }
+  const double T = chk.mean;  // the filters' period: the mean step over the log
   const double fs = 1.0 / T;
-  try {
-    opt.lowpass.validate(fs);
-  } catch (const std::invalid_argument& e) {
-    throw std::invalid_argument(fmt::format("pre-filter for a log sampled at {:g} Hz: {}", fs, e.what()));
-  }
-  const signal::TransferFunction tf =
-      opt.lowpass.kind == signal::LowpassOptions::Kind::Butterworth
-          ? signal::butter_lowpass(opt.lowpass.order, opt.lowpass.cutoff_hz, fs)
-          : signal::TransferFunction{signal::fir_lowpass_blackmanharris(opt.lowpass.taps, opt.lowpass.cutoff_hz, fs),
-                                     {1.0}};
-  const int padlen = 3 * (static_cast<int>(std::max(tf.a.size(), tf.b.size())) - 1);
+  // The pre-filter (second-order sections or FIR); refused, naming it, when it
+  // is invalid at this rate or cannot be realised stably.
+  signal::ZeroPhaseFilter zf = [&] {
+    try {
+      return signal::ZeroPhaseFilter(opt.lowpass, fs);
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument(fmt::format("pre-filter {}", e.what()));
+    }
+  }();
+  const int padlen = zf.padlen();
   if (n <= padlen)
     throw InputError(fmt::format(
         "flight log: {} samples ({:g} s at {:g} Hz) is shorter than the {} pre-filter needs (more than {} samples "
-        "of filtfilt edge padding)",
-        n, static_cast<double>(n - 1) * T, fs, filter_name(opt.lowpass), padlen));
-  const double settling = settling_time(tf, T);
+        "of edge padding)",
+        n, static_cast<double>(n - 1) * T, fs, opt.lowpass.name(), padlen));
+  const double settling = settling_time(zf, T);
   if (summary) {
     summary->filter_settling = settling;
     summary->samples = n;
     summary->T = T;
     summary->fs = fs;
     summary->duration = static_cast<double>(n - 1) * T;
-    summary->filter = filter_name(opt.lowpass);
+    summary->filter = opt.lowpass.name();
     summary->padlen = padlen;
-    summary->filter_f3db = zero_phase_f3db(tf, fs);
+    summary->filter_f3db = zero_phase_f3db(zf, fs);
   }
 
   // Everything happens inside the 15 columns of the result (see the header for
@@ -140,9 +132,7 @@ std::shared_ptr<const RegressionSignals> process_log(const FlightLog& log, const
   out->edge = opt.exclude_edges ? settling : 0.0;
   auto& X = out->x;
   X.resize(n, RegressionSignals::kCols);
-  detail::prepare_buffer(X.data(), static_cast<std::size_t>(X.size()) * sizeof(double));
-  signal::ZeroPhaseFilter zf(tf);
-  // Step 1: zero-phase low-pass (filtfilt with MATLAB's odd padding).
+  // Step 1: zero-phase low-pass (as scipy sosfiltfilt: odd padding, steady-state starts).
   auto filter_into = [&](int log_col, int x_col) {
     X.col(x_col) = log.data.col(log_col);
     zf.apply(X.col(x_col).data(), n);

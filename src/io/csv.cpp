@@ -4,12 +4,9 @@
 // Memory: a 20-minute log at 1 kHz is 1.2 million rows, and a simulator log may
 // carry 18-30 columns (~0.5-0.8 GB of text). The reader therefore never holds
 // the whole text: it reads fixed-size chunks and parses each complete line
-// straight into the final column-major matrix (capacity estimated from the file
-// size, shrunk in place at the end), so the peak is the matrix of the kept
-// columns plus a 256 KiB buffer. Skipped columns are not parsed, only counted.
+// straight into a column-major matrix that grows geometrically (x1.5) and is
+// shrunk in place at the end. Skipped columns are not parsed, only counted.
 #include "quadid/io.hpp"
-
-#include "../common/memory.hpp"
 
 #include <fmt/format.h>
 
@@ -22,9 +19,6 @@
 #include <cstring>
 #include <unistd.h>
 #include <unordered_map>
-#if defined(__linux__)
-#include <sys/mman.h>
-#endif
 
 namespace quadid {
 
@@ -101,7 +95,6 @@ class LineReader {
         line = std::string_view(b, static_cast<size_t>(e - b));
         if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
         const size_t next = nl ? static_cast<size_t>(nl - buf_.get()) + 1 : len_;
-        consumed_ += next - pos_;
         pos_ = next;
         if (++line_no_ == 1 && line.substr(0, 3) == "\xEF\xBB\xBF") line.remove_prefix(3);  // UTF-8 BOM
         return true;
@@ -111,8 +104,6 @@ class LineReader {
     }
   }
   size_t line_no() const { return line_no_; }
-  /// Bytes of the file consumed by the lines returned so far.
-  std::uint64_t consumed() const { return consumed_; }
 
  private:
   static constexpr size_t kChunk = size_t{1} << 18;
@@ -141,14 +132,13 @@ class LineReader {
   std::unique_ptr<std::FILE, FileCloser> f_;
   std::unique_ptr<char[]> buf_;  // uninitialized: zeroing it would only cost time
   size_t cap_ = 0, pos_ = 0, len_ = 0, line_no_ = 0;
-  std::uint64_t consumed_ = 0;
   bool eof_ = false;
 };
 
 
 // The kept columns, written straight into a column-major matrix whose row
-// capacity is estimated from the file size; at the end the columns are packed
-// and the buffer shrunk in place (no second copy of the data).
+// capacity grows by half when full; at the end the columns are packed and the
+// buffer shrunk in place (no second copy of the data).
 class ColumnStore {
  public:
   explicit ColumnStore(Eigen::Index ncol) : ncol_(ncol) {}
@@ -157,7 +147,6 @@ class ColumnStore {
   void reserve(Eigen::Index cap) {
     if (cap <= cap_) return;
     Eigen::MatrixXd bigger(cap, ncol_);
-    detail::prepare_buffer(bigger.data(), static_cast<std::size_t>(cap * ncol_) * sizeof(double));
     for (Eigen::Index j = 0; j < ncol_; ++j)
       std::copy(m_.data() + j * cap_, m_.data() + j * cap_ + rows_, bigger.data() + j * cap);
     m_.swap(bigger);
@@ -212,8 +201,9 @@ class RowLines {
 
 FlightLog read_flight_log(const std::filesystem::path& path, const CsvReadOptions& opt) {
   const std::string file = path.string();
-  if (!(opt.period_tolerance >= 0.0))
-    throw std::invalid_argument(fmt::format("CsvReadOptions: period_tolerance={} must be >= 0", opt.period_tolerance));
+  if (!(opt.period_tolerance >= 0.0 && opt.period_tolerance < 0.5))
+    throw std::invalid_argument(
+        fmt::format("CsvReadOptions: period_tolerance={} must be in [0, 0.5)", opt.period_tolerance));
   LineReader in(path);
   FlightLog log;
 
@@ -294,28 +284,11 @@ FlightLog read_flight_log(const std::filesystem::path& path, const CsvReadOption
   }
   const size_t nkeep = log.columns.size();
 
-  // Capacity: after the first rows, the remaining bytes over the mean row length
-  // so far (with 30% slack: early rows are often shorter, e.g. zeros at rest).
-  std::error_code size_ec;
-  const std::uint64_t file_bytes = std::filesystem::file_size(path, size_ec);
-  const std::uint64_t data_start = in.consumed();
   ColumnStore store(static_cast<Eigen::Index>(nkeep));
-  // The first rows go to a small store (at most 2048 rows, 4 MB, or what the
-  // file can hold at 2 bytes per field), then the estimate sets the capacity.
-  const std::uint64_t min_row_bytes = 2 * nfile;
-  const std::uint64_t can_hold = size_ec ? 2048 : (file_bytes - std::min(file_bytes, data_start)) / min_row_bytes + 1;
-  const Eigen::Index kProbeRows = static_cast<Eigen::Index>(std::clamp<std::uint64_t>(
-      std::min<std::uint64_t>(can_hold, (std::uint64_t{1} << 22) / (8 * std::max<size_t>(nkeep, 1))), 16, 2048));
-  store.reserve(kProbeRows);
   RowLines row_lines;
   while (in.next(line)) {
     if (trim(line).empty() || line.front() == '#') continue;
     const size_t line_no = in.line_no();
-    if (store.rows() == kProbeRows && !size_ec && file_bytes > in.consumed()) {
-      const double per_row = static_cast<double>(in.consumed() - data_start) / static_cast<double>(kProbeRows + 1);
-      const double left = static_cast<double>(file_bytes - in.consumed());
-      store.reserve(kProbeRows + 64 + static_cast<Eigen::Index>(1.3 * left / per_row));
-    }
     row_lines.add(static_cast<size_t>(store.rows()), line_no);
     double* row = store.new_row();
     const Eigen::Index stride = store.capacity();
@@ -365,18 +338,20 @@ FlightLog read_flight_log(const std::filesystem::path& path, const CsvReadOption
   const int ti = log.find("t");
   if (ti >= 0) {
     const auto t = log.data.col(ti);
-    const double T = (t(t.size() - 1) - t(0)) / static_cast<double>(t.size() - 1);
-    for (Eigen::Index k = 1; k < t.size(); ++k) {
-      const double dt = t(k) - t(k - 1);
-      if (!(dt > 0.0))
+    const signal::SamplePeriodCheck chk = signal::check_sample_period(t, opt.period_tolerance);
+    if (!chk.ok()) {
+      const Eigen::Index k = chk.bad;
+      const size_t line = row_lines.line_of(static_cast<size_t>(k));
+      if (!(chk.step > 0.0))
         throw InputError(fmt::format("{}:{}: column 't': time {} is not after the previous sample's {}; time must be "
                                      "strictly increasing",
-                                     file, row_lines.line_of(static_cast<size_t>(k)), t(k), t(k - 1)));
-      if (std::abs(dt - T) > opt.period_tolerance * T + 1e-9)
-        throw InputError(fmt::format(
-            "{}:{}: column 't': sample period {} s (from {} to {}) differs from the mean period {} s by more than "
-            "{}%; the log must be uniformly sampled (resample it first)",
-            file, row_lines.line_of(static_cast<size_t>(k)), dt, t(k - 1), t(k), T, 100.0 * opt.period_tolerance));
+                                     file, line, t(k), t(k - 1)));
+      throw InputError(fmt::format(
+          "{}:{}: column 't': sample period {:.6g} s (from t = {:.9g} to {:.9g}) where the log's period is {:.6g} s (its median "
+          "step): {:+.3g}%, more than the {:g}% tolerated; the log must be uniformly sampled (a gap or a rate "
+          "change? resample it first)",
+          file, line, chk.step, t(k - 1), t(k), chk.median, 100.0 * (chk.step / chk.median - 1.0),
+          100.0 * opt.period_tolerance));
     }
   }
   return log;

@@ -1,4 +1,4 @@
-// Import of an autopilot log into a flight log (DESIGN.md, "Autopilot logs"):
+// Import of an autopilot log into a flight log (docs/import.md):
 // topics -> time series (log clock, s) -> frame conversion -> one uniform
 // grid. A series faster than the grid is low-passed first (zero-phase
 // Butterworth, anti-aliasing) on a uniform grid at its own rate, then
@@ -107,8 +107,12 @@ Eigen::MatrixXd resample(const Series& s, const Eigen::VectorXd& grid, const Imp
   const auto n = static_cast<Eigen::Index>(std::floor((b - a) * fs)) + 1;
   Eigen::VectorXd u = Eigen::VectorXd::LinSpaced(n, a, a + static_cast<double>(n - 1) / fs);
   Eigen::MatrixXd X = interp(s.t, s.x, u);
-  const auto tf = signal::butter_lowpass(opt.aa_order, fc, fs);
-  if (X.rows() > 3 * static_cast<Eigen::Index>(tf.a.size()) + 1) X = signal::filtfilt(tf, X);
+  signal::LowpassOptions aa;
+  aa.order = opt.aa_order;
+  aa.cutoff_hz = fc;
+  signal::ZeroPhaseFilter zf(aa, fs);
+  if (X.rows() > zf.padlen())
+    for (Eigen::Index c = 0; c < X.cols(); ++c) zf.apply(X.col(c).data(), X.rows());
   how = fmt::format("{:.1f} Hz, zero-phase Butterworth order {} at {:g} Hz, then linear interpolation", fs,
                     opt.aa_order, fc);
   std::vector<double> uv(u.data(), u.data() + u.size());
@@ -335,7 +339,7 @@ FlightLog import_ulog(const ULog& log, const ImportOptions& opt, ImportReport* r
   for (const auto& d : log.dropouts)
     rep.dropouts.push_back({static_cast<double>(d.timestamp) * 1e-6, d.duration_ms * 1e-3});
   std::vector<Series> series;
-  // NED -> z up: positions (x, -y, -z) (DESIGN.md, "Autopilot logs").
+  // NED -> z up: positions (x, -y, -z) (docs/import.md).
   series.push_back(from_topic(log, opt.position_topic, {"x", "y", "z"}, {"x", "y", "z"}, {1, -1, -1}));
   // Quaternion FRD->NED to FLU->ENU-like z-up: (q0, q1, -q2, -q3).
   Series q = from_topic(log, opt.attitude_topic, {"q[0]", "q[1]", "q[2]", "q[3]"}, {"q0", "q1", "q2", "q3"},

@@ -246,7 +246,7 @@ RotorGeometry px4_rotor_geometry(const ULog& log) {
     throw InputError(fmt::format("the ULog has no parameter {} (CA_ROTOR_COUNT = {})", name, g.count));
   };
   for (int i = 0; i < g.count; ++i) {
-    // FRD -> FLU: (x, y, z) -> (x, -y, -z) (DESIGN.md, "Autopilot logs").
+    // FRD -> FLU: (x, y, z) -> (x, -y, -z) (docs/import.md).
     g.position.emplace_back(param(i, "PX", std::nullopt), -param(i, "PY", std::nullopt), -param(i, "PZ", 0.0));
     Eigen::Vector3d a(param(i, "AX", 0.0), -param(i, "AY", 0.0), -param(i, "AZ", -1.0));
     if (a.norm() > 0) a.normalize();

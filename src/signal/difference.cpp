@@ -3,7 +3,9 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
+#include <vector>
 #include <stdexcept>
 
 namespace quadid::signal {
@@ -18,22 +20,24 @@ void check(Eigen::Index n, double T) {
         fmt::format("central_difference: signal length {} must be at least 3", n));
 }
 
-// d may equal x (in place): x[k-1] is kept in `prev` before d[k-1] overwrites it.
+// d may equal x (in place): the originals that the formulas still need after
+// d has overwritten them (x[k-1], and the first and last three) are kept aside.
 void diff(const double* x, Eigen::Index n, double T, double* d) {
-  const double h = 1.0 / (2.0 * T);
-  // Ends: second-order one-sided differences (not in the paper, which leaves the
-  // first and last samples undefined); exact for quadratics like the interior.
-  const double first = (-3.0 * x[0] + 4.0 * x[1] - x[2]) * h;
-  const double last = (3.0 * x[n - 1] - 4.0 * x[n - 2] + x[n - 3]) * h;
-  // eq. (33) in the interior: (x[k+1] - x[k-1]) / (2T).
-  double prev = x[0];
-  for (Eigen::Index k = 1; k + 1 < n; ++k) {
+  const double head[3] = {x[0], x[1], x[2]};
+  const double tail[3] = {x[n - 3], x[n - 2], x[n - 1]};
+  double prev = x[0];  // the original x[k-1]
+  Eigen::Index k = 0;
+  const auto orig = [&](Eigen::Index i) {
+    if (i == k - 1) return prev;
+    if (i >= n - 3) return tail[i - (n - 3)];
+    if (i < 3) return head[i];
+    return x[i];
+  };
+  for (; k < n; ++k) {
     const double cur = x[k];
-    d[k] = (x[k + 1] - prev) * h;
+    d[k] = central_difference_at(orig, k, n, T);
     prev = cur;
   }
-  d[0] = first;
-  d[n - 1] = last;
 }
 
 }  // namespace
@@ -51,6 +55,31 @@ Eigen::MatrixXd central_difference(const Eigen::MatrixXd& columns, double T) {
   for (Eigen::Index j = 0; j < columns.cols(); ++j)
     diff(columns.col(j).data(), columns.rows(), T, d.col(j).data());
   return d;
+}
+
+SamplePeriodCheck check_sample_period(const Eigen::Ref<const Eigen::VectorXd>& t, double tolerance) {
+  if (t.size() < 2)
+    throw std::invalid_argument(fmt::format("check_sample_period: {} time value(s); need at least 2", t.size()));
+  if (!(tolerance >= 0.0 && tolerance < 0.5))
+    throw std::invalid_argument(fmt::format("check_sample_period: tolerance={} must be in [0, 0.5)", tolerance));
+  const Eigen::Index n = t.size();
+  std::vector<double> steps(static_cast<std::size_t>(n - 1));
+  for (Eigen::Index k = 1; k < n; ++k) steps[static_cast<std::size_t>(k - 1)] = t(k) - t(k - 1);
+  auto mid = steps.begin() + static_cast<std::ptrdiff_t>(steps.size() / 2);
+  std::nth_element(steps.begin(), mid, steps.end());
+  SamplePeriodCheck r;
+  r.median = *mid;
+  if (steps.size() % 2 == 0) r.median = 0.5 * (r.median + *std::max_element(steps.begin(), mid));
+  r.mean = (t(n - 1) - t(0)) / static_cast<double>(n - 1);
+  for (Eigen::Index k = 1; k < n; ++k) {
+    const double dt = t(k) - t(k - 1);
+    if (!(dt > 0.0) || !(std::abs(dt - r.median) <= tolerance * r.median)) {
+      r.bad = k;
+      r.step = dt;
+      break;
+    }
+  }
+  return r;
 }
 
 void central_difference_inplace(double* x, Eigen::Index n, double T) {

@@ -1,10 +1,11 @@
-// lfilter / lfilter_zi (as SciPy) and MATLAB-style filtfilt.
+// lfilter / lfilter_zi and sosfilt / sosfilt_zi (as SciPy), and the one
+// zero-phase forward-backward filter (ZeroPhaseFilter) behind sosfiltfilt,
+// filtfilt of an FIR and the identification's pre-filter.
 //
 // Speed: the recursion runs in place in the output, forward and then backward
-// (negative stride), with the order a compile-time constant for orders 0..8 so
-// the state lives in registers; only the two short edge pads need extra space.
-// FIR filters (a = [1]) use vectorized convolution instead of the recursion.
-// Work buffers are allocated once per call and shared by all columns.
+// (negative stride), one second-order section at a time with its two states in
+// registers; only the two short edge pads need extra space. FIR filters use
+// vectorized convolution instead. bench/bench_signal.cpp measures both.
 #include "quadid/signal.hpp"
 
 #include <fmt/format.h>
@@ -44,67 +45,49 @@ Normalized normalize(const TransferFunction& tf, const char* where) {
   return r;
 }
 
-// Direct form II transposed, in place: p[0], p[step], ..., p[(count-1)*step].
-// z (size N) is the initial state on entry and the final state on exit.
-template <int N>
-void df2t_fixed(const double* b, const double* a, double* z, double* p, std::ptrdiff_t count,
-                std::ptrdiff_t step) {
-  if constexpr (N == 0) {
-    const double b0 = b[0];
-    for (std::ptrdiff_t i = 0; i < count; ++i, p += step) *p *= b0;
-  } else {
-    double bb[N + 1], aa[N + 1], zz[N];
-    for (int k = 0; k <= N; ++k) {
-      bb[k] = b[k];
-      aa[k] = a[k];
-    }
-    for (int k = 0; k < N; ++k) zz[k] = z[k];
-    for (std::ptrdiff_t i = 0; i < count; ++i, p += step) {
-      const double x = *p;
-      const double y = zz[0] + bb[0] * x;
-      // Same operation order as scipy's lfilter, (z[k+1] + b x) - a y, which is
-      // also the shorter dependency chain through y.
-      for (int k = 0; k < N - 1; ++k) zz[k] = (zz[k + 1] + bb[k + 1] * x) - aa[k + 1] * y;
-      zz[N - 1] = bb[N] * x - aa[N] * y;
-      *p = y;
-    }
-    for (int k = 0; k < N; ++k) z[k] = zz[k];
+// Direct form II transposed, general order, in place: p[0], p[step], ...,
+// p[(count-1)*step]. z (size N) is the initial state on entry and the final
+// state on exit. Used by lfilter (first-order filters, FIR impulse responses).
+void df2t(const Normalized& f, double* z, double* p, std::ptrdiff_t count, std::ptrdiff_t step) {
+  const int N = f.order();
+  const double* b = f.b.data();
+  const double* a = f.a.data();
+  if (N == 0) {
+    for (std::ptrdiff_t i = 0; i < count; ++i, p += step) *p *= b[0];
+    return;
   }
-}
-
-void df2t_generic(int N, const double* b, const double* a, double* z, double* p,
-                  std::ptrdiff_t count, std::ptrdiff_t step) {
   for (std::ptrdiff_t i = 0; i < count; ++i, p += step) {
     const double x = *p;
     const double y = z[0] + b[0] * x;
+    // Same operation order as scipy's lfilter, (z[k+1] + b x) - a y.
     for (int k = 0; k < N - 1; ++k) z[k] = (z[k + 1] + b[k + 1] * x) - a[k + 1] * y;
     z[N - 1] = b[N] * x - a[N] * y;
     *p = y;
   }
 }
 
-void df2t(const Normalized& f, double* z, double* p, std::ptrdiff_t count, std::ptrdiff_t step) {
-  const double* b = f.b.data();
-  const double* a = f.a.data();
-  switch (f.order()) {
-    case 0: return df2t_fixed<0>(b, a, z, p, count, step);
-    case 1: return df2t_fixed<1>(b, a, z, p, count, step);
-    case 2: return df2t_fixed<2>(b, a, z, p, count, step);
-    case 3: return df2t_fixed<3>(b, a, z, p, count, step);
-    case 4: return df2t_fixed<4>(b, a, z, p, count, step);
-    case 5: return df2t_fixed<5>(b, a, z, p, count, step);
-    case 6: return df2t_fixed<6>(b, a, z, p, count, step);
-    case 7: return df2t_fixed<7>(b, a, z, p, count, step);
-    case 8: return df2t_fixed<8>(b, a, z, p, count, step);
-    default: return df2t_generic(f.order(), b, a, z, p, count, step);
+// One second-order section [b0 b1 b2 1 a1 a2] in direct form II transposed, in
+// place, with scipy's sosfilt operation order; z[0..1] is the state.
+void section_pass(const double* c, double* z, double* p, std::ptrdiff_t count, std::ptrdiff_t step) {
+  const double b0 = c[0], b1 = c[1], b2 = c[2], a1 = c[4], a2 = c[5];
+  double z0 = z[0], z1 = z[1];
+  for (std::ptrdiff_t i = 0; i < count; ++i, p += step) {
+    const double x = *p;
+    const double y = b0 * x + z0;
+    z0 = b1 * x - a1 * y + z1;
+    z1 = b2 * x - a2 * y;
+    *p = y;
   }
+  z[0] = z0;
+  z[1] = z1;
 }
 
 // Neumaier-compensated sum: the DC gain sum(b)/sum(a) of a narrow low-pass is a
 // ratio of two tiny sums of O(1) coefficients, so plain summation loses digits.
-double accurate_sum(const std::vector<double>& v) {
+double accurate_sum(const double* v, std::size_t n) {
   double s = 0.0, c = 0.0;
-  for (double x : v) {
+  for (std::size_t i = 0; i < n; ++i) {
+    const double x = v[i];
     const double t = s + x;
     c += (std::abs(s) >= std::abs(x)) ? (s - t) + x : (x - t) + s;
     s = t;
@@ -112,105 +95,55 @@ double accurate_sum(const std::vector<double>& v) {
   return s + c;
 }
 
-// Steady state of the DF2T state for a unit step (see lfilter_zi).
-std::vector<double> steady_state(const Normalized& f) {
-  const int N = f.order();
+// Steady state of the DF2T state for a unit step (see lfilter_zi), for
+// normalized b, a of length N + 1.
+std::vector<double> steady_state(const double* b, const double* a, int N) {
   std::vector<double> zi(static_cast<std::size_t>(N));
   if (N == 0) return zi;
-  const double sa = accurate_sum(f.a);
+  const double sa = accurate_sum(a, static_cast<std::size_t>(N) + 1);
   if (sa == 0.0)
     throw std::invalid_argument("lfilter_zi: the filter has a pole at z = 1 (sum(a) == 0)");
-  const double G = accurate_sum(f.b) / sa;  // DC gain = steady output for x = 1
+  const double G = accurate_sum(b, static_cast<std::size_t>(N) + 1) / sa;  // DC gain = steady output for x = 1
   // With x = y = const the DF2T state equations z_k = b_{k+1} x - a_{k+1} y + z_{k+1}
   // (z_N = 0) are solved from the last state backwards.
   double acc = 0.0;
   for (int k = N - 1; k >= 0; --k) {
-    acc += f.b[static_cast<std::size_t>(k + 1)] - f.a[static_cast<std::size_t>(k + 1)] * G;
+    acc += b[k + 1] - a[k + 1] * G;
     zi[static_cast<std::size_t>(k)] = acc;
   }
   return zi;
 }
 
-int padlen_of(const TransferFunction& tf) {
-  return 3 * (static_cast<int>(std::max(tf.a.size(), tf.b.size())) - 1);
-}
-
-// Reusable buffers for one filtfilt call (shared by all columns).
-struct Work {
-  Eigen::VectorXd ext, tmp;       // FIR: padded signal and shifted copy
-  std::vector<double> pre, post;  // IIR: the two pads
-  std::vector<double> z;          // IIR: filter state
-};
-
-// Odd reflection at both ends, as MATLAB's filtfilt and scipy's odd_ext.
-void odd_extend(const double* x, Eigen::Index n, Eigen::Index pad, double* ext) {
-  const double x0 = x[0], xn = x[n - 1];
-  for (Eigen::Index j = 1; j <= pad; ++j) ext[pad - j] = 2.0 * x0 - x[j];
-  std::copy(x, x + n, ext + pad);
-  for (Eigen::Index j = 1; j <= pad; ++j) ext[pad + n - 1 + j] = 2.0 * xn - x[n - 1 - j];
-}
-
-// out may equal x (in place): x is read only before out is written.
-void filtfilt_column(const Normalized& f, const std::vector<double>& zi, const double* x,
-                     Eigen::Index n, Eigen::Index pad, double* out, Work& w) {
-  if (f.fir()) {
-    // y[i] = sum_k b_k u[i-k] with u[i] = u[0] for i < 0 (the state zi*u[0]);
-    // then backwards with u[i] = u[L-1] for i >= L. Axpy form so it vectorizes.
-    const Eigen::Index L = n + 2 * pad;
-    const Eigen::Index M = static_cast<Eigen::Index>(f.b.size());
-    if (w.ext.size() != L) w.ext.resize(L);
-    if (w.tmp.size() != L + M - 1) w.tmp.resize(L + M - 1);
-    double* e = w.ext.data();
-    odd_extend(x, n, pad, e);
-    Eigen::VectorXd& u = w.tmp;
-    u.head(M - 1).setConstant(e[0]);
-    u.tail(L) = w.ext;
-    w.ext.setZero();
-    for (Eigen::Index k = 0; k < M; ++k) w.ext.noalias() += f.b[k] * u.segment(M - 1 - k, L);
-    // backward pass: out[i] = sum_k b_k y[i+k], y[i] = y[L-1] beyond the end; only
-    // the unpadded middle is needed.
-    u.head(L) = w.ext;
-    u.tail(M - 1).setConstant(e[L - 1]);
-    Eigen::Map<Eigen::VectorXd> o(out, n);
-    o.setZero();
-    for (Eigen::Index k = 0; k < M; ++k) o.noalias() += f.b[k] * u.segment(pad + k, n);
-    return;
+void check_sos(const Sos& sos, const char* where) {
+  if (sos.rows() == 0) throw std::invalid_argument(fmt::format("{}: no sections", where));
+  for (Eigen::Index i = 0; i < sos.rows(); ++i) {
+    if (!sos.row(i).allFinite())
+      throw std::invalid_argument(fmt::format("{}: section {} is not finite", where, i + 1));
+    if (sos(i, 3) != 1.0)
+      throw std::invalid_argument(fmt::format("{}: section {} has a0={}; sections are normalized, a0 = 1", where,
+                                              i + 1, sos(i, 3)));
   }
+}
 
-  // IIR: the padded signal is [pre | x | post]; only the two short pads need
-  // work space, the middle is filtered in place in `out`, and the state carries
-  // across the pieces.
-  const int N = f.order();
-  w.pre.resize(static_cast<std::size_t>(pad));
-  w.post.resize(static_cast<std::size_t>(pad));
-  w.z.resize(static_cast<std::size_t>(N));
-  double* pre = w.pre.data();
-  double* post = w.post.data();
-  const double x0 = x[0], xn = x[n - 1];
-  for (Eigen::Index j = 1; j <= pad; ++j) pre[pad - j] = 2.0 * x0 - x[j];
-  for (Eigen::Index j = 1; j <= pad; ++j) post[j - 1] = 2.0 * xn - x[n - 1 - j];
-  if (out != x) std::copy(x, x + n, out);  // out == x: filtering in place
-
-  const auto set_state = [&](double v) {
-    for (int k = 0; k < N; ++k) w.z[static_cast<std::size_t>(k)] = zi[static_cast<std::size_t>(k)] * v;
-  };
-  // forward pass
-  set_state(pad > 0 ? pre[0] : x0);
-  df2t(f, w.z.data(), pre, pad, 1);
-  df2t(f, w.z.data(), out, n, 1);
-  df2t(f, w.z.data(), post, pad, 1);
-  // backward pass, from the end of the forward output; the leading pad's
-  // backward output is not needed.
-  set_state(pad > 0 ? post[pad - 1] : out[n - 1]);
-  if (pad > 0) df2t(f, w.z.data(), post + (pad - 1), pad, -1);
-  df2t(f, w.z.data(), out + (n - 1), n, -1);
+// sosfilt_zi: each section's steady state, scaled by the DC gain of the ones before.
+Eigen::MatrixXd sos_steady_state(const Sos& sos) {
+  Eigen::MatrixXd zi(sos.rows(), 2);
+  double scale = 1.0;
+  for (Eigen::Index i = 0; i < sos.rows(); ++i) {
+    const double* c = sos.row(i).data();
+    const std::vector<double> z = steady_state(c, c + 3, 2);
+    zi(i, 0) = scale * z[0];
+    zi(i, 1) = scale * z[1];
+    scale *= accurate_sum(c, 3) / accurate_sum(c + 3, 3);
+  }
+  return zi;
 }
 
 void check_length(Eigen::Index n, int pad) {
   if (n <= pad)
     throw std::invalid_argument(fmt::format(
-        "filtfilt: signal length {} must be greater than the padding length {} "
-        "(3 * filter order); use a longer signal or a lower-order filter",
+        "zero-phase filter: signal length {} must be greater than the padding length {} "
+        "(about 3 x filter order); use a longer signal or a lower-order filter",
         n, pad));
 }
 
@@ -234,61 +167,212 @@ Eigen::VectorXd lfilter(const TransferFunction& tf, const Eigen::VectorXd& x,
 
 Eigen::VectorXd lfilter_zi(const TransferFunction& tf) {
   const Normalized f = normalize(tf, "lfilter_zi");
-  const std::vector<double> zi = steady_state(f);
+  const std::vector<double> zi = steady_state(f.b.data(), f.a.data(), f.order());
   return Eigen::Map<const Eigen::VectorXd>(zi.data(), static_cast<Eigen::Index>(zi.size()));
 }
 
-Eigen::VectorXd filtfilt(const TransferFunction& tf, const Eigen::VectorXd& x) {
-  const Normalized f = normalize(tf, "filtfilt");
-  const int pad = padlen_of(tf);
-  check_length(x.size(), pad);
-  const std::vector<double> zi = f.fir() ? std::vector<double>{} : steady_state(f);
-  Work w;
-  Eigen::VectorXd y(x.size());
-  filtfilt_column(f, zi, x.data(), x.size(), pad, y.data(), w);
+Eigen::MatrixXd sosfilt_zi(const Sos& sos) {
+  check_sos(sos, "sosfilt_zi");
+  return sos_steady_state(sos);
+}
+
+Eigen::VectorXd sosfilt(const Sos& sos, const Eigen::VectorXd& x, const Eigen::MatrixXd* zi) {
+  check_sos(sos, "sosfilt");
+  Eigen::MatrixXd z = Eigen::MatrixXd::Zero(sos.rows(), 2);
+  if (zi) {
+    if (zi->rows() != sos.rows() || zi->cols() != 2)
+      throw std::invalid_argument(fmt::format("sosfilt: zi is {}x{} but the filter needs {}x2", zi->rows(),
+                                              zi->cols(), sos.rows()));
+    z = *zi;
+  }
+  Eigen::VectorXd y = x;
+  for (Eigen::Index i = 0; i < sos.rows(); ++i) {
+    double st[2] = {z(i, 0), z(i, 1)};
+    section_pass(sos.row(i).data(), st, y.data(), y.size(), 1);
+  }
   return y;
 }
 
-Eigen::MatrixXd filtfilt(const TransferFunction& tf, const Eigen::MatrixXd& columns) {
-  const Normalized f = normalize(tf, "filtfilt");
-  const int pad = padlen_of(tf);
-  check_length(columns.rows(), pad);
-  const std::vector<double> zi = f.fir() ? std::vector<double>{} : steady_state(f);
-  Work w;
-  Eigen::MatrixXd y(columns.rows(), columns.cols());
-  for (Eigen::Index j = 0; j < columns.cols(); ++j)
-    filtfilt_column(f, zi, columns.col(j).data(), columns.rows(), pad, y.col(j).data(), w);
-  return y;
-}
-
-Eigen::VectorXd filtfilt(const std::vector<double>& fir_taps, const Eigen::VectorXd& x) {
-  return filtfilt(TransferFunction{fir_taps, {1.0}}, x);
-}
-
-Eigen::MatrixXd filtfilt(const std::vector<double>& fir_taps, const Eigen::MatrixXd& columns) {
-  return filtfilt(TransferFunction{fir_taps, {1.0}}, columns);
-}
+// ------------------------------------------------------------ ZeroPhaseFilter
 
 struct ZeroPhaseFilter::Impl {
-  Normalized f;
-  std::vector<double> zi;
+  bool fir = false;
+  Sos sos;                   // IIR: the sections
+  Eigen::MatrixXd zi;        // IIR: sosfilt_zi
+  std::vector<double> taps;  // FIR
   int pad = 0;
-  Work work;
+  // Work space, reused by every apply().
+  std::vector<double> pre, post;  // the two odd-reflection pads
+  Eigen::VectorXd ext, tmp;       // FIR: padded signal and shifted copy
+  Eigen::MatrixXd z;              // IIR: state, sections x 2
+
+  // The odd reflections at both ends, as MATLAB's filtfilt and scipy's odd_ext:
+  // pre = 2 x[0] - x[pad..1], post = 2 x[n-1] - x[n-2..n-1-pad].
+  void make_pads(const double* x, Eigen::Index n) {
+    pre.resize(static_cast<std::size_t>(pad));
+    post.resize(static_cast<std::size_t>(pad));
+    const double x0 = x[0], xn = x[n - 1];
+    for (Eigen::Index j = 1; j <= pad; ++j) pre[static_cast<std::size_t>(pad - j)] = 2.0 * x0 - x[j];
+    for (Eigen::Index j = 1; j <= pad; ++j) post[static_cast<std::size_t>(j - 1)] = 2.0 * xn - x[n - 1 - j];
+  }
+
+  void apply_fir(double* x, Eigen::Index n) {
+    // y[i] = sum_k b_k u[i-k] with u[i] = u[0] for i < 0 (the state zi*u[0]);
+    // then backwards with u[i] = u[L-1] for i >= L. Axpy form so it vectorizes.
+    const Eigen::Index L = n + 2 * pad;
+    const Eigen::Index M = static_cast<Eigen::Index>(taps.size());
+    if (ext.size() != L) ext.resize(L);
+    if (tmp.size() != L + M - 1) tmp.resize(L + M - 1);
+    make_pads(x, n);
+    std::copy(pre.begin(), pre.end(), ext.data());
+    std::copy(x, x + n, ext.data() + pad);
+    std::copy(post.begin(), post.end(), ext.data() + pad + n);
+    tmp.head(M - 1).setConstant(ext(0));
+    tmp.tail(L) = ext;
+    ext.setZero();
+    for (Eigen::Index k = 0; k < M; ++k) ext.noalias() += taps[static_cast<std::size_t>(k)] * tmp.segment(M - 1 - k, L);
+    // backward pass: out[i] = sum_k b_k y[i+k], y[i] = y[L-1] beyond the end; only
+    // the unpadded middle is needed.
+    tmp.head(L) = ext;
+    tmp.tail(M - 1).setConstant(ext(L - 1));
+    Eigen::Map<Eigen::VectorXd> o(x, n);
+    o.setZero();
+    for (Eigen::Index k = 0; k < M; ++k) o.noalias() += taps[static_cast<std::size_t>(k)] * tmp.segment(pad + k, n);
+  }
+
+  // The cascade over p[0], p[step], ..., section by section, each continuing from its state in z.
+  void cascade(double* p, std::ptrdiff_t count, std::ptrdiff_t step) {
+    for (Eigen::Index i = 0; i < sos.rows(); ++i) {
+      double st[2] = {z(i, 0), z(i, 1)};
+      section_pass(sos.row(i).data(), st, p, count, step);
+      z(i, 0) = st[0];
+      z(i, 1) = st[1];
+    }
+  }
+
+  void apply_sos(double* x, Eigen::Index n) {
+    // The padded signal is [pre | x | post]; only the two short pads need work
+    // space, the middle is filtered in place, and the states carry across the pieces.
+    make_pads(x, n);
+    double* pr = pre.data();
+    double* po = post.data();
+    // forward pass, from zi * (first padded sample)
+    z = zi * (pad > 0 ? pr[0] : x[0]);
+    cascade(pr, pad, 1);
+    cascade(x, n, 1);
+    cascade(po, pad, 1);
+    // backward pass, from zi * (last forward output); the leading pad's
+    // backward output is not needed.
+    z = zi * (pad > 0 ? po[pad - 1] : x[n - 1]);
+    if (pad > 0) cascade(po + (pad - 1), pad, -1);
+    cascade(x + (n - 1), n, -1);
+  }
 };
 
-ZeroPhaseFilter::ZeroPhaseFilter(const TransferFunction& tf) : impl_(std::make_unique<Impl>()) {
-  impl_->f = normalize(tf, "ZeroPhaseFilter");
-  impl_->pad = padlen_of(tf);
-  if (!impl_->f.fir()) impl_->zi = steady_state(impl_->f);
+ZeroPhaseFilter::ZeroPhaseFilter(const Sos& sos) : impl_(std::make_unique<Impl>()) {
+  check_sos(sos, "ZeroPhaseFilter");
+  impl_->sos = sos;
+  impl_->zi = sos_steady_state(sos);
+  // scipy.signal.sosfiltfilt's padlen: 3 x the number of taps of the cascade,
+  // 2 per section + 1, less the sections that are first order (b2 = a2 = 0).
+  const auto zeros_b2 = (sos.col(2).array() == 0.0).count();
+  const auto zeros_a2 = (sos.col(5).array() == 0.0).count();
+  impl_->pad = 3 * static_cast<int>(2 * sos.rows() + 1 - std::min(zeros_b2, zeros_a2));
 }
 
+ZeroPhaseFilter::ZeroPhaseFilter(const std::vector<double>& fir_taps) : impl_(std::make_unique<Impl>()) {
+  if (fir_taps.empty()) throw std::invalid_argument("ZeroPhaseFilter: no FIR taps");
+  for (double v : fir_taps)
+    if (!std::isfinite(v)) throw std::invalid_argument("ZeroPhaseFilter: an FIR tap is not finite");
+  impl_->fir = true;
+  impl_->taps = fir_taps;
+  impl_->pad = 3 * (static_cast<int>(fir_taps.size()) - 1);  // MATLAB filtfilt
+}
+
+namespace {
+ZeroPhaseFilter make_lowpass(const LowpassOptions& o, double fs_hz) {
+  try {
+    o.validate(fs_hz);
+    if (o.kind == LowpassOptions::Kind::Butterworth) {
+      const Sos sos = zpk2sos(butter_zpk(o.order, o.cutoff_hz, fs_hz));
+      try {
+        check_realizable(sos);
+      } catch (const std::invalid_argument& e) {
+        throw std::invalid_argument(fmt::format("cannot be realised: {}", e.what()));
+      }
+      return ZeroPhaseFilter(sos);
+    }
+    return ZeroPhaseFilter(fir_lowpass_blackmanharris(o.taps, o.cutoff_hz, fs_hz));
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(fmt::format("{} at {} Hz: {}", o.name(), fs_hz, e.what()));
+  }
+}
+}  // namespace
+
+ZeroPhaseFilter::ZeroPhaseFilter(const LowpassOptions& options, double fs_hz)
+    : ZeroPhaseFilter(make_lowpass(options, fs_hz)) {}
+
 ZeroPhaseFilter::~ZeroPhaseFilter() = default;
+ZeroPhaseFilter::ZeroPhaseFilter(ZeroPhaseFilter&&) noexcept = default;
+ZeroPhaseFilter& ZeroPhaseFilter::operator=(ZeroPhaseFilter&&) noexcept = default;
 
 int ZeroPhaseFilter::padlen() const { return impl_->pad; }
 
 void ZeroPhaseFilter::apply(double* x, Eigen::Index n) {
   check_length(n, impl_->pad);
-  filtfilt_column(impl_->f, impl_->zi, x, n, impl_->pad, x, impl_->work);
+  if (impl_->fir) impl_->apply_fir(x, n);
+  else impl_->apply_sos(x, n);
+}
+
+std::complex<double> ZeroPhaseFilter::frequency_response(double f_hz, double fs_hz) const {
+  if (impl_->fir) return signal::frequency_response(TransferFunction{impl_->taps, {1.0}}, f_hz, fs_hz);
+  return signal::frequency_response(impl_->sos, f_hz, fs_hz);
+}
+
+Eigen::VectorXd ZeroPhaseFilter::impulse_response(Eigen::Index samples) const {
+  Eigen::VectorXd h = Eigen::VectorXd::Zero(samples);
+  if (samples == 0) return h;
+  h(0) = 1.0;
+  if (impl_->fir) return lfilter(TransferFunction{impl_->taps, {1.0}}, h);
+  return sosfilt(impl_->sos, h);
+}
+
+// ------------------------------------------------------- copying front ends
+
+namespace {
+Eigen::MatrixXd apply_columns(ZeroPhaseFilter& zf, const Eigen::MatrixXd& columns) {
+  check_length(columns.rows(), zf.padlen());
+  Eigen::MatrixXd y = columns;
+  for (Eigen::Index j = 0; j < y.cols(); ++j) zf.apply(y.col(j).data(), y.rows());
+  return y;
+}
+Eigen::VectorXd apply_vector(ZeroPhaseFilter& zf, const Eigen::VectorXd& x) {
+  Eigen::VectorXd y = x;
+  zf.apply(y.data(), y.size());
+  return y;
+}
+}  // namespace
+
+Eigen::VectorXd sosfiltfilt(const Sos& sos, const Eigen::VectorXd& x) {
+  ZeroPhaseFilter zf(sos);
+  return apply_vector(zf, x);
+}
+Eigen::MatrixXd sosfiltfilt(const Sos& sos, const Eigen::MatrixXd& columns) {
+  ZeroPhaseFilter zf(sos);
+  return apply_columns(zf, columns);
+}
+Eigen::VectorXd filtfilt(const std::vector<double>& fir_taps, const Eigen::VectorXd& x) {
+  ZeroPhaseFilter zf(fir_taps);
+  return apply_vector(zf, x);
+}
+Eigen::MatrixXd filtfilt(const std::vector<double>& fir_taps, const Eigen::MatrixXd& columns) {
+  ZeroPhaseFilter zf(fir_taps);
+  return apply_columns(zf, columns);
+}
+
+Eigen::MatrixXd zero_phase_lowpass(const Eigen::MatrixXd& columns, double fs_hz, const LowpassOptions& options) {
+  ZeroPhaseFilter zf(options, fs_hz);
+  return apply_columns(zf, columns);
 }
 
 }  // namespace quadid::signal

@@ -1,5 +1,5 @@
 // Rotor model: per-rotor inputs -> rotor speeds (motor lag) -> thrusts ->
-// [Fz, tau] (DESIGN.md "Real vehicles"; formulas in include/quadid/vehicle.hpp).
+// [Fz, tau] (docs/vehicles.md; formulas in include/quadid/vehicle.hpp).
 #include "quadid/vehicle.hpp"
 
 

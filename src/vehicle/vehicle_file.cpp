@@ -1,4 +1,4 @@
-// The vehicle file (TOML, DESIGN.md "Real vehicles"), read with toml++:
+// The vehicle file (TOML, docs/vehicles.md), read with toml++:
 // every key checked, errors as "FILE:LINE:COLUMN: table.key: problem".
 #include "quadid/vehicle.hpp"
 

@@ -4,7 +4,8 @@
 Run with a Python that has numpy and scipy (here /usr/bin/python3: numpy 1.24,
 scipy 1.10):  /usr/bin/python3 tests/data/signal/gen_signal_golden.py
 Writes, next to this script:
-  signal_coeffs.json  filter coefficients, lfilter_zi vectors, the case list
+  signal_coeffs.json  filter coefficients (Butterworth as second-order sections,
+                      FIR taps, first-order filters), initial states, the case lists
   signal_golden.csv   the input signal x and every filtered output, one column each
 Deterministic: fixed seed, no time-dependent input. Floats written with repr
 (shortest round-trip), so the C++ side reads the exact doubles.
@@ -37,8 +38,7 @@ x = (0.7
 
 def exact_zi(b, a):
     """lfilter_zi of the given double coefficients in exact rational arithmetic,
-    rounded once to double: the reference for how accurate a zi can be. (For a
-    narrow low-pass, scipy's LAPACK solve is off by ~1e-10 here: sum(a) ~ 1e-6.)"""
+    rounded once to double: the reference for how accurate a zi can be."""
     b = [Fraction(v) / Fraction(a[0]) for v in b]
     a = [Fraction(v) / Fraction(a[0]) for v in a]
     n = max(len(a), len(b))
@@ -58,25 +58,47 @@ def matlab_filtfilt(b, a, sig):
     return ss.filtfilt(b, a, sig, padtype='odd', padlen=padlen)
 
 
-cases = []   # name, kind, parameters
+def cplx(v):
+    return [[float(np.real(c)), float(np.imag(c))] for c in v]
+
+
+cases = []   # zero-phase cases: sosfiltfilt (Butterworth) and filtfilt (FIR)
 columns = {"x": x}
 coeffs = {}
 
-# Butterworth (order, cutoff Hz, fs Hz)
-for order, fc, fs in [(1, 10.0, 500.0), (2, 5.0, 500.0), (4, 4.0, 500.0),
-                      (6, 20.0, 500.0), (8, 30.0, 500.0), (4, 10.0, 100.0)]:
+# Butterworth as second-order sections (order, cutoff Hz, fs Hz), zero-phase
+# with scipy.signal.sosfiltfilt's defaults (odd padding, padlen 3 * ntaps).
+for order, fc, fs in [(1, 10.0, 500.0), (2, 5.0, 500.0), (3, 1.0, 500.0), (4, 4.0, 500.0),
+                      (6, 20.0, 500.0), (8, 30.0, 500.0), (4, 10.0, 100.0), (8, 2.0, 500.0),
+                      (6, 0.5, 500.0), (8, 0.5, 500.0), (7, 0.1, 500.0), (5, 200.0, 500.0)]:
     name = f"butter_o{order}_fc{fc:g}_fs{fs:g}"
-    b, a = ss.butter(order, fc, fs=fs)
+    sos = ss.butter(order, fc, fs=fs, output='sos')
     coeffs[name] = {"kind": "butter", "order": order, "cutoff_hz": fc, "fs_hz": fs,
-                    "b": list(b), "a": list(a), "zi": list(ss.lfilter_zi(b, a)),
-                    "zi_exact": exact_zi(list(b), list(a)),
-                    "padlen": 3 * (max(len(a), len(b)) - 1)}
-    columns["filtfilt_" + name] = matlab_filtfilt(b, a, x)
+                    "sos": sos.tolist(), "zi": ss.sosfilt_zi(sos).tolist()}
+    columns["sosfiltfilt_" + name] = ss.sosfiltfilt(sos, x)
     cases.append(name)
 
-# plain lfilter from rest (zi = None) for one Butterworth
-b, a = coeffs["butter_o4_fc4_fs500"]["b"], coeffs["butter_o4_fc4_fs500"]["a"]
-columns["lfilter_butter_o4_fc4_fs500"] = ss.lfilter(b, a, x)
+# plain sosfilt from rest (zi = None) for one Butterworth
+columns["sosfilt_butter_o4_fc4_fs500"] = ss.sosfilt(np.array(coeffs["butter_o4_fc4_fs500"]["sos"]), x)
+
+# Every order the pre-filter allows (1-8) over cutoffs from 10 mHz to just below
+# Nyquist at 500 Hz: the sections (design + zpk2sos) and sosfilt_zi.
+sweep = []
+for order in range(1, 9):
+    for fc in [0.01, 0.05, 0.1, 0.5, 1.0, 2.0, 4.0, 10.0, 30.0, 100.0, 200.0, 245.0, 249.9, 249.99]:
+        sos = ss.butter(order, fc, fs=FS, output='sos')
+        sweep.append({"order": order, "cutoff_hz": fc, "fs_hz": FS, "sos": sos.tolist(),
+                      "zi": ss.sosfilt_zi(sos).tolist()})
+
+# zpk2sos beyond Butterworth: complex zeros, odd orders, a real pole and zero
+# (scipy's docstring example), an elliptic low-pass and a Chebyshev II band-pass.
+zpk_cases = []
+for label, (z, p, k) in [
+        ("docstring", (np.array([-1, -0.5 - 0.5j, -0.5 + 0.5j]), np.array([0.75, 0.8 + 0.1j, 0.8 - 0.1j]), 1.0)),
+        ("ellip5", ss.ellip(5, 0.5, 60, 0.2, output='zpk')),
+        ("cheby2_bp4", ss.cheby2(4, 40, [0.1, 0.3], btype='bandpass', output='zpk'))]:
+    zpk_cases.append({"name": label, "z": cplx(z), "p": cplx(p), "k": float(k),
+                      "sos": ss.zpk2sos(z, p, k).tolist()})
 
 # FIR Blackman-Harris (taps, cutoff Hz, fs Hz); 30 taps: firwin accepts even
 # lengths for a low-pass, and so does fir_lowpass_blackmanharris.
@@ -108,7 +130,8 @@ for name, (b, a) in first_order.items():
 
 meta = {"generator": "gen_signal_golden.py", "numpy": np.__version__,
         "scipy": scipy.__version__, "fs_hz": FS, "samples": N,
-        "filtfilt_cases": cases, "filters": coeffs}
+        "zero_phase_cases": cases, "filters": coeffs, "butter_sweep": sweep,
+        "zpk2sos": zpk_cases}
 with open(os.path.join(HERE, "signal_coeffs.json"), "w") as f:
     json.dump(meta, f, indent=1)
 
@@ -117,4 +140,4 @@ with open(os.path.join(HERE, "signal_golden.csv"), "w") as f:
     f.write(",".join(names) + "\n")
     for i in range(N):
         f.write(",".join(repr(float(columns[c][i])) for c in names) + "\n")
-print(f"wrote {len(names)} columns x {N} rows, {len(coeffs)} filters")
+print(f"wrote {len(names)} columns x {N} rows, {len(coeffs)} filters, {len(sweep)} sweep designs")
