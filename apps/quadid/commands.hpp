@@ -12,5 +12,6 @@ void register_simulate(CLI::App& app);
 void register_identify(CLI::App& app);
 void register_validate(CLI::App& app);
 void register_reproduce(CLI::App& app);
+void register_montecarlo(CLI::App& app);
 
 }  // namespace quadid::cli

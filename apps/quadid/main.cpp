@@ -29,6 +29,7 @@ int main(int argc, char** argv) {
   quadid::cli::register_identify(app);
   quadid::cli::register_validate(app);
   quadid::cli::register_reproduce(app);
+  quadid::cli::register_montecarlo(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
+#include <tuple>
 
 namespace quadid {
 namespace {
@@ -60,11 +61,6 @@ double correlation_length(double fs, double f3db, double lambda, bool filtered) 
   return std::max(1.0, fs / (2.0 * f));
 }
 
-bool positive_definite(const Mat3& I) {
-  const Eigen::SelfAdjointEigenSolver<Mat3> es(I, Eigen::EigenvaluesOnly);
-  return es.eigenvalues().minCoeff() > 0.0;
-}
-
 }  // namespace
 
 void IdentificationOptions::validate() const {
@@ -82,17 +78,51 @@ void IdentificationOptions::validate() const {
     throw std::invalid_argument("gd_initial: the initial guess is not finite");
   if (!(evolution_interval >= 0.0) || !std::isfinite(evolution_interval))
     throw std::invalid_argument(fmt::format("evolution_interval={} must be >= 0 s", evolution_interval));
+  uncertainty.validate();
+  physical.validate();
+}
+
+std::vector<const SetEstimate*> IdentificationResult::all_sets() const {
+  std::vector<const SetEstimate*> v;
+  for (const auto& e : estimates) v.push_back(&e);
+  for (const auto& e : physical_sets) v.push_back(&e);
+  return v;
+}
+
+const LeastSquaresSolution* IdentificationResult::least_squares_of(std::string_view set) const {
+  if (set == "LS") return &ls_standard;
+  if (set == "FMLS") return &ls_filtered;
+  return nullptr;
 }
 
 const SetEstimate& IdentificationResult::estimate(std::string_view name) const {
-  for (const auto& e : estimates)
-    if (e.name == name) return e;
-  throw std::invalid_argument(fmt::format("no estimate named '{}' (LS, GD, FMLS, FMGD)", name));
+  for (const auto* e : all_sets())
+    if (e->name == name) return *e;
+  throw std::invalid_argument(fmt::format("no estimate named '{}' (LS, GD, FMLS, FMGD, PC, FMPC)", name));
 }
 
 IdentificationResult identify(const FlightLog& log, const IdentificationOptions& opt) {
   opt.validate();
   IdentificationResult res;
+  if (opt.input_checks) {
+    InputCheckOptions ic;
+    ic.g = opt.processing.g;
+    ic.reference_mass = opt.reference.params.m;
+    res.input_findings = check_input(log, ic);
+    std::vector<std::string> errors;
+    for (const auto& f : res.input_findings) {
+      if (f.severity == Severity::Error) errors.push_back(fmt::format("{}: {} ({})", f.check, f.saw, f.action));
+      else if (f.severity == Severity::Warning)
+        res.warnings.push_back(fmt::format("input check {}: {} ({})", f.check, f.saw, f.action));
+    }
+    if (!errors.empty()) {
+      if (!opt.ignore_input_errors)
+        throw InputError(fmt::format("the log fails the input checks: {}; if the log is right, ignore the checks "
+                                     "(--ignore-input-errors)",
+                                     fmt::join(errors, "; ")));
+      for (const auto& e : errors) res.warnings.push_back("input check " + e + " (ignored)");
+    }
+  }
   const auto sig = process_log(log, opt.processing, &res.processing);
   const Regression std_reg(sig, RegressionModel::Standard, opt.window);
   const Regression filt_reg(sig, RegressionModel::Filtered, opt.window, opt.lambda, opt.gd_variant);
@@ -119,6 +149,13 @@ IdentificationResult identify(const FlightLog& log, const IdentificationOptions&
   const double fs = res.processing.fs, f3 = res.processing.filter_f3db;
   res.ls_standard = solve_least_squares(s.acc, prior, opt.ls, correlation_length(fs, f3, opt.lambda, false));
   res.ls_filtered = solve_least_squares(f.acc, prior, opt.ls, correlation_length(fs, f3, opt.lambda, true));
+  // Second pass: the influence of each sample on the estimate, for the HAC
+  // covariance (docs/uncertainty.md).
+  for (auto [reg, sol] : {std::pair{&std_reg, &res.ls_standard}, std::pair{&filt_reg, &res.ls_filtered}}) {
+    InfluenceAccumulator infl(*sol);
+    reg->for_each([&](Eigen::Index, const Regressor4x7& G, const Vec4& Y) { infl.add(G, Y); });
+    attach_uncertainty(*sol, infl.finish(opt.uncertainty), prior, opt.ls);
+  }
   res.gd_step_gain_standard = s.gd->max_step_gain();
   res.gd_step_gain_filtered = f.gd->max_step_gain();
 
@@ -134,6 +171,15 @@ IdentificationResult identify(const FlightLog& log, const IdentificationOptions&
   res.estimates[1] = gd_estimate("GD", RegressionModel::Standard, *s.gd);
   res.estimates[2] = SetEstimate{"FMLS", RegressionModel::Filtered, true, res.ls_filtered.theta, true, ""};
   res.estimates[3] = gd_estimate("FMGD", RegressionModel::Filtered, *f.gd);
+  // Physically consistent sets: the closest consistent Theta in each LS metric.
+  for (const auto& [name, model, sol] : {std::tuple{"PC", RegressionModel::Standard, &res.ls_standard},
+                                         std::tuple{"FMPC", RegressionModel::Filtered, &res.ls_filtered}}) {
+    PhysicalProjection pr = closest_physical(*sol, prior, opt.physical);
+    SetEstimate e{name, model, true, pr.theta, pr.theta.allFinite(), ""};
+    if (!e.valid) e.note = fmt::format("{}: no consistent set ({})", name, pr.status);
+    res.physical_sets.push_back(e);
+    res.projections.push_back(std::move(pr));
+  }
 
   // Identifiability: rank deficiency is an error unless allowed; a large
   // standard error is a warning.
@@ -164,8 +210,13 @@ IdentificationResult identify(const FlightLog& log, const IdentificationOptions&
         detail.push_back(fmt::format("{} = {:.4g} +- {:.2g}", n, sol->theta(j), sol->std_error(j)));
       }
       res.warnings.push_back(fmt::format("{}: poorly determined by these data (standard error above {:g}% of the "
-                                         "parameter's scale): {}",
-                                         name, 100.0 * opt.ls.poor_fraction, fmt::join(detail, ", ")));
+                                         "parameter's scale{}): {}",
+                                         name, 100.0 * opt.ls.poor_fraction,
+                                         sol->near_null.empty()
+                                             ? std::string()
+                                             : fmt::format(", or in a near-null direction: {}",
+                                                           fmt::join(sol->near_null, ", ")),
+                                         fmt::join(detail, ", ")));
     }
   }
   // The two regressions see the same flight through different filters; when
@@ -186,11 +237,13 @@ IdentificationResult identify(const FlightLog& log, const IdentificationOptions&
   }
   for (const auto& e : res.estimates) {
     if (!e.valid) continue;
-    if (!(e.theta(0) > 0.0))
-      res.warnings.push_back(fmt::format("{}: the estimated mass {:.4g} kg is not positive", e.name, e.theta(0)));
-    else if (!positive_definite(e.params().I))
-      res.warnings.push_back(
-          fmt::format("{}: the estimated inertia tensor is not positive definite (not a physical body)", e.name));
+    const PhysicalConsistency c = check_physical_consistency(e.theta);
+    if (!c.physical)
+      res.warnings.push_back(fmt::format("{}: not a physical body: {}{}", e.name, c.why,
+                                         e.least_squares ? fmt::format(" (the closest physical set is {})",
+                                                                       e.model == RegressionModel::Standard ? "PC"
+                                                                                                            : "FMPC")
+                                                         : std::string()));
   }
 
   // Tables 5-6: each model with its own sets and the reference.
