@@ -41,10 +41,10 @@ struct InputCheckOptions {
   double min_accel_rms = 0.05;
   /// Aliasing: mean power spectral density of Fz / tau in the top fifth below
   /// Nyquist, relative to the median density between band_hz and there (the
-  /// noise floor), above this ratio (+10 dB by default) is reported. White noise,
+  /// noise floor), above this ratio (+6 dB by default) is reported. White noise,
   /// aliased or not, gives ~1: only content that rises towards Nyquist (folded
   /// vibration) can be seen.
-  double aliasing_ratio = 10.0;
+  double aliasing_ratio = 4.0;
   double band_hz = 2.0;
   /// Saturation: a run of at least this many consecutive samples (and at least
   /// saturation_fraction of the log in all) exactly at the log's max or min.
