@@ -14,8 +14,8 @@ using namespace quadid;
 namespace {
 
 // A 30 s Table 2 flight of the virtual QBall 2 with the default sensor noise,
-// 500 Hz, plus a rotor vibration at 180 Hz on the force and torques (as real
-// logs have: 2 % of hover thrust, 5 mN m), which is what aliasing folds.
+// 500 Hz, plus a rotor vibration at 178 Hz on the force and torques (as real
+// logs have: 2 % of hover thrust, 20 mN m), which is what aliasing folds.
 const FlightLog& clean_log() {
   static const FlightLog log = [] {
     SimulationOptions o;
@@ -23,9 +23,9 @@ const FlightLog& clean_log() {
     o.record_truth = false;
     FlightLog l = simulate(FourierTrajectory::table2(), o).log;
     const Eigen::VectorXd t = l.column("t");
-    const Eigen::VectorXd vib = (2.0 * M_PI * 180.0 * t).array().sin();
+    const Eigen::VectorXd vib = (2.0 * M_PI * 178.0 * t).array().sin();
     l.data.col(l.find("Fz")) += 0.35 * vib;
-    for (const char* c : {"tau_phi", "tau_theta", "tau_psi"}) l.data.col(l.find(c)) += 0.005 * vib;
+    for (const char* c : {"tau_phi", "tau_theta", "tau_psi"}) l.data.col(l.find(c)) += 0.02 * vib;
     return l;
   }();
   return log;
@@ -91,8 +91,8 @@ TEST(InputChecks, ThrustInKgfIsNamed) {
 }
 
 TEST(InputChecks, DecimationWithoutAntiAliasingIsNamed) {
-  // Every 10th sample (500 -> 50 Hz) with no filter: the 180 Hz vibration
-  // folds to 20 Hz, near the new Nyquist frequency.
+  // Every 10th sample (500 -> 50 Hz) with no filter: the 178 Hz vibration
+  // folds to 22 Hz, near the new Nyquist frequency.
   const FlightLog& c = clean_log();
   FlightLog log = c;
   const Eigen::Index n = c.rows() / 10;

@@ -45,6 +45,9 @@ struct InputCheckOptions {
   /// aliased or not, gives ~1: only content that rises towards Nyquist (folded
   /// vibration) can be seen.
   double aliasing_ratio = 4.0;
+  /// ... and only when that density is also above this fraction (-30 dB) of the
+  /// mean density below band_hz (a noise-free log's floor is rounding noise).
+  double aliasing_band_ratio = 1e-3;
   double band_hz = 2.0;
   /// Saturation: a run of at least this many consecutive samples (and at least
   /// saturation_fraction of the log in all) exactly at the log's max or min.
