@@ -59,8 +59,18 @@ TEST_F(CliIdentify, JsonOnStdoutAloneAndTheSameInTheOutputFile) {
   for (const char* set : {"LS", "GD", "FMLS", "FMGD"}) ASSERT_TRUE(j["estimates"].contains(set)) << set;
   // The result is a parameter-set file other commands read (load_param_sets).
   const auto sets = quadid::load_param_sets(path("result.json"));
-  ASSERT_EQ(sets.size(), 4u);
+  ASSERT_EQ(sets.size(), 6u);  // LS GD FMLS FMGD, then the physically consistent PC, FMPC
   EXPECT_EQ(sets[0].first, "LS");
+  for (const char* set : {"LS", "FMLS"}) {
+    const auto& u = j["uncertainty"][set]["Izz"];
+    EXPECT_LE(u["ci95"][0].get<double>(), j["estimates"][set]["Izz"].get<double>()) << set;
+    EXPECT_GE(u["ci95"][1].get<double>(), j["estimates"][set]["Izz"].get<double>()) << set;
+    EXPECT_GT(u["std_error"].get<double>(), 0.0) << set;
+  }
+  // The plant violates Ixx + Iyy >= Izz (Table 3 LS): LS says so, PC is physical.
+  EXPECT_FALSE(j["consistency"]["LS"]["physical"].get<bool>());
+  EXPECT_TRUE(j["consistency"]["PC"]["physical"].get<bool>());
+  EXPECT_TRUE(j["input_checks"].is_array());
   EXPECT_NEAR(sets[0].second.m, truth.m, 0.005 * truth.m);
   EXPECT_NEAR(j["estimates"]["FMLS"]["Izz"].get<double>(), truth.I(2, 2), 0.03 * truth.I(2, 2));
   const auto& pe = j["prediction_error"]["standard"];

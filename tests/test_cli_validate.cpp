@@ -22,9 +22,9 @@ TEST_F(CliValidate, JudgesAnIdentifyResultAsFourSetsPlusFiles) {
                        " --params qball2-virtual --window 4:14 --json");
   ASSERT_EQ(r.rc, 0) << r.err;
   const auto j = nlohmann::json::parse(r.out);  // stdout holds only the JSON
-  EXPECT_EQ(j["sets"].size(), 5u);
-  for (const char* k : {"LS", "GD", "FMLS", "FMGD", "qball2-virtual"}) EXPECT_TRUE(j["sets"].contains(k)) << k;
-  EXPECT_EQ(j["simulation"]["rows"].size(), 5u);
+  EXPECT_EQ(j["sets"].size(), 7u);  // the six sets of identify (PC, FMPC too) and the preset
+  for (const char* k : {"LS", "GD", "FMLS", "FMGD", "PC", "FMPC", "qball2-virtual"}) EXPECT_TRUE(j["sets"].contains(k)) << k;
+  EXPECT_EQ(j["simulation"]["rows"].size(), 7u);
   EXPECT_TRUE(j["prediction_error"].contains("standard"));
   EXPECT_TRUE(j["prediction_error"].contains("filtered"));
   // The text form prints the Table 4 layout and both prediction tables.

@@ -478,7 +478,13 @@ TEST(Identification, SimulatedNoiseFreeFlightMeetsTheAcceptanceCriteria) {
   const IdentificationResult r = identify(simulate(FourierTrajectory::table2(), so).log);
   // Issue 4: m within 0.2%, Ixx, Iyy, Izz within 1% (measured: 0.004% and <= 0.06%).
   expect_ls_accuracy(r, so.plant, 0.002, 0.01, "noise-free");
-  EXPECT_TRUE(r.warnings.empty());
+  // Without sensor noise the torques' spectral floor is rounding noise, and the
+  // controller's content near Nyquist stands 38 dB above it: the aliasing input
+  // check says so (docs/input-checks.md). No other warning.
+  std::vector<std::string> w;
+  for (const auto& x : r.warnings)
+    if (x.rfind("input check aliasing", 0) != 0) w.push_back(x);
+  EXPECT_TRUE(w.empty()) << w.front();
   std::cout << "noise-free 50 s Table 2 flight, 500 Hz, window 10-50 s:\n" << error_table(r, so.plant);
 }
 

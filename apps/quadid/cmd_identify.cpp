@@ -29,6 +29,7 @@ struct IdentifyArgs {
   std::string nominal = "qball2-nominal";
   ProcessingArgs proc;
   bool allow_rank_deficient = false;
+  bool ignore_input_errors = false;
   std::string evolution;
   double evolution_interval = 0.01;
   std::string out;
@@ -52,6 +53,7 @@ void run(const IdentifyArgs& a) {
   opt.reference = NamedParams{param_set_name(a.nominal), load_params(a.nominal)};
   if (a.gd_init != "nominal") opt.gd_initial = load_params(a.gd_init);
   opt.allow_rank_deficient = a.allow_rank_deficient;
+  opt.ignore_input_errors = a.ignore_input_errors;
   opt.evolution_interval = a.evolution_interval;
 
   IdentifyRequest req;
@@ -88,8 +90,11 @@ void run(const IdentifyArgs& a) {
              a.log, res.processing.samples, res.processing.fs, res.processing.duration, res.processing.filter,
              res.processing.filter_f3db, res.processing.filter_settling,
              opt.processing.exclude_edges ? ", left out at both ends of the log" : "");
+  if (!res.input_findings.empty()) fmt::print("Input checks:\n{}\n", format_findings(res.input_findings));
   fmt::print("{}\n", format_estimates_table(res));
   if (res.extended) fmt::print("{}\n", format_real_flight(*res.extended));
+  fmt::print("{}\n", format_uncertainty_table(res));
+  fmt::print("{}\n", format_consistency(res));
   fmt::print("Least squares: column-scaled condition number {:.4g} (standard), {:.4g} (filtered)\n",
              res.ls_standard.condition, res.ls_filtered.condition);
   fmt::print("Gradient descent: sigma = {:g}, {} discretization, max sigma*T*lambda_max = {:.3g}\n\n", opt.gd.sigma,
@@ -150,6 +155,8 @@ void register_identify(CLI::App& app) {
                   "pre-filter cutoff of the moment rows (gyro differentiated once), Hz; default --cutoff");
   sub->add_flag("--allow-rank-deficient", a->allow_rank_deficient,
                 "warn instead of failing when the data do not determine some parameters (they keep the nominal values)");
+  sub->add_flag("--ignore-input-errors", a->ignore_input_errors,
+                "go on when the input checks find an error (angles in degrees, z down, time gaps; docs/input-checks.md)");
   a->proc.add_to(sub);
   sub->add_option("--evolution", a->evolution,
                   "write the estimates over time (Figs. 4-5) as CSV: t then LS_m..LS_Izz, GD_*, FMLS_*, FMGD_*");

@@ -15,5 +15,6 @@ void register_reproduce(CLI::App& app);
 void register_log_info(CLI::App& app);
 void register_import(CLI::App& app);
 void register_batch(CLI::App& app);
+void register_montecarlo(CLI::App& app);
 
 }  // namespace quadid::cli

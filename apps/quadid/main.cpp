@@ -34,6 +34,7 @@ int main(int argc, char** argv) {
   quadid::cli::register_import(app);
   quadid::cli::register_log_info(app);
   quadid::cli::register_batch(app);
+  quadid::cli::register_montecarlo(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

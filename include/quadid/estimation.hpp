@@ -6,6 +6,7 @@
 #include "quadid/model.hpp"
 #include "quadid/regressor.hpp"
 
+#include <array>
 #include <limits>
 #include <string>
 #include <vector>
@@ -50,8 +51,39 @@ struct LeastSquaresOptions {
   /// A parameter whose standard error exceeds this fraction of its scale (m for
   /// the mass, the mean principal moment for inertia entries) is "poorly determined".
   double poor_fraction = 0.05;
+  /// A direction of the column-scaled regressor whose singular value is below
+  /// near_null times the largest (but above rank_tolerance) is "near-null": the
+  /// parameters making it up are reported as poorly determined whatever their
+  /// standard errors say (those rely on a noise model; a near-null direction
+  /// turns any model error into a large estimate error).
+  double near_null = 1e-3;
   /// Throws std::invalid_argument naming the bad option.
   void validate() const;
+};
+
+/// The HAC covariance of a least-squares solution and its intervals.
+struct LeastSquaresUncertainty {
+  bool computed = false;
+  long samples = 0;
+  /// Cov(theta) = sum_k sum_l w(|k - l|) psi_k psi_l^T with the influence
+  /// psi_k = (A^T A)^+ Gamma_k^T e_k and Bartlett weights w (Newey-West).
+  Mat7 covariance = Mat7::Constant(std::numeric_limits<double>::quiet_NaN());
+  Theta std_error = Theta::Constant(std::numeric_limits<double>::quiet_NaN());
+  /// The same with lag 0 only (heteroscedasticity-consistent, white residuals):
+  /// std_error / white_std_error is the inflation by the residual correlation.
+  Theta white_std_error = Theta::Constant(std::numeric_limits<double>::quiet_NaN());
+  Theta ci_low = Theta::Constant(std::numeric_limits<double>::quiet_NaN());
+  Theta ci_high = Theta::Constant(std::numeric_limits<double>::quiet_NaN());
+  /// Lag (samples) after which the autocorrelation of every parameter's
+  /// influence series stays within +-2 sqrt(log10(n)/n) for 5 consecutive lags
+  /// (Politis & White 2004).
+  long correlation_time = 0;
+  bool correlation_time_capped = false;  // the search reached max_lag
+  long bandwidth = 0;                    // Bartlett bandwidth used (samples)
+  /// Effective degrees of freedom of the Bartlett variance estimate, 3 n / (2 L),
+  /// and the Student-t quantile used for the intervals.
+  double dof = std::numeric_limits<double>::infinity();
+  double quantile = 1.959963984540054;
 };
 
 /// The batch solution of eq. (40) with its diagnostics.
@@ -73,6 +105,25 @@ struct LeastSquaresSolution {
   std::vector<std::string> unidentifiable;
   /// Parameters whose standard error is large against their scale.
   std::vector<std::string> poorly_determined;
+  /// Parameters with a large component (> 0.3) in a near-null direction of the
+  /// column-scaled regressor (singular value below LeastSquaresOptions::near_null
+  /// times the largest): the data determine only a combination of them.
+  std::vector<std::string> near_null;
+  /// Factors of the fit, for the uncertainty and the physically consistent set.
+  /// column_scale d (1/column norm, 0 for a zero column), the right singular
+  /// vectors V of the column-scaled regressor A D = U S V^T (columns in the order
+  /// of `singular_values`), the pseudo-inverse (A^T A)^+ = D V S^-2 V^T D over the
+  /// kept directions, and F = S V^T D^-1 (zero rows for dropped directions), so that
+  /// |A Theta - y|^2 = |F (Theta - theta)|^2 + RSS for any Theta.
+  Theta column_scale = Theta::Zero();
+  Mat7 singular_vectors = Mat7::Zero();
+  Mat7 normal_pinv = Mat7::Zero();
+  Mat7 metric_factor = Mat7::Zero();
+  /// How std_error was computed: "white" (residual variance x sqrt(correlation
+  /// length), from the accumulated sums alone) or "HAC" (attach_uncertainty).
+  std::string std_error_method = "white";
+  /// The HAC covariance and intervals (computed = false until attach_uncertainty).
+  LeastSquaresUncertainty uncertainty;
   bool full_rank() const { return unidentifiable.empty(); }
 };
 
@@ -83,6 +134,103 @@ struct LeastSquaresSolution {
 /// independent residual, used for the standard errors.
 LeastSquaresSolution solve_least_squares(const LeastSquaresAccumulator& acc, const Theta& prior,
                                          const LeastSquaresOptions& opt = {}, double correlation_length = 1.0);
+
+// --- Uncertainty of a least-squares solution (docs/uncertainty.md) ---------------
+
+/// Options of the HAC (heteroscedasticity and autocorrelation consistent)
+/// sandwich covariance.
+struct UncertaintyOptions {
+  /// Level of the confidence intervals.
+  double confidence = 0.95;
+  /// Bartlett kernel bandwidth in samples; 0 = automatic: bandwidth_factor times
+  /// the correlation time of the influence series (below).
+  long bandwidth = 0;
+  /// Automatic bandwidth / correlation time. 4: the Bartlett weights stay above
+  /// 0.75 over the lags that carry the correlation, so the variance is
+  /// underestimated by a few percent only (docs/uncertainty.md).
+  double bandwidth_factor = 4.0;
+  /// Longest lag searched for the correlation time (samples; the search also
+  /// stops at a quarter of the samples). Reaching it is reported.
+  long max_lag = 20000;
+  /// Throws std::invalid_argument naming the bad option.
+  void validate() const;
+};
+
+/// Second pass over the samples of a solved regression: stores the influence
+/// psi_k of each sample (7 numbers per sample).
+class InfluenceAccumulator {
+ public:
+  explicit InfluenceAccumulator(const LeastSquaresSolution& sol);
+  void add(const Regressor4x7& G, const Vec4& Y);
+  long count() const { return static_cast<long>(psi_.size() / 7); }
+  LeastSquaresUncertainty finish(const UncertaintyOptions& opt = {}) const;
+
+ private:
+  Theta theta_;
+  Mat7 pinv_;
+  std::vector<double> psi_;
+};
+
+/// Fills sol.poorly_determined: relative standard error above opt.poor_fraction
+/// (scale: |m| for the mass, the mean of |Ixx|, |Iyy|, |Izz| for every inertia
+/// entry, the prior's when the estimate's is 0), or a part of a near-null direction.
+void judge_poorly_determined(LeastSquaresSolution& sol, const Theta& prior, const LeastSquaresOptions& opt = {});
+
+/// Replaces sol.std_error by the HAC one, keeps `u` in sol.uncertainty and
+/// re-judges which parameters are poorly determined.
+void attach_uncertainty(LeastSquaresSolution& sol, const LeastSquaresUncertainty& u, const Theta& prior,
+                        const LeastSquaresOptions& opt = {});
+
+/// Student-t quantile (Cornish-Fisher expansion, A&S 26.7.5: error < 1e-3 for
+/// nu >= 5, exact normal quantile for infinite nu). 0 < p < 1, nu >= 1.
+double student_t_quantile(double p, double nu);
+
+// --- Physical consistency (docs/uncertainty.md) -----------------------------------
+
+struct PhysicalConsistency {
+  bool physical = false;
+  std::string why;  // "m > 0, I positive definite, triangle inequalities hold" or the first violation
+};
+
+/// m > 0, I symmetric positive definite, triangle inequalities of the principal
+/// moments (equivalently Sigma = tr(I)/2 1 - I positive semidefinite; e.g.
+/// Ixx + Iyy >= Izz). `tolerance` relative to tr(I) for the triangle inequalities.
+PhysicalConsistency check_physical_consistency(const Theta& theta, double tolerance = 1e-9);
+
+struct PhysicalProjectionOptions {
+  /// Lower bound of the mass, as a fraction of the reference scale (m > 0 strictly).
+  double min_mass_fraction = 1e-6;
+  /// Stopping tolerance of NLopt (relative, on the parameters).
+  double xtol_rel = 1e-12;
+  int max_evaluations = 5000;
+  void validate() const;
+};
+
+struct PhysicalProjection {
+  Theta theta = Theta::Constant(std::numeric_limits<double>::quiet_NaN());
+  bool changed = false;      // false: the input was consistent and is returned as is
+  double cost = 0.0;         // |F (theta - theta_ls)|^2: RSS added by enforcing consistency
+  int evaluations = 0;
+  std::string status;        // NLopt's, or "already consistent"
+};
+
+/// The physically consistent Theta closest to theta_ls in the metric |F (.)|^2
+/// (F = LeastSquaresSolution::metric_factor: the least-squares cost itself).
+/// Parametrized by m and the second moment Sigma = L L^T (L lower triangular):
+/// I = tr(Sigma) 1 - Sigma, so every trial point is consistent; NLopt SLSQP with
+/// exact gradients. `scale` (e.g. the reference set) sets the variables' scale.
+PhysicalProjection closest_physical(const Mat7& F, const Theta& theta_ls, const Theta& scale,
+                                    const PhysicalProjectionOptions& opt = {});
+/// The same from a least-squares solution.
+PhysicalProjection closest_physical(const LeastSquaresSolution& sol, const Theta& scale,
+                                    const PhysicalProjectionOptions& opt = {});
+
+namespace detail {
+/// closest_physical's objective (normalized) at x = [m/ms, l11, l21, l22, l31,
+/// l32, l33] and its exact gradient, and the Theta of x; for the tests.
+double physical_objective(const Mat7& F, const Theta& theta_ls, const Theta& scale, const std::array<double, 7>& x,
+                          std::array<double, 7>* grad, Theta* theta = nullptr);
+}  // namespace detail
 
 /// Discretizations of the gradient law (41), d/dt Theta = -sigma Gamma^T (Gamma Theta - Upsilon).
 enum class GdDiscretization {

@@ -35,6 +35,7 @@ struct ExtendedEstimate {
   /// m (or s), Ixx Ixy Ixz Iyy Iyz Izz, then the extra terms.
   std::vector<std::string> names;
   Eigen::VectorXd value, std_error;
+  Eigen::MatrixXd covariance;  // of `value`, inflated by the residuals' correlation length
   /// The rigid-body parameters (m = the known mass when it was given).
   Theta theta = Theta::Zero();
   /// The extra parameters (thrust_scale, offset_x, ... rotor_inertia), name -> value.

@@ -4,6 +4,7 @@
 // See docs/identify.md.
 #pragma once
 
+#include "quadid/checks.hpp"
 #include "quadid/estimation.hpp"
 #include "quadid/io.hpp"
 #include "quadid/signal.hpp"
@@ -238,6 +239,15 @@ struct IdentificationOptions {
   bool auto_cutoffs = false;
   bool extended() const;
   static constexpr double kMaxEvolutionInterval = 3600.0;  // s (an hour): the largest validate() accepts
+  /// Standard errors and intervals of LS and FMLS (HAC sandwich, docs/uncertainty.md).
+  UncertaintyOptions uncertainty{};
+  /// The physically consistent sets PC (from LS) and FMPC (from FMLS).
+  PhysicalProjectionOptions physical{};
+  /// Checks of the log before any estimate (units, frames, aliasing,
+  /// saturation, gaps; docs/input-checks.md). Findings of severity "error" stop
+  /// the identification unless ignore_input_errors.
+  bool input_checks = true;
+  bool ignore_input_errors = false;
   void validate() const;
 };
 
@@ -279,6 +289,16 @@ struct IdentificationResult {
   std::vector<std::string> warnings;
   /// The real-flight regression's full result, when it was used (options.extended()).
   std::shared_ptr<const ExtendedResult> extended;
+  /// Physically consistent sets: PC (closest to LS in its least-squares metric)
+  /// and FMPC (closest to FMLS); equal to LS / FMLS when those are consistent.
+  std::vector<SetEstimate> physical_sets;
+  std::vector<PhysicalProjection> projections;  // one per physical set
+  /// What the input checks found (empty when disabled).
+  std::vector<InputFinding> input_findings;
+  /// Every set: the four of the paper, then the physical ones.
+  std::vector<const SetEstimate*> all_sets() const;
+  /// The least-squares solution behind LS, FMLS (nullptr for other sets).
+  const LeastSquaresSolution* least_squares_of(std::string_view set) const;
   const SetEstimate& estimate(std::string_view name) const;  // throws on an unknown name
 };
 
@@ -298,6 +318,10 @@ std::string format_evolution_csv(const Evolution& e);
 nlohmann::json to_json(const PredictionErrorTable& t);
 /// {"estimates": {"LS": {m, Ixx, ...}, ...}, "prediction_error": {...}, ...}
 nlohmann::json to_json(const IdentificationResult& r);
+/// Standard errors, intervals and what the data determine poorly, for LS and FMLS.
+std::string format_uncertainty_table(const IdentificationResult& r);
+/// One line per set: physically consistent or why not.
+std::string format_consistency(const IdentificationResult& r);
 
 // --- Implementation of the template ----------------------------------------------
 

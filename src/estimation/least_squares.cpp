@@ -36,6 +36,8 @@ void LeastSquaresOptions::validate() const {
     throw std::invalid_argument(fmt::format("LeastSquaresOptions: rank_tolerance={} must be in (0, 1)", rank_tolerance));
   if (!(poor_fraction > 0.0))
     throw std::invalid_argument(fmt::format("LeastSquaresOptions: poor_fraction={} must be positive", poor_fraction));
+  if (!(near_null > 0.0 && near_null < 1.0))
+    throw std::invalid_argument(fmt::format("LeastSquaresOptions: near_null={} must be in (0, 1)", near_null));
 }
 
 Theta LeastSquaresAccumulator::solve_quick() const {
@@ -89,6 +91,27 @@ LeastSquaresSolution solve_least_squares(const LeastSquaresAccumulator& acc, con
   for (int j = 0; j < 7; ++j)
     if (flagged[static_cast<size_t>(j)]) sol.unidentifiable.emplace_back(kThetaNames[static_cast<size_t>(j)]);
   sol.theta = prior + d.asDiagonal() * x;
+
+  // Factors for the uncertainty and the consistent set (see LeastSquaresSolution).
+  // Columns of V and rows of F in descending singular value order.
+  sol.column_scale = d;
+  std::vector<bool> near(7, false);
+  for (int i = 0; i < 7; ++i) {
+    const int e = 6 - i;  // eigenvalues ascend
+    const auto v = es.eigenvectors().col(e);
+    sol.singular_vectors.col(i) = v;
+    if (lmax > 0.0 && lam(e) > cut) {
+      const Theta vd = d.asDiagonal() * v;
+      sol.normal_pinv += vd * vd.transpose() / lam(e);
+      for (int j = 0; j < 7; ++j)
+        sol.metric_factor(i, j) = d(j) != 0.0 ? std::sqrt(lam(e)) * v(j) / d(j) : 0.0;
+      if (lam(e) < opt.near_null * opt.near_null * lmax)
+        for (int j = 0; j < 7; ++j)
+          if (std::abs(v(j)) > 0.3) near[static_cast<size_t>(j)] = true;
+    }
+  }
+  for (int j = 0; j < 7; ++j)
+    if (near[static_cast<size_t>(j)]) sol.near_null.emplace_back(kThetaNames[static_cast<size_t>(j)]);
   sol.condition = (sol.singular_values(6) > 0.0) ? sol.singular_values(0) / sol.singular_values(6)
                                                   : std::numeric_limits<double>::infinity();
 
@@ -144,16 +167,23 @@ LeastSquaresSolution solve_least_squares(const LeastSquaresAccumulator& acc, con
       const double s2 = rss_all / std::max(1.0, 4.0 * n - 7.0);
       for (Eigen::Index j : det) sol.std_error(j) = std::sqrt(infl * s2 * Ainv(j, j));
     }
-    const double mscale = std::abs(th(0));
-    double iscale = (std::abs(th(1)) + std::abs(th(4)) + std::abs(th(6))) / 3.0;
-    if (!(iscale > 0.0)) iscale = (std::abs(prior(1)) + std::abs(prior(4)) + std::abs(prior(6))) / 3.0;
-    for (Eigen::Index j : det) {
-      const double scale = (j == 0) ? mscale : iscale;
-      if (!(sol.std_error(j) <= opt.poor_fraction * scale))
-        sol.poorly_determined.emplace_back(kThetaNames[static_cast<size_t>(j)]);
-    }
+    judge_poorly_determined(sol, prior, opt);
   }
   return sol;
+}
+
+void judge_poorly_determined(LeastSquaresSolution& sol, const Theta& prior, const LeastSquaresOptions& opt) {
+  const Theta& th = sol.theta;
+  const double mscale = std::abs(th(0));
+  double iscale = (std::abs(th(1)) + std::abs(th(4)) + std::abs(th(6))) / 3.0;
+  if (!(iscale > 0.0)) iscale = (std::abs(prior(1)) + std::abs(prior(4)) + std::abs(prior(6))) / 3.0;
+  sol.poorly_determined.clear();
+  for (int j = 0; j < 7; ++j) {
+    const double scale = (j == 0) ? mscale : iscale;
+    const std::string name = kThetaNames[static_cast<size_t>(j)];
+    const bool near = std::find(sol.near_null.begin(), sol.near_null.end(), name) != sol.near_null.end();
+    if (!(sol.std_error(j) <= opt.poor_fraction * scale) || near) sol.poorly_determined.push_back(name);
+  }
 }
 
 }  // namespace quadid

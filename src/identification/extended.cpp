@@ -393,7 +393,8 @@ ExtendedResult identify_extended(const FlightLog& log, const ExtendedOptions& op
     double fc = std::min(res.force_processing.filter_f3db, res.moment_processing.filter_f3db);
     if (model == RegressionModel::Filtered) fc = std::min(fc, opt.lambda / (2.0 * std::numbers::pi));
     const double corr = std::max(1.0, fs / (2.0 * fc));
-    e.std_error = (f.sol.covariance.diagonal() * corr).cwiseSqrt();
+    e.covariance = f.sol.covariance * corr;
+    e.std_error = e.covariance.diagonal().cwiseSqrt();
     e.theta = f.sol.x.head<7>();
     if (terms.known_mass) e.theta(0) = *terms.known_mass;
     for (Eigen::Index j = 7; j < P; ++j) e.extra.emplace_back(names[static_cast<size_t>(j)], f.sol.x(j));

@@ -7,10 +7,12 @@
 
 #include <fmt/format.h>
 
+#include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
+#include <tuple>
 
 namespace quadid {
 namespace {
@@ -62,11 +64,6 @@ double correlation_length(double fs, double f3db, double lambda, bool filtered) 
   return std::max(1.0, fs / (2.0 * f));
 }
 
-bool positive_definite(const Mat3& I) {
-  const Eigen::SelfAdjointEigenSolver<Mat3> es(I, Eigen::EigenvaluesOnly);
-  return es.eigenvalues().minCoeff() > 0.0;
-}
-
 }  // namespace
 
 void IdentificationOptions::validate() const {
@@ -89,22 +86,58 @@ void IdentificationOptions::validate() const {
   if (!(evolution_interval >= 0.0 && evolution_interval <= kMaxEvolutionInterval))
     throw std::invalid_argument(fmt::format("--evolution-interval = {:g} s must be in [0, {:g}] s (0 = every sample)",
                                             evolution_interval, kMaxEvolutionInterval));
+  uncertainty.validate();
+  physical.validate();
 }
 
 bool IdentificationOptions::extended() const {
   const double c = processing.lowpass.cutoff_hz;
   return terms.any() || auto_cutoffs || force_cutoff_hz.value_or(c) != c || moment_cutoff_hz.value_or(c) != c;
+
+}
+
+std::vector<const SetEstimate*> IdentificationResult::all_sets() const {
+  std::vector<const SetEstimate*> v;
+  for (const auto& e : estimates) v.push_back(&e);
+  for (const auto& e : physical_sets) v.push_back(&e);
+  return v;
+}
+
+const LeastSquaresSolution* IdentificationResult::least_squares_of(std::string_view set) const {
+  if (set == "LS") return &ls_standard;
+  if (set == "FMLS") return &ls_filtered;
+  return nullptr;
 }
 
 const SetEstimate& IdentificationResult::estimate(std::string_view name) const {
-  for (const auto& e : estimates)
-    if (e.name == name) return e;
-  throw std::invalid_argument(fmt::format("no estimate named '{}' (LS, GD, FMLS, FMGD)", name));
+  for (const auto* e : all_sets())
+    if (e->name == name) return *e;
+  throw std::invalid_argument(fmt::format("no estimate named '{}' (LS, GD, FMLS, FMGD, PC, FMPC)", name));
 }
 
 IdentificationResult identify(const FlightLog& log, const IdentificationOptions& opt) {
   opt.validate();
   IdentificationResult res;
+  std::vector<std::string> input_warnings;  // listed after the estimation's own warnings
+  if (opt.input_checks) {
+    InputCheckOptions ic;
+    ic.g = opt.processing.g;
+    ic.reference_mass = opt.reference.params.m;
+    res.input_findings = check_input(log, ic);
+    std::vector<std::string> errors;
+    for (const auto& f : res.input_findings) {
+      if (f.severity == Severity::Error) errors.push_back(fmt::format("{}: {} ({})", f.check, f.saw, f.action));
+      else if (f.severity == Severity::Warning)
+        input_warnings.push_back(fmt::format("input check {}: {} ({})", f.check, f.saw, f.action));
+    }
+    if (!errors.empty()) {
+      if (!opt.ignore_input_errors)
+        throw InputError(fmt::format("the log fails the input checks: {}; if the log is right, ignore the checks "
+                                     "(--ignore-input-errors)",
+                                     fmt::join(errors, "; ")));
+      for (const auto& e : errors) input_warnings.push_back("input check " + e + " (ignored)");
+    }
+  }
   const auto sig = process_log(log, opt.processing, &res.processing);
   const Regression std_reg(sig, RegressionModel::Standard, opt.window);
   const Regression filt_reg(sig, RegressionModel::Filtered, opt.window, opt.lambda, opt.gd_variant);
@@ -131,6 +164,13 @@ IdentificationResult identify(const FlightLog& log, const IdentificationOptions&
   const double fs = res.processing.fs, f3 = res.processing.filter_f3db;
   res.ls_standard = solve_least_squares(s.acc, prior, opt.ls, correlation_length(fs, f3, opt.lambda, false));
   res.ls_filtered = solve_least_squares(f.acc, prior, opt.ls, correlation_length(fs, f3, opt.lambda, true));
+  // Second pass: the influence of each sample on the estimate, for the HAC
+  // covariance (docs/uncertainty.md).
+  for (auto [reg, sol] : {std::pair{&std_reg, &res.ls_standard}, std::pair{&filt_reg, &res.ls_filtered}}) {
+    InfluenceAccumulator infl(*sol);
+    reg->for_each([&](Eigen::Index, const Regressor4x7& G, const Vec4& Y) { infl.add(G, Y); });
+    attach_uncertainty(*sol, infl.finish(opt.uncertainty), prior, opt.ls);
+  }
   res.gd_step_gain_standard = s.gd->max_step_gain();
   res.gd_step_gain_filtered = f.gd->max_step_gain();
 
@@ -146,6 +186,15 @@ IdentificationResult identify(const FlightLog& log, const IdentificationOptions&
   res.estimates[1] = gd_estimate("GD", RegressionModel::Standard, *s.gd);
   res.estimates[2] = SetEstimate{"FMLS", RegressionModel::Filtered, true, res.ls_filtered.theta, true, "", {}};
   res.estimates[3] = gd_estimate("FMGD", RegressionModel::Filtered, *f.gd);
+  // Physically consistent sets: the closest consistent Theta in each LS metric.
+  for (const auto& [name, model, sol] : {std::tuple{"PC", RegressionModel::Standard, &res.ls_standard},
+                                         std::tuple{"FMPC", RegressionModel::Filtered, &res.ls_filtered}}) {
+    PhysicalProjection pr = closest_physical(*sol, prior, opt.physical);
+    SetEstimate e{name, model, true, pr.theta, pr.theta.allFinite(), "", {}};
+    if (!e.valid) e.note = fmt::format("{}: no consistent set ({})", name, pr.status);
+    res.physical_sets.push_back(e);
+    res.projections.push_back(std::move(pr));
+  }
 
   if (opt.extended()) {
     // LS and FMLS from the real-flight regression (extended.hpp); the paper's
@@ -174,6 +223,39 @@ IdentificationResult identify(const FlightLog& log, const IdentificationOptions&
       sol.poorly_determined.clear();
       for (const auto& n : x.poorly_determined)
         if (n != "thrust_scale") sol.poorly_determined.push_back(n);
+      // Intervals of the real-flight regression: its standard errors (white
+      // residuals inflated by the filters' correlation length), normal quantile.
+      Mat7 cov = x.covariance.topLeftCorner<7, 7>();
+      if (opt.terms.known_mass) {  // m is given: no variance, no correlation
+        cov.row(0).setZero();
+        cov.col(0).setZero();
+      }
+      auto& u = sol.uncertainty;
+      u = LeastSquaresUncertainty{};
+      u.computed = true;
+      u.samples = xr->window_samples;
+      u.covariance = cov;
+      u.std_error = sol.std_error;
+      u.white_std_error = sol.std_error;
+      u.ci_low = x.theta - u.quantile * sol.std_error;
+      u.ci_high = x.theta + u.quantile * sol.std_error;
+      sol.std_error_method = "real-flight regression: QR covariance, residual variance inflated by the pre-filters' "
+                             "correlation length";
+      // The physically consistent set closest to it, in the metric of its
+      // covariance (m held at the known mass when given).
+      Mat7 info = Mat7::Zero();
+      const Theta sd = sol.std_error.cwiseMax(1e-12 * x.theta.cwiseAbs().maxCoeff());
+      const Eigen::LDLT<Mat7> ldlt(cov + Mat7(sd.cwiseAbs2().asDiagonal()) * 1e-9);
+      info = ldlt.solve(Mat7::Identity());
+      if (opt.terms.known_mass) info(0, 0) = 1e12 * info.diagonal().tail<6>().maxCoeff();
+      const Eigen::LLT<Mat7> llt(0.5 * (info + info.transpose()));
+      const Mat7 F = llt.matrixU();
+      PhysicalProjection pr = closest_physical(F, x.theta, prior, opt.physical);
+      SetEstimate& pc = res.physical_sets[static_cast<size_t>(i)];
+      pc.theta = pr.theta;
+      pc.valid = pr.theta.allFinite();
+      pc.note = pc.valid ? "" : fmt::format("{}: no consistent set ({})", pc.name, pr.status);
+      res.projections[static_cast<size_t>(i)] = std::move(pr);
     }
     for (const auto& w : xr->warnings) res.warnings.push_back(w);
     res.extended = std::move(xr);
@@ -208,8 +290,13 @@ IdentificationResult identify(const FlightLog& log, const IdentificationOptions&
         detail.push_back(fmt::format("{} = {:.4g} +- {:.2g}", n, sol->theta(j), sol->std_error(j)));
       }
       res.warnings.push_back(fmt::format("{}: poorly determined by these data (standard error above {:g}% of the "
-                                         "parameter's scale): {}",
-                                         name, 100.0 * opt.ls.poor_fraction, fmt::join(detail, ", ")));
+                                         "parameter's scale{}): {}",
+                                         name, 100.0 * opt.ls.poor_fraction,
+                                         sol->near_null.empty()
+                                             ? std::string()
+                                             : fmt::format(", or in a near-null direction: {}",
+                                                           fmt::join(sol->near_null, ", ")),
+                                         fmt::join(detail, ", ")));
     }
   }
   // The two regressions see the same flight through different filters; when
@@ -230,11 +317,15 @@ IdentificationResult identify(const FlightLog& log, const IdentificationOptions&
   }
   for (const auto& e : res.estimates) {
     if (!e.valid) continue;
-    if (!(e.theta(0) > 0.0))
-      res.warnings.push_back(fmt::format("{}: the estimated mass {:.4g} kg is not positive", e.name, e.theta(0)));
-    else if (!positive_definite(e.params().I))
-      res.warnings.push_back(
-          fmt::format("{}: the estimated inertia tensor is not positive definite (not a physical body)", e.name));
+    // Positivity only: the triangle inequalities are reported in consistency.<SET>
+    // (the paper's own "true" plant, Table 3, violates them).
+    const PhysicalConsistency c = check_physical_consistency(e.theta);
+    if (!c.physical && c.why.find("triangle") == std::string::npos)
+      res.warnings.push_back(fmt::format("{}: not a physical body: {}{}", e.name, c.why,
+                                         e.least_squares ? fmt::format(" (the closest physical set is {})",
+                                                                       e.model == RegressionModel::Standard ? "PC"
+                                                                                                            : "FMPC")
+                                                         : std::string()));
   }
 
   // Tables 5-6: each model with its own sets and the reference.
@@ -248,6 +339,7 @@ IdentificationResult identify(const FlightLog& log, const IdentificationOptions&
   };
   res.errors_standard = prediction_error(std_reg.with_window(ew), sets_of(0, 1), opt.reference);
   res.errors_filtered = prediction_error(filt_reg.with_window(ew), sets_of(2, 3), opt.reference);
+  res.warnings.insert(res.warnings.end(), input_warnings.begin(), input_warnings.end());
   return res;
 }
 

@@ -6,6 +6,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 
 namespace quadid {
@@ -46,15 +47,45 @@ json ls_json(const LeastSquaresSolution& s) {
   json j = {{"condition", finite_or_null(s.condition)},
             {"singular_values", vec_json(s.singular_values)},
             {"std_error", theta_json(s.std_error)},
+            {"std_error_method", s.std_error_method},
             {"residual_rms", s.residual_rms},
             {"unidentifiable", s.unidentifiable},
+            {"near_null", s.near_null},
             {"poorly_determined", s.poorly_determined}};
   if (!s.unidentifiable.empty())
     j["std_error_note"] = fmt::format(
         "null for {}: the data do not determine them (kept at the reference values); the other standard errors "
         "hold them fixed there",
         fmt::join(s.unidentifiable, ", "));
+  const auto& u = s.uncertainty;
+  if (u.computed)
+    j["hac"] = {{"kernel", "Bartlett"},
+                {"correlation_time_samples", u.correlation_time},
+                {"correlation_time_capped", u.correlation_time_capped},
+                {"bandwidth_samples", u.bandwidth},
+                {"dof", finite_or_null(u.dof)},
+                {"t_quantile", u.quantile},
+                {"white_std_error", theta_json(u.white_std_error)}};
   return j;
+}
+
+// uncertainty.<SET>.<param> = {"std_error": ..., "ci95": [lo, hi]} (DESIGN.md).
+json uncertainty_json(const LeastSquaresSolution& s) {
+  json j = json::object();
+  const auto& u = s.uncertainty;
+  if (!u.computed) return j;
+  for (int i = 0; i < 7; ++i)
+    j[kThetaNames[static_cast<size_t>(i)]] = {
+        {"std_error", finite_or_null(u.std_error(i))},
+        {"ci95", json::array({finite_or_null(u.ci_low(i)), finite_or_null(u.ci_high(i))})}};
+  return j;
+}
+
+// "value +- std" with the std to 2 significant digits, or the value alone.
+std::string value_pm(double v, double se) {
+  if (!std::isfinite(v)) return "-";
+  if (!std::isfinite(se)) return fmt::format("{:.6g} +- ?", v);
+  return fmt::format("{:.6g} +- {:.2g}", v, se);
 }
 
 }  // namespace
@@ -64,16 +95,82 @@ std::string format_estimates_table(const IdentificationResult& r) {
   t.title = fmt::format("Estimated parameters (Table 3): window {} ({} samples at {:g} Hz)", r.window.to_string(),
                         r.window_samples, r.processing.fs);
   t.header = {"Parameter", "Units"};
-  for (const auto& e : r.estimates) t.header.push_back(e.name);
+  // LS and FMLS as "value +- standard error" (HAC, docs/uncertainty.md).
+  const auto sets = r.all_sets();
+  for (const auto* e : sets) t.header.push_back(e->name);
   t.header.push_back(r.reference.name);
   const Theta ref = r.reference.params.theta();
   for (int j = 0; j < 7; ++j) {
     std::vector<std::string> row = {kThetaNames[static_cast<size_t>(j)], theta_unit(j)};
-    for (const auto& e : r.estimates) row.push_back(e.valid ? num(e.theta(j)) : "diverged");
+    for (const auto* e : sets) {
+      std::string cell = e->valid ? num(e->theta(j)) : "diverged";
+      if (const auto* ls = r.least_squares_of(e->name); ls && e->valid && ls->uncertainty.computed)
+        cell = value_pm(e->theta(j), ls->std_error(j));
+      row.push_back(cell);
+    }
     row.push_back(num(ref(j)));
     t.rows.push_back(std::move(row));
   }
   return t.to_text();
+}
+
+std::string format_uncertainty_table(const IdentificationResult& r) {
+  fmt::memory_buffer out;
+  auto it = std::back_inserter(out);
+  for (const char* name : {"LS", "FMLS"}) {
+    const LeastSquaresSolution& s = *r.least_squares_of(name);
+    const auto& u = s.uncertainty;
+    if (!u.computed) continue;
+    fmt::format_to(it,
+                   "{}: 95% intervals (HAC, Bartlett bandwidth {} samples = {:.3g} x correlation time {} samples{}; "
+                   "Student t, {:.0f} dof, quantile {:.3f})\n",
+                   name, u.bandwidth, u.correlation_time > 0 ? double(u.bandwidth) / double(u.correlation_time) : 0.0,
+                   u.correlation_time, u.correlation_time_capped ? " (search capped)" : "", u.dof, u.quantile);
+    fmt::format_to(it, "{:<10}{:>14}{:>11}{:>9}{:>29}{:>10}\n", "Parameter", "estimate", "std err", "rel %",
+                   "95% interval", "x white");
+    const double iscale = (std::abs(s.theta(1)) + std::abs(s.theta(4)) + std::abs(s.theta(6))) / 3.0;
+    for (int j = 0; j < 7; ++j) {
+      const std::string n = kThetaNames[static_cast<size_t>(j)];
+      const double scale = j == 0 ? std::abs(s.theta(0)) : iscale;
+      const bool poor = std::find(s.poorly_determined.begin(), s.poorly_determined.end(), n) != s.poorly_determined.end();
+      fmt::format_to(it, "{:<10}{:>14}{:>11}{:>9}{:>29}{:>10}{}\n", n, num(s.theta(j)),
+                     std::isfinite(u.std_error(j)) ? fmt::format("{:.2g}", u.std_error(j)) : "-",
+                     std::isfinite(u.std_error(j)) && scale > 0 ? fmt::format("{:.2f}", 100.0 * u.std_error(j) / scale) : "-",
+                     std::isfinite(u.ci_low(j)) ? fmt::format("[{:.5g}, {:.5g}]", u.ci_low(j), u.ci_high(j)) : "-",
+                     u.white_std_error(j) > 0.0 && std::isfinite(u.std_error(j))
+                         ? fmt::format("{:.2f}", u.std_error(j) / u.white_std_error(j))
+                         : "-",
+                     poor ? "  poorly determined" : "");
+    }
+  }
+  fmt::format_to(it, "(rel % against |m| for m, the mean principal moment for inertia entries; x white: the std error "
+                     "over the one that ignores the residual correlation)\n");
+  return fmt::to_string(out);
+}
+
+std::string format_consistency(const IdentificationResult& r) {
+  fmt::memory_buffer out;
+  auto it = std::back_inserter(out);
+  fmt::format_to(it, "Physical consistency (m > 0, I positive definite, triangle inequalities):\n");
+  for (const auto* e : r.all_sets()) {
+    if (!e->valid) {
+      fmt::format_to(it, "  {:<6} -    {}\n", e->name, e->note);
+      continue;
+    }
+    const PhysicalConsistency c = check_physical_consistency(e->theta);
+    fmt::format_to(it, "  {:<6} {:<4} {}\n", e->name, c.physical ? "yes" : "NO", c.why);
+  }
+  for (size_t i = 0; i < r.physical_sets.size() && i < r.projections.size(); ++i) {
+    const auto& p = r.projections[i];
+    if (p.changed)
+      fmt::format_to(it, "  {} moved from {} to be consistent: least-squares cost +{:.3g} ({}, {} evaluations)\n",
+                     r.physical_sets[i].name, r.physical_sets[i].name == "PC" ? "LS" : "FMLS", p.cost, p.status,
+                     p.evaluations);
+    else
+      fmt::format_to(it, "  {} = {} (already consistent)\n", r.physical_sets[i].name,
+                     r.physical_sets[i].name == "PC" ? "LS" : "FMLS");
+  }
+  return fmt::to_string(out);
 }
 
 std::string format_prediction_table(const PredictionErrorTable& t, std::string_view title) {
@@ -147,6 +244,14 @@ json to_json(const IdentificationResult& r) {
              {"discretization",
               r.options.gd.discretization == GdDiscretization::Exact ? "exact" : "forward-euler (eq. 42)"},
              {"initial", theta_json(r.gd_initial)}};
+  json consistency = json::object();
+  for (const auto* e : r.all_sets()) {
+    if (!e->valid) continue;
+    const PhysicalConsistency c = check_physical_consistency(e->theta);
+    consistency[e->name] = {{"physical", c.physical}, {"why", c.why}};
+  }
+  for (const auto& e : r.physical_sets)
+    if (e.valid) est[e.name] = to_json(e.params());
   for (const auto& e : r.estimates) {
     if (e.valid) {
       est[e.name] = to_json(e.params());
@@ -180,6 +285,9 @@ json to_json(const IdentificationResult& r) {
            {{"lambda", r.options.lambda},
             {"gd_variant", r.options.gd_variant == signal::GdVariant::Consistent ? "consistent" : "printed"}}},
           {"least_squares", {{"LS", ls_json(r.ls_standard)}, {"FMLS", ls_json(r.ls_filtered)}}},
+          {"uncertainty", {{"LS", uncertainty_json(r.ls_standard)}, {"FMLS", uncertainty_json(r.ls_filtered)}}},
+          {"consistency", consistency},
+          {"input_checks", to_json(r.input_findings)},
           {"gradient_descent", gd},
           {"prediction_error", {{"standard", to_json(r.errors_standard)}, {"filtered", to_json(r.errors_filtered)}}},
           {"warnings", r.warnings}};

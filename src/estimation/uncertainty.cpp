@@ -1,0 +1,171 @@
+// Uncertainty of a least-squares solution: HAC (Newey-West) sandwich covariance
+// from the influence of each sample, with a data-driven bandwidth. See
+// docs/uncertainty.md for the reasoning and its limits (errors in variables).
+#include "quadid/estimation.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <stdexcept>
+
+namespace quadid {
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+// Standard normal quantile: bisection on 0.5 erfc(-z / sqrt 2) = p (exact to
+// ~1e-15; called a few times per identification).
+double normal_quantile(double p) {
+  double lo = -40.0, hi = 40.0;
+  for (int i = 0; i < 200 && hi - lo > 1e-15; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    if (0.5 * std::erfc(-mid / std::numbers::sqrt2) < p) lo = mid;
+    else hi = mid;
+  }
+  return 0.5 * (lo + hi);
+}
+
+// Lag-k autocovariance of column j of the n x 7 row-major series x (mean removed).
+double autocov(const std::vector<double>& x, long n, int j, long k) {
+  double s = 0.0;
+  for (long i = 0; i + k < n; ++i) s += x[static_cast<size_t>(7 * i + j)] * x[static_cast<size_t>(7 * (i + k) + j)];
+  return s / static_cast<double>(n);
+}
+
+}  // namespace
+
+void UncertaintyOptions::validate() const {
+  if (!(confidence > 0.0 && confidence < 1.0))
+    throw std::invalid_argument(fmt::format("UncertaintyOptions: confidence={} must be in (0, 1)", confidence));
+  if (bandwidth < 0)
+    throw std::invalid_argument(fmt::format("UncertaintyOptions: bandwidth={} must be >= 0 (0 = automatic)", bandwidth));
+  if (!(bandwidth_factor >= 1.0) || !std::isfinite(bandwidth_factor))
+    throw std::invalid_argument(fmt::format("UncertaintyOptions: bandwidth_factor={} must be >= 1", bandwidth_factor));
+  if (max_lag < 1) throw std::invalid_argument(fmt::format("UncertaintyOptions: max_lag={} must be >= 1", max_lag));
+}
+
+double student_t_quantile(double p, double nu) {
+  if (!(p > 0.0 && p < 1.0)) throw std::invalid_argument(fmt::format("student_t_quantile: p={} must be in (0, 1)", p));
+  if (!(nu >= 1.0)) throw std::invalid_argument(fmt::format("student_t_quantile: nu={} must be >= 1", nu));
+  const double z = normal_quantile(p);
+  if (!std::isfinite(nu)) return z;
+  // Abramowitz & Stegun 26.7.5, terms up to nu^-4.
+  const double z2 = z * z, z3 = z2 * z, z5 = z3 * z2, z7 = z5 * z2, z9 = z7 * z2;
+  const double g1 = (z3 + z) / 4.0;
+  const double g2 = (5.0 * z5 + 16.0 * z3 + 3.0 * z) / 96.0;
+  const double g3 = (3.0 * z7 + 19.0 * z5 + 17.0 * z3 - 15.0 * z) / 384.0;
+  const double g4 = (79.0 * z9 + 776.0 * z7 + 1482.0 * z5 - 1920.0 * z3 - 945.0 * z) / 92160.0;
+  return z + g1 / nu + g2 / (nu * nu) + g3 / (nu * nu * nu) + g4 / (nu * nu * nu * nu);
+}
+
+InfluenceAccumulator::InfluenceAccumulator(const LeastSquaresSolution& sol)
+    : theta_(sol.theta), pinv_(sol.normal_pinv) {}
+
+void InfluenceAccumulator::add(const Regressor4x7& G, const Vec4& Y) {
+  // psi_k = (A^T A)^+ Gamma_k^T e_k: the sample's contribution to theta - theta_true
+  // (to first order), with the rows weighted as in the fit (unit weights).
+  const Vec4 e = Y - G * theta_;
+  const Theta psi = pinv_ * (G.transpose() * e);
+  for (int j = 0; j < 7; ++j) psi_.push_back(psi(j));
+}
+
+LeastSquaresUncertainty InfluenceAccumulator::finish(const UncertaintyOptions& opt) const {
+  opt.validate();
+  LeastSquaresUncertainty u;
+  const long n = count();
+  u.samples = n;
+  if (n < 8 || !theta_.allFinite()) return u;
+
+  // Centre the influence series (its sum is ~0 by the normal equations).
+  std::vector<double> x = psi_;
+  Theta mean = Theta::Zero();
+  for (long i = 0; i < n; ++i)
+    for (int j = 0; j < 7; ++j) mean(j) += x[static_cast<size_t>(7 * i + j)];
+  mean /= static_cast<double>(n);
+  for (long i = 0; i < n; ++i)
+    for (int j = 0; j < 7; ++j) x[static_cast<size_t>(7 * i + j)] -= mean(j);
+
+  // Correlation time: Politis & White (2004): the smallest lag m after which
+  // |rho(m + k)| < 2 sqrt(log10(n)/n) for k = 1..5, the largest over the
+  // parameters with a non-zero influence.
+  const double thr = 2.0 * std::sqrt(std::log10(static_cast<double>(n)) / static_cast<double>(n));
+  constexpr long K = 5;
+  const long lag_cap = std::max<long>(1, std::min<long>(opt.max_lag, n / 4));
+  long m_hat = 0;
+  for (int j = 0; j < 7; ++j) {
+    const double c0 = autocov(x, n, j, 0);
+    if (!(c0 > 0.0)) continue;
+    long run = 0, m = 0;
+    for (long k = 1; k <= lag_cap; ++k) {
+      if (std::abs(autocov(x, n, j, k) / c0) < thr) {
+        if (++run == K) break;
+      } else {
+        run = 0;
+        m = k;
+      }
+    }
+    if (run < K) u.correlation_time_capped = true;
+    m_hat = std::max(m_hat, m);
+  }
+  u.correlation_time = m_hat;
+  long L = opt.bandwidth > 0 ? opt.bandwidth
+                             : static_cast<long>(std::ceil(opt.bandwidth_factor * static_cast<double>(std::max<long>(1, m_hat))));
+  L = std::clamp<long>(L, 1, n);
+  u.bandwidth = L;
+
+  // Bartlett-kernel long-run covariance by overlapping batch sums (Meketon &
+  // Schmeiser): E[S_k S_k^T] / L = sum_{|l|<L} (1 - |l|/L) Gamma(l) for the sum
+  // S_k of L consecutive psi. O(n) with a running sum; positive semidefinite.
+  Mat7 lrv = Mat7::Zero(), white = Mat7::Zero();
+  Theta S = Theta::Zero();
+  long batches = 0;
+  for (long i = 0; i < n; ++i) {
+    const Eigen::Map<const Theta> xi(&x[static_cast<size_t>(7 * i)]);
+    white.noalias() += xi * xi.transpose();
+    S += xi;
+    if (i >= L) S -= Eigen::Map<const Theta>(&x[static_cast<size_t>(7 * (i - L))]);
+    if (i >= L - 1) {
+      lrv.noalias() += S * S.transpose();
+      ++batches;
+    }
+  }
+  lrv /= static_cast<double>(batches) * static_cast<double>(L);
+  // The influence series sums to zero (normal equations), which biases a
+  // Bartlett estimate down by 1 - b + b^2/3, b = L/n (Kiefer & Vogelsang 2005,
+  // fixed-b expectation of the demeaned Bartlett estimator): undone here.
+  const double b = static_cast<double>(L) / static_cast<double>(n);
+  lrv /= std::max(0.25, 1.0 - b + b * b / 3.0);
+  // theta_hat - theta ~ sum_k psi_k: Cov = n * long-run covariance.
+  u.covariance = static_cast<double>(n) * lrv;
+  u.white_std_error = white.diagonal().cwiseSqrt();
+  u.std_error = u.covariance.diagonal().cwiseSqrt();
+  u.dof = std::max(1.0, 1.5 * static_cast<double>(n) / static_cast<double>(L));
+  u.quantile = student_t_quantile(0.5 + 0.5 * opt.confidence, u.dof);
+  u.ci_low = theta_ - u.quantile * u.std_error;
+  u.ci_high = theta_ + u.quantile * u.std_error;
+  u.computed = true;
+  return u;
+}
+
+void attach_uncertainty(LeastSquaresSolution& sol, const LeastSquaresUncertainty& u, const Theta& prior,
+                        const LeastSquaresOptions& opt) {
+  sol.uncertainty = u;
+  if (!u.computed) return;
+  sol.std_error = u.std_error;
+  // Unidentifiable directions keep the prior: no standard error to speak of.
+  for (const auto& n : sol.unidentifiable) {
+    for (size_t j = 0; j < 7; ++j)
+      if (n == kThetaNames[j]) {
+        sol.std_error(static_cast<Eigen::Index>(j)) = std::numeric_limits<double>::infinity();
+        sol.uncertainty.std_error(static_cast<Eigen::Index>(j)) = kNaN;
+        sol.uncertainty.ci_low(static_cast<Eigen::Index>(j)) = kNaN;
+        sol.uncertainty.ci_high(static_cast<Eigen::Index>(j)) = kNaN;
+      }
+  }
+  sol.std_error_method = "HAC";
+  judge_poorly_determined(sol, prior, opt);
+}
+
+}  // namespace quadid

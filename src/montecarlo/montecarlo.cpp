@@ -1,0 +1,335 @@
+// Monte Carlo identification flights on a thread pool (docs/montecarlo.md).
+#include "quadid/montecarlo.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <mutex>
+#include <stdexcept>
+#include <thread>
+
+namespace quadid {
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+MonteCarloRun fly(const MonteCarloOptions& o, const Trajectory& traj, int i) {
+  MonteCarloRun run;
+  run.index = i;
+  run.seed = run_seed(o.seed, i);
+  try {
+    SimulationOptions so = o.simulation;
+    so.sensors.seed = run.seed;
+    so.record_truth = false;
+    const SimulationResult sim = simulate(traj, so);
+    IdentificationOptions io = o.identification;
+    io.evolution_interval = std::max(io.evolution_interval, 1.0);  // not used here: keep it small
+    const IdentificationResult id = identify(sim.log, io);
+    for (const auto* e : id.all_sets()) {
+      run.sets.push_back(e->name);
+      run.estimates.push_back(e->valid ? e->theta : Theta::Constant(kNaN));
+      const LeastSquaresSolution* ls = id.least_squares_of(e->name);
+      if (ls && ls->uncertainty.computed) {
+        run.ci_low.push_back(ls->uncertainty.ci_low);
+        run.ci_high.push_back(ls->uncertainty.ci_high);
+      } else {
+        run.ci_low.push_back(Theta::Constant(kNaN));
+        run.ci_high.push_back(Theta::Constant(kNaN));
+      }
+      run.physical.push_back(e->valid && check_physical_consistency(e->theta).physical);
+    }
+    run.warnings = static_cast<int>(id.warnings.size());
+    run.ok = true;
+  } catch (const std::exception& e) {
+    run.ok = false;
+    run.error = e.what();
+  }
+  return run;
+}
+
+// Scale of each parameter for relative numbers: |truth| for m and the moments,
+// the mean principal moment for the products.
+Theta relative_scale(const Theta& truth) {
+  Theta s = truth.cwiseAbs();
+  const double mean_moment = (std::abs(truth(1)) + std::abs(truth(4)) + std::abs(truth(6))) / 3.0;
+  for (int j : {2, 3, 5}) s(j) = mean_moment;
+  return s;
+}
+
+}  // namespace
+
+void MonteCarloOptions::validate() const {
+  if (runs < 1) throw std::invalid_argument(fmt::format("--runs {}: need at least 1 run", runs));
+  if (threads < 0) throw std::invalid_argument(fmt::format("--threads {}: must be >= 0 (0 = all cores)", threads));
+  if (trajectory.empty()) throw std::invalid_argument("--trajectory: empty");
+  simulation.validate();
+  identification.validate();
+}
+
+std::uint64_t run_seed(std::uint64_t seed, int run) {
+  // splitmix64 (Steele, Lea & Flood 2014) of seed + (run + 1) * golden gamma.
+  std::uint64_t z = seed + static_cast<std::uint64_t>(run + 1) * 0x9E3779B97F4A7C15ULL;
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
+  return z ^ (z >> 31);
+}
+
+std::vector<MonteCarloSetStats> montecarlo_statistics(const std::vector<MonteCarloRun>& runs, const Theta& truth) {
+  std::vector<MonteCarloSetStats> out;
+  const MonteCarloRun* first = nullptr;
+  for (const auto& r : runs)
+    if (r.ok) {
+      first = &r;
+      break;
+    }
+  if (!first) return out;
+  for (size_t s = 0; s < first->sets.size(); ++s) {
+    MonteCarloSetStats st;
+    st.name = first->sets[s];
+    Theta sum = Theta::Zero(), sum2 = Theta::Zero(), cover = Theta::Zero(), half = Theta::Zero();
+    int with_ci = 0, physical = 0;
+    for (const auto& r : runs) {  // in run order: the same sums whatever the thread count
+      if (!r.ok || s >= r.sets.size() || r.sets[s] != st.name || !r.estimates[s].allFinite()) continue;
+      ++st.runs;
+      sum += r.estimates[s];
+      sum2 += (r.estimates[s] - truth).cwiseAbs2();
+      if (r.physical[s]) ++physical;
+      if (r.ci_low[s].allFinite() && r.ci_high[s].allFinite()) {
+        ++with_ci;
+        for (int j = 0; j < 7; ++j)
+          if (r.ci_low[s](j) <= truth(j) && truth(j) <= r.ci_high[s](j)) cover(j) += 1.0;
+        half += 0.5 * (r.ci_high[s] - r.ci_low[s]);
+      }
+    }
+    if (st.runs == 0) {
+      out.push_back(st);
+      continue;
+    }
+    const double n = st.runs;
+    st.mean = sum / n;
+    st.bias = st.mean - truth;
+    st.rmse = (sum2 / n).cwiseSqrt();
+    Theta var = Theta::Zero();
+    for (const auto& r : runs)
+      if (r.ok && s < r.sets.size() && r.sets[s] == st.name && r.estimates[s].allFinite())
+        var += (r.estimates[s] - st.mean).cwiseAbs2();
+    st.std = (var / std::max(1.0, n - 1.0)).cwiseSqrt();
+    st.physical_fraction = physical / n;
+    st.has_intervals = with_ci > 0;
+    if (with_ci > 0) {
+      st.coverage = cover / double(with_ci);
+      st.mean_half_width = half / double(with_ci);
+    }
+    out.push_back(st);
+  }
+  return out;
+}
+
+MonteCarloResult run_montecarlo(const MonteCarloOptions& options, const std::function<void(int, int)>& progress) {
+  options.validate();
+  const auto traj = trajectory_from_spec(options.trajectory);
+  MonteCarloResult res;
+  res.options = options;
+  res.truth = options.simulation.plant.theta();
+  const int hw = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  res.threads = std::min(options.threads > 0 ? options.threads : hw, options.runs);
+  res.runs.resize(static_cast<size_t>(options.runs));
+  const auto t0 = std::chrono::steady_clock::now();
+  std::atomic<int> next{0}, done{0};
+  auto worker = [&] {
+    for (int i = next++; i < options.runs; i = next++) {
+      res.runs[static_cast<size_t>(i)] = fly(options, *traj, i);
+      const int d = ++done;
+      if (progress) progress(d, options.runs);
+    }
+  };
+  std::vector<std::thread> pool;
+  for (int k = 1; k < res.threads; ++k) pool.emplace_back(worker);
+  worker();
+  for (auto& t : pool) t.join();
+  res.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  for (const auto& r : res.runs)
+    if (!r.ok) ++res.failed;
+  res.sets = montecarlo_statistics(res.runs, res.truth);
+  return res;
+}
+
+namespace {
+
+nlohmann::json theta_obj(const Theta& t) {
+  nlohmann::json j = nlohmann::json::object();
+  for (int i = 0; i < 7; ++i)
+    j[kThetaNames[static_cast<size_t>(i)]] = std::isfinite(t(i)) ? nlohmann::json(t(i)) : nlohmann::json(nullptr);
+  return j;
+}
+
+}  // namespace
+
+nlohmann::json to_json(const MonteCarloResult& r) {
+  nlohmann::json sets = nlohmann::json::object();
+  for (const auto& s : r.sets) {
+    nlohmann::json j = {{"runs", s.runs},     {"mean", theta_obj(s.mean)}, {"bias", theta_obj(s.bias)},
+                        {"std", theta_obj(s.std)}, {"rmse", theta_obj(s.rmse)},
+                        {"physical_fraction", s.physical_fraction}};
+    if (s.has_intervals) {
+      j["coverage95"] = theta_obj(s.coverage);
+      j["mean_ci95_half_width"] = theta_obj(s.mean_half_width);
+    }
+    sets[s.name] = j;
+  }
+  nlohmann::json failures = nlohmann::json::array();
+  for (const auto& run : r.runs)
+    if (!run.ok) failures.push_back({{"run", run.index}, {"seed", run.seed}, {"error", run.error}});
+  const auto& o = r.options;
+  return {{"runs", o.runs},
+          {"failed", r.failed},
+          {"failures", failures},
+          {"seed", o.seed},
+          {"threads", r.threads},
+          {"seconds", r.seconds},
+          {"trajectory", o.trajectory},
+          {"duration_s", o.simulation.duration},
+          {"noise", {{"position", o.simulation.sensors.noise.position},
+                     {"yaw", o.simulation.sensors.noise.yaw},
+                     {"attitude", o.simulation.sensors.noise.attitude},
+                     {"gyro", o.simulation.sensors.noise.gyro}}},
+          {"window", {{"t0", o.identification.window.t0},
+                      {"t1", std::isfinite(o.identification.window.t1) ? nlohmann::json(o.identification.window.t1)
+                                                                       : nlohmann::json(nullptr)}}},
+          {"prefilter_cutoff_hz", o.identification.processing.lowpass.cutoff_hz},
+          {"lambda", o.identification.lambda},
+          {"truth", theta_obj(r.truth)},
+          {"sets", sets}};
+}
+
+std::string format_montecarlo(const MonteCarloResult& r) {
+  fmt::memory_buffer out;
+  auto it = std::back_inserter(out);
+  const auto& o = r.options;
+  fmt::format_to(it,
+                 "Monte Carlo: {} runs ({} failed) of trajectory {}, {:g} s, seed {}, {} thread(s), {:.1f} s; "
+                 "window {}, pre-filter {:g} Hz, lambda {:g} rad/s\n",
+                 o.runs, r.failed, o.trajectory, o.simulation.duration, o.seed, r.threads, r.seconds,
+                 o.identification.window.to_string(), o.identification.processing.lowpass.cutoff_hz,
+                 o.identification.lambda);
+  const Theta scale = relative_scale(r.truth);
+  fmt::format_to(it, "Relative to the truth (m, Ixx, Iyy, Izz) or to the mean moment (products), in %.\n");
+  auto table = [&](const char* title, auto value) {
+    fmt::format_to(it, "\n{}\n{:<6}", title, "Set");
+    for (const char* n : kThetaNames) fmt::format_to(it, "{:>10}", n);
+    fmt::format_to(it, "\n");
+    for (const auto& s : r.sets) {
+      if (s.runs == 0) continue;
+      std::string row;
+      bool any = false;
+      for (int j = 0; j < 7; ++j) {
+        const double v = value(s, j);
+        any |= std::isfinite(v);
+        row += std::isfinite(v) ? fmt::format("{:>10.3f}", v) : fmt::format("{:>10}", "-");
+      }
+      if (any) fmt::format_to(it, "{:<6}{}\n", s.name, row);
+    }
+  };
+  table("Bias (%)", [&](const MonteCarloSetStats& s, int j) { return 100.0 * s.bias(j) / scale(j); });
+  table("Standard deviation (%)", [&](const MonteCarloSetStats& s, int j) { return 100.0 * s.std(j) / scale(j); });
+  table("RMSE (%)", [&](const MonteCarloSetStats& s, int j) { return 100.0 * s.rmse(j) / scale(j); });
+  table("Coverage of the 95% intervals (%)", [&](const MonteCarloSetStats& s, int j) {
+    return s.has_intervals ? 100.0 * s.coverage(j) : kNaN;
+  });
+  table("Mean 95% half width / (1.96 x std over runs)", [&](const MonteCarloSetStats& s, int j) {
+    return s.has_intervals && s.std(j) > 0 ? s.mean_half_width(j) / (1.959963984540054 * s.std(j)) : kNaN;
+  });
+  fmt::format_to(it, "\nPhysically consistent:");
+  for (const auto& s : r.sets) fmt::format_to(it, " {} {:.0f}%", s.name, 100.0 * s.physical_fraction);
+  fmt::format_to(it, "\n");
+  return fmt::to_string(out);
+}
+
+std::vector<report::Plot> montecarlo_histograms(const MonteCarloResult& r, int bins) {
+  std::vector<report::Plot> plots;
+  for (int j = 0; j < 7; ++j) {
+    // Common bins over the 1st-99th percentiles of every set's estimates.
+    std::vector<double> all;
+    for (const auto& run : r.runs)
+      if (run.ok)
+        for (const auto& e : run.estimates)
+          if (std::isfinite(e(j))) all.push_back(e(j));
+    if (all.empty()) continue;
+    std::sort(all.begin(), all.end());
+    double lo = all[all.size() / 100], hi = all[all.size() - 1 - all.size() / 100];
+    lo = std::min(lo, r.truth(j));
+    hi = std::max(hi, r.truth(j));
+    if (!(hi > lo)) hi = lo + 1e-12 * (1.0 + std::abs(lo));
+    const double w = (hi - lo) / bins;
+    report::Plot p;
+    const bool mass = j == 0;
+    p.title = fmt::format("{} over {} runs (truth: black)", kThetaNames[static_cast<size_t>(j)], r.runs.size());
+    p.xlabel = fmt::format("{} ({})", kThetaNames[static_cast<size_t>(j)], mass ? "kg" : "kg m^2");
+    p.ylabel = "runs per bin";
+    p.width = 520;
+    p.height = 260;
+    int ymax = 0;
+    size_t idx = 0;
+    for (const auto& s : r.sets) {
+      std::vector<int> count(static_cast<size_t>(bins), 0);
+      for (const auto& run : r.runs) {
+        if (!run.ok) continue;
+        for (size_t k = 0; k < run.sets.size(); ++k)
+          if (run.sets[k] == s.name && std::isfinite(run.estimates[k](j))) {
+            const int b = static_cast<int>(std::floor((run.estimates[k](j) - lo) / w));
+            if (b >= 0 && b < bins) ++count[static_cast<size_t>(b)];
+            else if (b == bins) ++count[static_cast<size_t>(bins - 1)];
+          }
+      }
+      report::Series se;
+      se.label = s.name;
+      se.color = report::color_for(s.name, idx++);
+      for (int b = 0; b < bins; ++b) {  // a step outline
+        se.x.push_back(lo + b * w);
+        se.y.push_back(count[static_cast<size_t>(b)]);
+        se.x.push_back(lo + (b + 1) * w);
+        se.y.push_back(count[static_cast<size_t>(b)]);
+        ymax = std::max(ymax, count[static_cast<size_t>(b)]);
+      }
+      p.series.push_back(std::move(se));
+    }
+    report::Series truth;
+    truth.label = "truth";
+    truth.color = "black";
+    truth.dashed = true;
+    truth.x = {r.truth(j), r.truth(j)};
+    truth.y = {0.0, double(ymax)};
+    p.series.push_back(std::move(truth));
+    plots.push_back(std::move(p));
+  }
+  return plots;
+}
+
+std::string format_montecarlo_runs_csv(const MonteCarloResult& r) {
+  fmt::memory_buffer out;
+  auto it = std::back_inserter(out);
+  fmt::format_to(it, "run,seed,ok");
+  std::vector<std::string> names;
+  for (const auto& s : r.sets) names.push_back(s.name);
+  for (const auto& n : names)
+    for (const char* p : kThetaNames) fmt::format_to(it, ",{}_{}", n, p);
+  fmt::format_to(it, "\n");
+  for (const auto& run : r.runs) {
+    fmt::format_to(it, "{},{},{}", run.index, run.seed, run.ok ? 1 : 0);
+    for (const auto& n : names) {
+      const auto f = std::find(run.sets.begin(), run.sets.end(), n);
+      for (int j = 0; j < 7; ++j) {
+        const double v = f == run.sets.end() ? kNaN : run.estimates[static_cast<size_t>(f - run.sets.begin())](j);
+        if (std::isfinite(v)) fmt::format_to(it, ",{}", v);
+        else fmt::format_to(it, ",nan");
+      }
+    }
+    fmt::format_to(it, "\n");
+  }
+  return fmt::to_string(out);
+}
+
+}  // namespace quadid
