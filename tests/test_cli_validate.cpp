@@ -78,7 +78,7 @@ TEST_F(CliValidate, SimulateIdentifyAndValidateAtLogRatesWithoutMetadata) {
     const auto j = nlohmann::json::parse(v.out);
     const auto& sim_j = j["simulation"];
     EXPECT_FALSE(sim_j["reference"].contains("failure")) << sim_j["reference"].dump();
-    ASSERT_EQ(sim_j["rows"].size(), 4u);
+    ASSERT_EQ(sim_j["rows"].size(), 6u);  // LS, GD, FMLS, FMGD, PC, FMPC
     for (const auto& row : sim_j["rows"]) {
       EXPECT_FALSE(row.contains("failure")) << row.dump();
       for (const auto& [signal, v] : row["rms"].items()) EXPECT_TRUE(v.is_number()) << row["name"] << " " << signal;

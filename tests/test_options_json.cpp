@@ -115,7 +115,7 @@ TEST(OptionsJson, ErrorsNameTheOption) {
   EXPECT_NE(message({{"order", 2.5}}).find("'order' (--order): expected an integer, got 2.5"), std::string::npos);
   EXPECT_NE(message({{"gd_init", 3}}).find("'gd_init' (--gd-init): expected a string"), std::string::npos);
   EXPECT_NE(message({{"window", "9"}}).find("(--window)"), std::string::npos) << message({{"window", "9"}});
-  EXPECT_NE(message({{"lambda", -1}}).find("lambda=-1"), std::string::npos) << message({{"lambda", -1}});
+  EXPECT_NE(message({{"lambda", -1}}).find("--lambda = -1"), std::string::npos) << message({{"lambda", -1}});
   EXPECT_NE(message({{"lambda", 1}, {"lambda_", 2}}).find("given twice"), std::string::npos);
   EXPECT_NE(message(json::array()).find("expected a JSON object"), std::string::npos);
   EXPECT_THROW((void)quadid::simulate_options_from_json(json::object()), std::invalid_argument);  // trajectory required

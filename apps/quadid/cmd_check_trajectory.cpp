@@ -62,13 +62,9 @@ void register_check_trajectory(CLI::App& app) {
     Constraints base;
     std::string limits_from = "defaults of section III-B";
     const std::string& spec = args->trajectory;
-    const auto names = builtin_trajectory_names();
-    if (std::find(names.begin(), names.end(), spec) == names.end() && std::filesystem::is_regular_file(spec)) {
-      const nlohmann::json j = read_json_file(spec);
-      if (j.is_object() && j.contains("constraints")) {
-        base = constraints_from_json(j["constraints"], spec);
-        limits_from = spec;
-      }
+    if (const auto saved = saved_trajectory_limits(spec)) {
+      base = *saved;
+      limits_from = spec;
     }
     opt.limits = args->limits.over(base);
     opt.validate();

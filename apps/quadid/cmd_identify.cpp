@@ -65,6 +65,9 @@ void run(const IdentifyArgs& a) {
   rf.nominal_given = a.nominal_opt->count() > 0;
   apply_real_flight(req, rf);
   req.options.validate();
+  // Output paths checked before the work starts.
+  if (!a.out.empty()) check_output_file(a.out, "-o/--out");
+  if (!a.evolution.empty()) check_output_file(a.evolution, "--evolution");
   const std::optional<Vehicle>& vehicle = req.vehicle;
   const FlightLog log = load_identification_log(a.log, req);
 

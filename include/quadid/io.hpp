@@ -3,6 +3,7 @@
 // converts between files and the library's types.
 #pragma once
 
+#include "quadid/design.hpp"
 #include "quadid/model.hpp"
 #include "quadid/signal.hpp"
 #include "quadid/trajectory.hpp"
@@ -98,6 +99,9 @@ nlohmann::json to_json(const FourierTrajectory& traj);
 /// Reads the trajectory JSON of docs/file-formats.md; the error names the field that is wrong.
 FourierTrajectory trajectory_from_json(const nlohmann::json& j, const std::string& source);
 
+/// The limits a designed trajectory file records (its "constraints"), or
+/// nothing for a built-in name or a file without them.
+std::optional<Constraints> saved_trajectory_limits(const std::string& spec);
 /// A trajectory from a built-in name (table2, circle1..3) or a JSON file.
 std::unique_ptr<Trajectory> load_trajectory(const std::string& spec);
 /// The name a parameter set goes by in tables: "nom" for the QBall 2 nominal

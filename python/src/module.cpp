@@ -212,8 +212,26 @@ py::dict design(const py::dict& opts, const std::string& out) {
   return to_py(j).cast<py::dict>();
 }
 
+// True when `opts` gives any of the limits of section III-B (--x-max ... --z0).
+bool has_limit_option(const py::dict& opts) {
+  static const char* kLimits[] = {"x-max",    "y-max",    "z-min",    "z-max",      "psi-max",   "tilt-max",
+                                  "xdot-max", "ydot-max", "zdot-max", "psidot-max", "zddot-min", "z0"};
+  for (const auto& item : opts) {
+    const std::string k = quadid::normalize_option_key(py::str(item.first).cast<std::string>());
+    for (const char* l : kLimits)
+      if (k == l) return true;
+  }
+  return false;
+}
+
 py::dict check_trajectory(const std::string& trajectory, const py::dict& opts) {
-  const quadid::CheckOptions opt = quadid::check_options_from_json(options_json(opts));
+  quadid::CheckOptions opt = quadid::check_options_from_json(options_json(opts));
+  // As the command line: a designed file's own limits, unless limits are given here.
+  std::string limits_from = "defaults of section III-B";
+  if (const auto saved = quadid::saved_trajectory_limits(trajectory); saved && !has_limit_option(opts)) {
+    opt.limits = *saved;
+    limits_from = trajectory;
+  }
   json j;
   {
     py::gil_scoped_release nogil;
@@ -221,6 +239,7 @@ py::dict check_trajectory(const std::string& trajectory, const py::dict& opts) {
     j = quadid::to_json(quadid::check_trajectory(*traj, opt));
     j["source"] = trajectory;
     j["limits"] = quadid::to_json(opt.limits);
+    j["limits_from"] = limits_from;
   }
   return to_py(j).cast<py::dict>();
 }

@@ -37,7 +37,7 @@ def test_identify_on_arrays_equals_the_command_line(logs):
     res = quadid.identify(arrays, window=WINDOW)
     assert res["log"] is None  # a mapping has no file name
     assert_same(without(res, "evolution", "log"), without(cli, "log"), REL)
-    assert set(res["estimates"]) == {"LS", "GD", "FMLS", "FMGD"}
+    assert set(res["estimates"]) == {"LS", "GD", "FMLS", "FMGD", "PC", "FMPC"}
     assert all(isinstance(v, float) for v in res["estimates"]["LS"].values())
 
 

@@ -158,7 +158,7 @@ void attach_uncertainty(LeastSquaresSolution& sol, const LeastSquaresUncertainty
   for (const auto& n : sol.unidentifiable) {
     for (size_t j = 0; j < 7; ++j)
       if (n == kThetaNames[j]) {
-        sol.std_error(static_cast<Eigen::Index>(j)) = std::numeric_limits<double>::infinity();
+        sol.std_error(static_cast<Eigen::Index>(j)) = kNaN;  // JSON null with a note (report.cpp)
         sol.uncertainty.std_error(static_cast<Eigen::Index>(j)) = kNaN;
         sol.uncertainty.ci_low(static_cast<Eigen::Index>(j)) = kNaN;
         sol.uncertainty.ci_high(static_cast<Eigen::Index>(j)) = kNaN;

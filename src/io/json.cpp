@@ -2,6 +2,8 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
+
 namespace quadid {
 
 using nlohmann::json;
@@ -167,6 +169,15 @@ std::string param_set_name(const std::string& spec) {
   for (const auto& n : Params::preset_names())
     if (spec == n) return spec;
   return std::filesystem::path(spec).stem().string();
+}
+
+std::optional<Constraints> saved_trajectory_limits(const std::string& spec) {
+  const auto names = builtin_trajectory_names();
+  if (std::find(names.begin(), names.end(), spec) != names.end() || !std::filesystem::is_regular_file(spec))
+    return std::nullopt;
+  const nlohmann::json j = read_json_file(spec);
+  if (!j.is_object() || !j.contains("constraints")) return std::nullopt;
+  return constraints_from_json(j["constraints"], spec);
 }
 
 }  // namespace quadid

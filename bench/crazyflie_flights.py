@@ -1,0 +1,60 @@
+#!/usr/bin/python3
+"""Identify the real Crazyflie 2.1 flights of ../shared/data/crazyflie-usd with
+the built-in vehicle and the weighed mass, for several term sets, and print the
+per-flight table and the spread across flights (CV). A measurement for the
+issue notes, not a test: the flights are not in the repository.
+
+usage: bench/crazyflie_flights.py [QUADID_EXE] [DATA_DIR] [-- extra identify options]
+"""
+import json, os, subprocess, sys
+
+args = sys.argv[1:]
+extra = []
+if "--" in args:
+    i = args.index("--")
+    extra, args = args[i + 1:], args[:i]
+exe = args[0] if len(args) > 0 else "build/quadid"
+data = args[1] if len(args) > 1 else os.path.join(os.path.dirname(__file__), "..", "..", "shared", "data", "crazyflie-usd")
+flights = sorted(f for f in os.listdir(data) if f.startswith("jana"))
+MASS = 0.0347  # kg, weighed (the data set's README)
+
+configs = [
+    ("paper model, 4 Hz", ["--terms", "paper", "--cutoffs", "fixed"]),
+    ("paper + weighting, held-out cutoffs", ["--terms", "weighting", "--cutoffs", "held-out"]),
+    ("+ offsets", ["--terms", "weighting,offsets", "--cutoffs", "held-out"]),
+    ("+ flapping", ["--terms", "weighting,offsets,flapping", "--cutoffs", "held-out"]),
+    ("default (real: + rotor inertia)", []),
+]
+
+
+def cv(xs):
+    m = sum(xs) / len(xs)
+    if len(xs) < 2 or m == 0:
+        return float("nan")
+    return (sum((x - m) ** 2 for x in xs) / (len(xs) - 1)) ** 0.5 / abs(m) * 100
+
+
+for name, opts in configs:
+    rows = []
+    for f in flights:
+        cmd = [exe, "identify", os.path.join(data, f), "--vehicle", "crazyflie21", "--known-mass", str(MASS),
+               "--ignore-input-errors", "--json"] + opts + extra
+        p = subprocess.run(cmd, capture_output=True, text=True)
+        if p.returncode != 0:
+            print(f"{name}: {f}: failed: {p.stderr.strip()[:300]}")
+            continue
+        j = json.loads(p.stdout)
+        e = j["estimates"]["LS"]
+        s = e.get("extra", {}).get("thrust_scale", float("nan"))
+        I = [e["Ixx"], e["Iyy"], e["Izz"]]
+        rf = j.get("real_flight", {})
+        cut = rf.get("cutoff_selection", {})
+        cons = j.get("consistency", {}).get("LS", {}).get("physical")
+        rows.append((f, s, I, cut.get("force_cutoff_hz"), cut.get("moment_cutoff_hz"), cons))
+    print(f"\n== {name}")
+    print(f"{'flight':8} {'s':>7} {'Ixx':>8} {'Iyy':>8} {'Izz':>8}  (1e-6 kg m^2)  cutoffs F/M Hz  physical")
+    for f, s, I, cf, cm, cons in rows:
+        print(f"{f:8} {s:7.4f} {I[0]*1e6:8.2f} {I[1]*1e6:8.2f} {I[2]*1e6:8.2f}  {str(cf):>6}/{str(cm):<6} {cons}")
+    if len(rows) > 1:
+        print(f"{'CV %':8} {cv([r[1] for r in rows]):7.2f} {cv([r[2][0] for r in rows]):8.1f} "
+              f"{cv([r[2][1] for r in rows]):8.1f} {cv([r[2][2] for r in rows]):8.1f}")
