@@ -66,3 +66,21 @@ def test_validate_equals_the_command_line(logs):
     assert_same(res, cli, 1e-12)
     with pytest.raises(ValueError, match="at least one"):
         quadid.validate(logs[0], [])
+
+
+def test_vehicle_by_name_in_simulate_and_identify(tmp_path):
+    """A built-in vehicle by name: the same rotor-level log as the command line,
+    and identify(vehicle=...) equal to `quadid identify --vehicle ... --json`."""
+    p = tmp_path / "cli.csv"
+    args = ["--trajectory", "table2", "--vehicle", "crazyflie21", "--speedup", "1.5", "--duration", "20", "--seed", "3"]
+    run_cli("simulate", *args, "-o", str(p))
+    sim = quadid.simulate("table2", vehicle="crazyflie21", speedup=1.5, duration=20, seed=3, out=tmp_path / "py.csv")
+    assert (tmp_path / "py.csv").read_bytes() == p.read_bytes()
+    assert "rpm.m1" in sim["log"]
+    cli = cli_json("identify", str(p), "--vehicle", "crazyflie21", "--known-mass", "0.0347")
+    res = quadid.identify(str(p), vehicle="crazyflie21", known_mass=0.0347)
+    for s in ("LS", "FMLS"):
+        for k in ("Ixx", "Iyy", "Izz"):
+            assert res["estimates"][s][k] == pytest.approx(cli["estimates"][s][k], rel=1e-9)
+        assert res["estimates"][s]["extra"]["thrust_scale"] == pytest.approx(
+            cli["estimates"][s]["extra"]["thrust_scale"], rel=1e-9)

@@ -87,15 +87,12 @@ struct Assembler {
     for (int i = 0; i < 7; ++i) bb(i) = b[i];
     const Regressor4x7 Gamma = assemble_regressor(Vec4(da[A_W], da[A_P], da[A_Q], da[A_R]), bb);
     const Vec4 F(b[B_FZ], b[B_TX], b[B_TY], b[B_TZ]);
-    if (terms.known_mass) {
-      // m0 Gamma_m + Gamma_I I + E x_e - s F = 0
-      G.col(0) = -F;
-      G.middleCols<6>(1) = Gamma.rightCols<6>();
-      Y = -*terms.known_mass * Gamma.col(0);
-    } else {
-      G.leftCols<7>() = Gamma;
-      Y = F;
-    }
+    // Always the thrust model's scale (s = 1): with a known mass the estimates
+    // are rescaled afterwards (identify_extended). Estimating s inside the
+    // regression would make the moment rows homogeneous in (I, s, terms), and
+    // on real data their model error would pull all of them toward zero.
+    G.leftCols<7>() = Gamma;
+    Y = F;
     for (size_t j = 0; j < extra.size(); ++j) G.col(7 + static_cast<Eigen::Index>(j)) = extra[j].column(da, b);
   }
 };
@@ -354,12 +351,11 @@ ExtendedResult identify_extended(const FlightLog& log, const ExtendedOptions& op
   const std::vector<Term> extra = active_terms(terms);
   const Eigen::Index P = 7 + static_cast<Eigen::Index>(extra.size());
   std::vector<std::string> names;
-  names.emplace_back(terms.known_mass ? "thrust_scale" : "m");
+  names.emplace_back(terms.known_mass ? "thrust_scale" : "m");  // thrust_scale: after the rescaling below
   for (int j = 1; j < 7; ++j) names.emplace_back(kThetaNames[static_cast<size_t>(j)]);
   for (const auto& t : extra) names.emplace_back(t.name);
   Eigen::VectorXd prior = Eigen::VectorXd::Zero(P);
   prior.head<7>() = opt.reference.theta();
-  if (terms.known_mass) prior(0) = 1.0;
   const Assembler assemble{terms, extra, P};
 
   double f_force = opt.force_cutoff_hz, f_moment = opt.moment_cutoff_hz;
@@ -386,19 +382,41 @@ ExtendedResult identify_extended(const FlightLog& log, const ExtendedOptions& op
     e.name = mi == 0 ? "LS" : "FMLS";
     e.model = model;
     e.names = names;
-    e.value = f.sol.x;
     // Residuals of filtered data are correlated over ~fs / (2 f) samples: the
     // standard errors grow by the square root of that length (as for the
     // paper's model in identify.cpp).
     double fc = std::min(res.force_processing.filter_f3db, res.moment_processing.filter_f3db);
     if (model == RegressionModel::Filtered) fc = std::min(fc, opt.lambda / (2.0 * std::numbers::pi));
     const double corr = std::max(1.0, fs / (2.0 * fc));
+    Eigen::VectorXd x = f.sol.x;
     e.covariance = f.sol.covariance * corr;
+    if (terms.known_mass) {
+      // "Weigh it, fly it": the regression found m' = m / s and every other
+      // parameter divided by s; with m known, s = m / m' and the others are
+      // multiplied by s. Covariance by the Jacobian of that map (exact: it is
+      // linear in x given x0, and x0's own variance enters through J.col(0)).
+      const double m0 = *terms.known_mass, x0 = f.sol.x(0);
+      if (!(x0 > 0.0))
+        throw InputError(fmt::format("the flight gives a mass {:.4g} kg from the rotor model's thrust, not a positive "
+                                     "one: the thrust scale cannot be found (check the rotor model and the log's units)",
+                                     x0));
+      const double sc = m0 / x0;
+      Eigen::MatrixXd J = Eigen::MatrixXd::Zero(P, P);
+      x(0) = sc;
+      J(0, 0) = -m0 / (x0 * x0);
+      for (Eigen::Index j = 1; j < P; ++j) {
+        x(j) = sc * f.sol.x(j);
+        J(j, j) = sc;
+        J(j, 0) = -m0 * f.sol.x(j) / (x0 * x0);
+      }
+      e.covariance = J * e.covariance * J.transpose();
+    }
+    e.value = x;
     e.std_error = e.covariance.diagonal().cwiseSqrt();
-    e.theta = f.sol.x.head<7>();
+    e.theta = x.head<7>();
     if (terms.known_mass) e.theta(0) = *terms.known_mass;
-    for (Eigen::Index j = 7; j < P; ++j) e.extra.emplace_back(names[static_cast<size_t>(j)], f.sol.x(j));
-    if (terms.known_mass) e.extra.insert(e.extra.begin(), {"thrust_scale", f.sol.x(0)});
+    for (Eigen::Index j = 7; j < P; ++j) e.extra.emplace_back(names[static_cast<size_t>(j)], x(j));
+    if (terms.known_mass) e.extra.insert(e.extra.begin(), {"thrust_scale", x(0)});
     e.row_weight = f.w;
     e.residual_rms = f.res_rms;
     e.condition = f.sol.condition;
@@ -407,7 +425,7 @@ ExtendedResult identify_extended(const FlightLog& log, const ExtendedOptions& op
     // mass, or the mean principal moment), the thrust scale against 1.
     const double iscale = (std::abs(e.theta(1)) + std::abs(e.theta(4)) + std::abs(e.theta(6))) / 3.0;
     for (Eigen::Index j = 0; j < 7; ++j) {
-      const double scale = j == 0 ? std::abs(f.sol.x(0)) : iscale;
+      const double scale = j == 0 ? std::abs(e.value(0)) : iscale;
       if (!(e.std_error(j) <= opt.ls.poor_fraction * scale)) e.poorly_determined.push_back(names[static_cast<size_t>(j)]);
     }
     res.estimates[static_cast<size_t>(mi)] = std::move(e);
@@ -423,7 +441,6 @@ CutoffSelection select_cutoffs(const FlightLog& log, const ExtendedOptions& opt)
   const Eigen::Index P = 7 + static_cast<Eigen::Index>(extra.size());
   Eigen::VectorXd prior = Eigen::VectorXd::Zero(P);
   prior.head<7>() = opt.reference.theta();
-  if (terms.known_mass) prior(0) = 1.0;
   const Assembler assemble{terms, extra, P};
   const int K = opt.cv_blocks;
 

@@ -108,6 +108,9 @@ const std::vector<OptionSpec>& simulate_specs() {
       {"actuator-tau", K::Number, "actuator lag time constant, s (default 0)"},
       {"g", K::Number, "gravity, m/s^2 (default 9.81)"},
       {"summary-from", K::Number, "start of the window of the RMS tracking errors, s (default 0)"},
+      {"vehicle", K::String, "fly a vehicle file or built-in with rotor-level actuation (docs/vehicles.md)"},
+      {"speedup", K::Number, "play a Fourier trajectory this many times faster (default 1)"},
+      {"sigma-rotor", K::Number, "with vehicle: noise std on the logged rotor speeds, rad/s or rpm"},
   };
   return s;
 }
@@ -488,17 +491,47 @@ SimulateRequest simulate_options_from_json(const nlohmann::json& j) {
       throw std::invalid_argument("simulate: options radius and altitude only apply to trajectory circle");
     req.trajectory = trajectory_from_spec(*spec);
   }
+  // In the command line's order: rates, models, noise profile, then the
+  // vehicle (which overrides those it defines unless given here), then noise levels.
   o.duration = r.number("duration").value_or(o.duration);
-  o.plant = load_params(r.string("plant").value_or("qball2-virtual"));
-  o.controller.params = load_params(r.string("controller-params").value_or("qball2-nominal"));
+  o.g = r.number("g").value_or(o.g);
+  const auto rate = r.number("rate");
+  if (rate) o.set_rate(*rate);  // sensors at most at the log rate, RK4 step ~1 ms dividing the period
+  const auto mocap_rate = r.number("mocap-rate"), imu_rate = r.number("imu-rate"), dt = r.number("dt");
+  if (mocap_rate) o.sensors.mocap_rate = *mocap_rate;
+  if (imu_rate) o.sensors.imu_rate = *imu_rate;
+  if (dt) o.dt = *dt;
+  const auto plant = r.string("plant"), cparams = r.string("controller-params");
+  o.plant = load_params(plant.value_or("qball2-virtual"));
+  o.controller.params = load_params(cparams.value_or("qball2-nominal"));
   o.controller.torque_map = r.with_option("torque-map", [&] { return torque_map_from_string(r.string("torque-map").value_or("WT")); });
   o.controller.derivative_discretization = r.with_option("derivative", [&] {
     return derivative_discretization_from_string(r.string("derivative").value_or("tustin"));
   });
-  o.controller.Fz_max = r.number("fz-max").value_or(o.controller.Fz_max);
-  o.controller.tau_max = r.number("tau-max").value_or(o.controller.tau_max);
+  const auto fz_max = r.number("fz-max"), tau_max = r.number("tau-max");
+  if (fz_max) o.controller.Fz_max = *fz_max;
+  if (tau_max) o.controller.tau_max = *tau_max;
+  o.controller.g = o.g;  // as the CLI: one gravity for plant and controller
   NoiseSigmas& n = o.sensors.noise;
   n = r.with_option("noise", [&] { return NoiseSigmas::preset(r.string("noise").value_or("default")); });
+  o.actuator_tau = r.number("actuator-tau").value_or(o.actuator_tau);
+  if (const auto v = r.string("vehicle")) {
+    const SimulationOptions before = o;
+    r.with_option("vehicle", [&] {
+      configure_for_vehicle(o, load_vehicle(*v));
+      return 0;
+    });
+    if (plant) o.plant = before.plant;
+    if (cparams) o.controller.params = before.controller.params;
+    if (fz_max) o.controller.Fz_max = before.controller.Fz_max;
+    if (tau_max) o.controller.tau_max = before.controller.tau_max;
+    if (rate) o.controller.rate = before.controller.rate;
+    if (mocap_rate) o.sensors.mocap_rate = before.sensors.mocap_rate;
+    if (imu_rate) o.sensors.imu_rate = before.sensors.imu_rate;
+    if (before.actuator_tau > 0.0)
+      throw std::invalid_argument("simulate: option 'actuator-tau' cannot be used with 'vehicle' (the vehicle's rotors.time_constant is the lag)");
+  }
+  if (const auto sr = r.number("sigma-rotor")) o.rotor_noise = *sr;
   n.position = r.number("sigma-position").value_or(n.position);
   n.yaw = r.number("sigma-yaw").value_or(n.yaw);
   n.attitude = r.number("sigma-attitude").value_or(n.attitude);
@@ -511,14 +544,9 @@ SimulateRequest simulate_options_from_json(const nlohmann::json& j) {
   const auto seed = r.integer("seed");
   if (seed && *seed < 0) throw std::invalid_argument(fmt::format("simulate: option 'seed' (--seed): {} < 0", *seed));
   o.sensors.seed = seed ? static_cast<std::uint64_t>(*seed) : o.sensors.seed;
-  o.dt = r.number("dt").value_or(o.dt);
-  o.controller.rate = r.number("rate").value_or(o.controller.rate);
-  o.sensors.mocap_rate = r.number("mocap-rate").value_or(o.sensors.mocap_rate);
-  o.sensors.imu_rate = r.number("imu-rate").value_or(o.sensors.imu_rate);
-  o.actuator_tau = r.number("actuator-tau").value_or(o.actuator_tau);
-  o.g = r.number("g").value_or(o.g);
-  o.controller.g = o.g;  // as the CLI: one gravity for plant and controller
   o.summary_from = r.number("summary-from").value_or(o.summary_from);
+  if (const auto sp = r.number("speedup"); sp && *sp != 1.0)
+    req.trajectory = r.with_option("speedup", [&] { return std::shared_ptr<const Trajectory>(time_scaled(*req.trajectory, *sp)); });
   o.record_truth = false;
   r.finish();
   validate_as("simulate", [&] { o.validate(); });
