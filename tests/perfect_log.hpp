@@ -41,4 +41,10 @@ inline FlightLog perfect_log(const Params& P, double fs, double duration, double
   return log;
 }
 
+/// The virtual QBall 2 flying Table 2 perfectly for 50 s at 500 Hz (built once).
+inline const FlightLog& perfect_table2() {
+  static const FlightLog log = perfect_log(Params::qball2_virtual(), 500.0, 50.0);
+  return log;
+}
+
 }  // namespace quadid::testing

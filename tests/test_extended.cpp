@@ -17,13 +17,10 @@
 
 using namespace quadid;
 using quadid::testing::perfect_log;
+using quadid::testing::perfect_table2;
 
 namespace {
 
-const FlightLog& perfect_table2() {
-  static const FlightLog log = perfect_log(Params::qball2_virtual(), 500.0, 50.0);
-  return log;
-}
 
 double extra(const ExtendedEstimate& e, const std::string& name) {
   for (const auto& [n, v] : e.extra)

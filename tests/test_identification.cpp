@@ -22,13 +22,10 @@
 
 using namespace quadid;
 using quadid::testing::perfect_log;
+using quadid::testing::perfect_table2;
 
 namespace {
 
-const FlightLog& perfect_table2() {
-  static const FlightLog log = perfect_log(Params::qball2_virtual(), 500.0, 50.0);
-  return log;
-}
 
 // Relative error of each parameter against the truth.
 Theta rel_error(const Theta& est, const Theta& truth) { return (est - truth).cwiseQuotient(truth); }

@@ -18,6 +18,7 @@
 //   thread runs, and each start is deterministic, so the result does not
 //   depend on the number of threads.
 #include "design_internal.hpp"
+#include "../common/nlopt_status.hpp"
 
 #include <Eigen/QR>
 #include <fmt/format.h>
@@ -317,17 +318,6 @@ void constraints_cb(unsigned m, double* c, unsigned, const double* y, double* gr
   rd->record(y, m ? *std::max_element(c, c + m) : 0.0);
 }
 
-std::string nlopt_status(nlopt::result r) {
-  switch (r) {
-    case nlopt::SUCCESS: return "success";
-    case nlopt::STOPVAL_REACHED: return "stopval reached";
-    case nlopt::FTOL_REACHED: return "ftol reached";
-    case nlopt::XTOL_REACHED: return "xtol reached";
-    case nlopt::MAXEVAL_REACHED: return "max evaluations";
-    case nlopt::MAXTIME_REACHED: return "max time";
-    default: return fmt::format("nlopt code {}", static_cast<int>(r));
-  }
-}
 
 // A random start in y: velocity amplitudes a, b uniform in [-1, 1] m/s,
 // projected onto the start conditions, then shrunk so that the largest
@@ -379,7 +369,7 @@ StartSummary run_start(const Setup& s, int index, Eigen::VectorXd y, Eigen::Vect
     std::vector<double> yv(y.data(), y.data() + y.size());
     double f = 0.0;
     try {
-      sum.status = nlopt_status(o.optimize(yv, f));
+      sum.status = detail::nlopt_status(o.optimize(yv, f));
     } catch (const nlopt::forced_stop&) {
       sum.status = "converged";
     } catch (const nlopt::roundoff_limited&) {

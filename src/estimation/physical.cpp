@@ -6,6 +6,7 @@
 // tr(I)/2 1 - I is PSD, which contains the triangle inequalities of the
 // principal moments (Ixx + Iyy - Izz = 2 Sigma_zz >= 0 in any axes).
 #include "quadid/estimation.hpp"
+#include "../common/nlopt_status.hpp"
 
 #include <fmt/format.h>
 
@@ -108,17 +109,6 @@ double objective(unsigned n, const double* x, double* grad, void* data) {
   return static_cast<Problem*>(data)->value(x, grad);
 }
 
-std::string nlopt_text(nlopt::result r) {
-  switch (r) {
-    case nlopt::SUCCESS: return "success";
-    case nlopt::STOPVAL_REACHED: return "stopval reached";
-    case nlopt::FTOL_REACHED: return "ftol reached";
-    case nlopt::XTOL_REACHED: return "xtol reached";
-    case nlopt::MAXEVAL_REACHED: return "max evaluations";
-    case nlopt::MAXTIME_REACHED: return "max time";
-    default: return fmt::format("nlopt code {}", static_cast<int>(r));
-  }
-}
 
 }  // namespace
 
@@ -215,7 +205,7 @@ PhysicalProjection closest_physical(const Mat7& F, const Theta& theta_ls, const 
   o.set_maxeval(opt.max_evaluations);
   double f = 0.0;
   try {
-    out.status = nlopt_text(o.optimize(x, f));
+    out.status = detail::nlopt_status(o.optimize(x, f));
   } catch (const nlopt::roundoff_limited&) {
     out.status = "roundoff limited";  // at the optimum to machine precision
   } catch (const std::exception& e) {

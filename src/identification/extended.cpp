@@ -344,19 +344,37 @@ std::vector<double> candidate_cutoffs(double fs) {
   return c;
 }
 
+namespace {
+
+// The unknowns of a regression with the given terms: their names, the prior
+// (the reference set, zero for the terms) and the per-sample assembler.
+struct Unknowns {
+  std::vector<Term> extra;
+  Eigen::Index P = 0;
+  std::vector<std::string> names;
+  Eigen::VectorXd prior;
+  explicit Unknowns(const ExtendedOptions& opt) : extra(active_terms(opt.terms)) {
+    P = 7 + static_cast<Eigen::Index>(extra.size());
+    names.emplace_back(opt.terms.known_mass ? "thrust_scale" : "m");  // thrust_scale: after the rescaling
+    for (int j = 1; j < 7; ++j) names.emplace_back(kThetaNames[static_cast<size_t>(j)]);
+    for (const auto& t : extra) names.emplace_back(t.name);
+    prior = Eigen::VectorXd::Zero(P);
+    prior.head<7>() = opt.reference.theta();
+  }
+  Assembler assembler(const ModelTerms& terms) const { return Assembler{terms, extra, P}; }
+};
+
+}  // namespace
+
 ExtendedResult identify_extended(const FlightLog& log, const ExtendedOptions& opt) {
   opt.validate();
   ExtendedResult res;
   const ModelTerms& terms = opt.terms;
-  const std::vector<Term> extra = active_terms(terms);
-  const Eigen::Index P = 7 + static_cast<Eigen::Index>(extra.size());
-  std::vector<std::string> names;
-  names.emplace_back(terms.known_mass ? "thrust_scale" : "m");  // thrust_scale: after the rescaling below
-  for (int j = 1; j < 7; ++j) names.emplace_back(kThetaNames[static_cast<size_t>(j)]);
-  for (const auto& t : extra) names.emplace_back(t.name);
-  Eigen::VectorXd prior = Eigen::VectorXd::Zero(P);
-  prior.head<7>() = opt.reference.theta();
-  const Assembler assemble{terms, extra, P};
+  const Unknowns u(opt);
+  const Eigen::Index P = u.P;
+  const std::vector<std::string>& names = u.names;
+  const Eigen::VectorXd& prior = u.prior;
+  const Assembler assemble = u.assembler(terms);
 
   double f_force = opt.force_cutoff_hz, f_moment = opt.moment_cutoff_hz;
   if (opt.auto_cutoffs) {
@@ -436,12 +454,10 @@ ExtendedResult identify_extended(const FlightLog& log, const ExtendedOptions& op
 CutoffSelection select_cutoffs(const FlightLog& log, const ExtendedOptions& opt) {
   opt.validate();
   CutoffSelection sel;
-  const ModelTerms& terms = opt.terms;
-  const std::vector<Term> extra = active_terms(terms);
-  const Eigen::Index P = 7 + static_cast<Eigen::Index>(extra.size());
-  Eigen::VectorXd prior = Eigen::VectorXd::Zero(P);
-  prior.head<7>() = opt.reference.theta();
-  const Assembler assemble{terms, extra, P};
+  const Unknowns u(opt);
+  const Eigen::Index P = u.P;
+  const Eigen::VectorXd& prior = u.prior;
+  const Assembler assemble = u.assembler(opt.terms);
   const int K = opt.cv_blocks;
 
   // The sample rate, from a first processing at the given cutoffs.
