@@ -149,8 +149,9 @@ void register_identify(CLI::App& app) {
                   "weighting (docs/real-flights.md)")
       ->capture_default_str();
   sub->add_option("--cutoffs", a->real.cutoffs,
-                  "pre-filter cutoffs: auto (held-out with --vehicle, else fixed), held-out (chosen by prediction "
-                  "error on held-out time blocks), or fixed (--cutoff, --cutoff-force, --cutoff-moment)")
+                  "pre-filter cutoffs: auto (with --vehicle the moment rows at twice --cutoff, else --cutoff for all "
+                  "rows), held-out (chosen by prediction error on held-out time blocks), or fixed (--cutoff, "
+                  "--cutoff-force, --cutoff-moment)")
       ->capture_default_str();
   sub->add_option("--cutoff-force", a->real.cutoff_force,
                   "pre-filter cutoff of the force row (positions differentiated twice), Hz; default --cutoff");
