@@ -369,35 +369,28 @@ json comment_json(const FlightLog& log, const char* key) {
 }  // namespace
 
 std::vector<std::string> simulation_log_comments(const Trajectory& traj, const SimulationOptions& o) {
+  std::vector<std::string> c = {kMagic,
+                                "trajectory: " + trajectory_spec(traj),
+                                "plant: " + to_json(o.plant).dump(),
+                                "controller: " + controller_json(o.controller).dump(),
+                                "sensors: " + sensors_json(o.sensors).dump(),
+                                "noise: " + noise_label(o.sensors.noise),
+                                fmt::format("seed: {}", o.sensors.seed),
+                                fmt::format("dt: {}", o.dt),
+                                "simulation: " + simulation_json(o).dump()};
   if (o.rotors)
-    return {kMagic,
-            "trajectory: " + trajectory_spec(traj),
-            "plant: " + to_json(o.plant).dump(),
-            "controller: " + controller_json(o.controller).dump(),
-            "sensors: " + sensors_json(o.sensors).dump(),
-            "noise: " + noise_label(o.sensors.noise),
-            fmt::format("seed: {}", o.sensors.seed),
-            fmt::format("dt: {}", o.dt),
-            "simulation: " + simulation_json(o).dump(),
-            fmt::format("columns: x y z psi = motion capture (held between samples); phi theta p q r = IMU; "
-                        "Fz tau_* = the rotors' wrench (after mixer, saturation and motor lag); {} = rotor {} "
-                        "({}); x_d y_d z_d psi_d = reference. SI units, radians",
-                        fmt::join(o.rotors->columns, " "),
-                        o.rotors->input == RotorInput::kCommand ? "commands" : "speeds",
-                        o.rotors->input == RotorInput::kCommand ? "0..1, before the motor lag"
-                        : o.rotors->input == RotorInput::kRpm   ? "rev/min"
-                                                                : "rad/s")};
-  return {kMagic,
-          "trajectory: " + trajectory_spec(traj),
-          "plant: " + to_json(o.plant).dump(),
-          "controller: " + controller_json(o.controller).dump(),
-          "sensors: " + sensors_json(o.sensors).dump(),
-          "noise: " + noise_label(o.sensors.noise),
-          fmt::format("seed: {}", o.sensors.seed),
-          fmt::format("dt: {}", o.dt),
-          "simulation: " + simulation_json(o).dump(),
-          "columns: x y z psi = motion capture (held between samples); phi theta p q r = IMU; "
-          "Fz tau_* = applied (saturated) commands; x_d y_d z_d psi_d = reference. SI units, radians"};
+    c.push_back(fmt::format("columns: x y z psi = motion capture (held between samples); phi theta p q r = IMU; "
+                            "Fz tau_* = the rotors' wrench (after mixer, saturation and motor lag); {} = rotor {} "
+                            "({}); x_d y_d z_d psi_d = reference. SI units, radians",
+                            fmt::join(o.rotors->columns, " "),
+                            o.rotors->input == RotorInput::kCommand ? "commands" : "speeds",
+                            o.rotors->input == RotorInput::kCommand ? "0..1, before the motor lag"
+                            : o.rotors->input == RotorInput::kRpm   ? "rev/min"
+                                                                    : "rad/s"));
+  else
+    c.push_back("columns: x y z psi = motion capture (held between samples); phi theta p q r = IMU; "
+                "Fz tau_* = applied (saturated) commands; x_d y_d z_d psi_d = reference. SI units, radians");
+  return c;
 }
 
 std::unique_ptr<Trajectory> trajectory_from_log(const FlightLog& log) {
