@@ -145,7 +145,7 @@ void register_identify(CLI::App& app) {
                   "inertia, instead of the mass (motion alone cannot fix mass, thrust and inertia together)");
   sub->add_option("--terms", a->real.terms,
                   "regression terms: auto (real with --vehicle, else paper), paper, real (offsets, flapping, "
-                  "rotor-inertia, weighting), or a comma list of offsets, flapping, damping, rotor-inertia, drag, "
+                  "rotor-inertia, weighting), or a comma list of offsets, flapping, damping, rotor-inertia, drag, wind, "
                   "weighting (docs/real-flights.md)")
       ->capture_default_str();
   sub->add_option("--cutoffs", a->real.cutoffs,

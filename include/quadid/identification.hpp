@@ -59,8 +59,10 @@ struct ProcessingOptions {
   /// already moving at 0.63 m/s) has edge residuals that dominate the 0-50 s
   /// prediction-error tables. false: the paper's windows taken literally.
   bool exclude_edges = true;
-  /// Also keep the body-frame horizontal velocity [u v] (RegressionSignals::uv),
-  /// for the blade-flapping term of the real-flight regression.
+  /// Also keep the body-frame horizontal velocity [u v] (RegressionSignals::uv)
+  /// and the body x, y components of the world's X and Y axes
+  /// (RegressionSignals::world_axes), for the blade-flapping and wind terms of
+  /// the real-flight regression.
   bool keep_body_velocity = false;
   void validate() const;
 };
@@ -94,6 +96,9 @@ struct RegressionSignals {
   Eigen::Matrix<double, Eigen::Dynamic, kCols> x;
   /// Body velocity [u v] (m/s), only with ProcessingOptions::keep_body_velocity.
   Eigen::Matrix<double, Eigen::Dynamic, 2> uv;
+  /// [R00 R10 R01 R11] of R(eta) (eq. 1): the body x components of the world X
+  /// and Y axes, then their body y components. Only with keep_body_velocity.
+  Eigen::Matrix<double, Eigen::Dynamic, 4> world_axes;
   Eigen::Index size() const { return x.rows(); }
 };
 
@@ -191,11 +196,15 @@ struct ModelTerms {
   bool rate_damping = false;    // D_x, D_y, D_z: -D w (N m s)
   bool rotor_inertia = false;   // J_r: yaw reaction and gyroscopic torque (kg m^2); needs Omega_r
   bool force_drag = false;      // k_w: -k_w w in the force row (N s/m)
+  /// Horizontal moments fixed in the world frame (N m), seen in the body frame:
+  /// a steady wind on flapping blades (-K (e_z x R^T w_wind)). 4 parameters.
+  bool wind = false;
   /// Weigh the four rows by the inverse of their own residual RMS (two passes).
   bool weight_rows = false;
   /// True when any term beyond the paper's model is on.
   bool any() const {
-    return known_mass || torque_offsets || flapping || rate_damping || rotor_inertia || force_drag || weight_rows;
+    return known_mass || torque_offsets || flapping || rate_damping || rotor_inertia || force_drag || wind ||
+           weight_rows;
   }
   /// All real-flight terms on (the defaults with a rotor model).
   static ModelTerms real_flight(bool have_rotor_speeds);
@@ -204,7 +213,7 @@ struct ModelTerms {
 };
 
 /// --terms: "paper" (none of the terms), "real" (real_flight()), or a comma
-/// list of offsets, flapping, damping, rotor-inertia, drag, weighting. Throws
+/// list of offsets, flapping, damping, rotor-inertia, drag, wind, weighting. Throws
 /// std::invalid_argument naming --terms and the choices.
 ModelTerms parse_model_terms(std::string_view spec, bool have_rotor_speeds);
 
@@ -274,6 +283,12 @@ struct Evolution {
 
 struct ExtendedResult;
 
+/// The set quadid recommends, and why (recommend_set).
+struct Recommendation {
+  std::string set;     // a name of IdentificationResult::all_sets(), empty when none is usable
+  std::string reason;  // one or two sentences for a person
+};
+
 struct IdentificationResult {
   std::array<SetEstimate, 4> estimates;  // LS, GD, FMLS, FMGD (docs/file-formats.md names)
   LeastSquaresSolution ls_standard, ls_filtered;
@@ -295,12 +310,23 @@ struct IdentificationResult {
   std::vector<PhysicalProjection> projections;  // one per physical set
   /// What the input checks found (empty when disabled).
   std::vector<InputFinding> input_findings;
+  /// The set to use (recommend_set, filled by identify()).
+  Recommendation recommended;
   /// Every set: the four of the paper, then the physical ones.
   std::vector<const SetEstimate*> all_sets() const;
   /// The least-squares solution behind LS, FMLS (nullptr for other sets).
   const LeastSquaresSolution* least_squares_of(std::string_view set) const;
   const SetEstimate& estimate(std::string_view name) const;  // throws on an unknown name
 };
+
+/// The set to use among those of `r`: of the two least-squares sets (LS, FMLS)
+/// the one with the smaller standard errors (relative to each parameter's
+/// scale; both are consistent estimators of the same parameters, so the more
+/// precise is the better), replaced by its physically consistent projection
+/// (PC, FMPC) when it is not consistent. GD and FMGD are the paper's
+/// comparison and converge toward LS at best: never recommended. The reason
+/// names the figures behind the choice and what the data determine poorly.
+Recommendation recommend_set(const IdentificationResult& r);
 
 /// The paper's whole procedure on one log. Throws InputError on bad data
 /// (missing columns, short log, window outside the log, rank-deficient data

@@ -27,6 +27,7 @@ enum : int {
   B_C = 0, B_PQ, B_PR, B_QR, B_PP, B_QQ, B_RR,  // Phi_b signals (eq. 13)
   B_FZ, B_TX, B_TY, B_TZ,                       // outputs
   B_ONE, B_U, B_V, B_W, B_P, B_Q, B_R, B_QOM, B_POM,
+  B_RXX, B_RYX, B_RXY, B_RYY,  // body x, then y, components of the world X, Y axes
   kNumB,
 };
 
@@ -60,6 +61,16 @@ const Term kRotorTerms[] = {
     {"rotor_inertia",
      [](const double* da, const double* b) { return v4(0, b[B_QOM], -b[B_POM], da[A_OMEGA_R]); }},
 };
+// A steady horizontal wind w (world) on flapping blades: -K (e_z x R^T w), whose
+// body x part is K_x (R^T w)_y = K_x (R01 w_X + R11 w_Y) and y part
+// -K_y (R00 w_X + R10 w_Y). Each product K_i w_J is one parameter: the moment
+// about body axis i per unit of the world axis J seen along the other body axis.
+const Term kWindTerms[] = {
+    {"wind_x_X", [](const double*, const double* b) { return v4(0, -b[B_RXY], 0, 0); }},
+    {"wind_x_Y", [](const double*, const double* b) { return v4(0, -b[B_RYY], 0, 0); }},
+    {"wind_y_X", [](const double*, const double* b) { return v4(0, 0, b[B_RXX], 0); }},
+    {"wind_y_Y", [](const double*, const double* b) { return v4(0, 0, b[B_RYX], 0); }},
+};
 const Term kDragTerms[] = {
     {"drag_z", [](const double*, const double* b) { return v4(b[B_W], 0, 0, 0); }},
 };
@@ -74,6 +85,7 @@ std::vector<Term> active_terms(const ModelTerms& t) {
   if (t.rate_damping) add(kDampTerms);
   if (t.rotor_inertia) add(kRotorTerms);
   if (t.force_drag) add(kDragTerms);
+  if (t.wind) add(kWindTerms);
   return v;
 }
 
@@ -126,11 +138,12 @@ ModelTerms parse_model_terms(std::string_view spec, bool have_rotor_speeds) {
     else if (item == "damping") t.rate_damping = true;
     else if (item == "rotor-inertia") t.rotor_inertia = true;
     else if (item == "drag") t.force_drag = true;
+    else if (item == "wind") t.wind = true;
     else if (item == "weighting") t.weight_rows = true;
     else
       throw std::invalid_argument(fmt::format(
           "--terms {}: '{}' is not a term; expected paper, real, or a comma list of offsets, flapping, damping, "
-          "rotor-inertia, drag, weighting",
+          "rotor-inertia, drag, wind, weighting",
           spec, item));
   }
   return t;
@@ -175,9 +188,9 @@ RawSignals raw_signals(const FlightLog& log, const ExtendedOptions& opt, double 
   ProcessingOptions pf = opt.processing, pm = opt.processing;
   pf.lowpass.cutoff_hz = f_force;
   pm.lowpass.cutoff_hz = f_moment;
-  pm.keep_body_velocity = terms.flapping;
+  pm.keep_body_velocity = terms.flapping || terms.wind;
   r.sf = process_log(log, pf, &r.pf);
-  r.sm = f_moment == f_force && !terms.flapping ? r.sf : process_log(log, pm, &r.pm);
+  r.sm = f_moment == f_force && !pm.keep_body_velocity ? r.sf : process_log(log, pm, &r.pm);
   if (r.sm == r.sf) r.pm = r.pf;
   const Eigen::Index n = r.sf->size();
   r.T = r.sf->T;
@@ -204,8 +217,13 @@ RawSignals raw_signals(const FlightLog& log, const ExtendedOptions& opt, double 
   b.col(B_FZ) = XF.col(11);
   b.middleCols<3>(B_TX) = XM.middleCols<3>(12);
   b.col(B_ONE).setOnes();
-  if (terms.flapping) b.middleCols<2>(B_U) = r.sm->uv;
-  else b.middleCols<2>(B_U).setZero();
+  if (pm.keep_body_velocity) {
+    b.middleCols<2>(B_U) = r.sm->uv;
+    b.middleCols<4>(B_RXX) = r.sm->world_axes;
+  } else {
+    b.middleCols<2>(B_U).setZero();
+    b.middleCols<4>(B_RXX).setZero();
+  }
   b.col(B_W) = XF.col(0);
   b.middleCols<3>(B_P) = XM.middleCols<3>(1);
   b.col(B_QOM) = XM.col(2).cwiseProduct(omega_r);

@@ -340,6 +340,7 @@ IdentificationResult identify(const FlightLog& log, const IdentificationOptions&
   res.errors_standard = prediction_error(std_reg.with_window(ew), sets_of(0, 1), opt.reference);
   res.errors_filtered = prediction_error(filt_reg.with_window(ew), sets_of(2, 3), opt.reference);
   res.warnings.insert(res.warnings.end(), input_warnings.begin(), input_warnings.end());
+  res.recommended = recommend_set(res);
   return res;
 }
 

@@ -151,15 +151,22 @@ std::shared_ptr<const RegressionSignals> process_log(const FlightLog& log, const
   }
   // Step 3: v = R(eta)^T p_dot (eq. 3), then the Phi_b signals.
   const double g = opt.g;
-  if (opt.keep_body_velocity) out->uv.resize(n, 2);
+  if (opt.keep_body_velocity) {
+    out->uv.resize(n, 2);
+    out->world_axes.resize(n, 4);
+  }
   for (Eigen::Index k = 0; k < n; ++k) {
     const double phi = X(k, 8), theta = X(k, 9);
     const Vec3 eta(phi, theta, X(k, 10));
     const Vec3 pdot(X(k, 5), X(k, 6), X(k, 7));
-    const Vec3 v = rotation<double>(eta).transpose() * pdot;
+    const Mat3 R = rotation<double>(eta);
+    const Vec3 v = R.transpose() * pdot;
     const double p = X(k, 1), q = X(k, 2), r = X(k, 3);
     X(k, 0) = v(2);
-    if (opt.keep_body_velocity) out->uv.row(k) = v.head<2>().transpose();
+    if (opt.keep_body_velocity) {
+      out->uv.row(k) = v.head<2>().transpose();
+      out->world_axes.row(k) << R(0, 0), R(1, 0), R(0, 1), R(1, 1);
+    }
     X(k, 4) = p * v(1) - q * v(0) + g * std::cos(theta) * std::cos(phi);  // eq. (7): p v - q u + g_bz
     X(k, 5) = p * q;
     X(k, 6) = p * r;

@@ -170,6 +170,10 @@ std::string format_consistency(const IdentificationResult& r) {
       fmt::format_to(it, "  {} = {} (already consistent)\n", r.physical_sets[i].name,
                      r.physical_sets[i].name == "PC" ? "LS" : "FMLS");
   }
+  if (!r.recommended.set.empty())
+    fmt::format_to(it, "\nRecommended set: {}. {}\n", r.recommended.set, r.recommended.reason);
+  else if (!r.recommended.reason.empty())
+    fmt::format_to(it, "\nNo set recommended: {}\n", r.recommended.reason);
   return fmt::to_string(out);
 }
 
@@ -287,6 +291,7 @@ json to_json(const IdentificationResult& r) {
           {"least_squares", {{"LS", ls_json(r.ls_standard)}, {"FMLS", ls_json(r.ls_filtered)}}},
           {"uncertainty", {{"LS", uncertainty_json(r.ls_standard)}, {"FMLS", uncertainty_json(r.ls_filtered)}}},
           {"consistency", consistency},
+          {"recommended", {{"set", r.recommended.set}, {"reason", r.recommended.reason}}},
           {"input_checks", to_json(r.input_findings)},
           {"gradient_descent", gd},
           {"prediction_error", {{"standard", to_json(r.errors_standard)}, {"filtered", to_json(r.errors_filtered)}}},

@@ -1,0 +1,110 @@
+// Which set to use (include/quadid/identification.hpp, recommend_set).
+#include "quadid/identification.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <vector>
+
+namespace quadid {
+namespace {
+
+// Root mean square of the standard errors relative to each parameter's scale
+// (|m| for m, the mean principal moment for the inertia entries); the mass
+// is left out when it was given (its standard error is 0 by construction).
+double relative_precision(const LeastSquaresSolution& sol, const Theta& theta, bool mass_known) {
+  const Theta& se = sol.uncertainty.computed ? sol.uncertainty.std_error : sol.std_error;
+  const double iscale = (std::abs(theta(1)) + std::abs(theta(4)) + std::abs(theta(6))) / 3.0;
+  double ss = 0.0;
+  int n = 0;
+  for (int j = mass_known ? 1 : 0; j < 7; ++j) {
+    const double scale = j == 0 ? std::abs(theta(0)) : iscale;
+    if (!(scale > 0.0)) return std::numeric_limits<double>::infinity();
+    const double rel = se(j) / scale;
+    if (!std::isfinite(rel)) return std::numeric_limits<double>::infinity();
+    ss += rel * rel;
+    ++n;
+  }
+  return std::sqrt(ss / n);
+}
+
+}  // namespace
+
+Recommendation recommend_set(const IdentificationResult& r) {
+  const bool mass_known = r.options.terms.known_mass.has_value();
+  struct Candidate {
+    const SetEstimate* set;
+    const LeastSquaresSolution* sol;
+    const SetEstimate* physical;
+    double precision;
+  };
+  std::vector<Candidate> c;
+  for (int i : {0, 1}) {
+    const SetEstimate& e = r.estimates[static_cast<size_t>(2 * i)];
+    const LeastSquaresSolution& sol = i == 0 ? r.ls_standard : r.ls_filtered;
+    const SetEstimate* pc =
+        static_cast<size_t>(i) < r.physical_sets.size() ? &r.physical_sets[static_cast<size_t>(i)] : nullptr;
+    if (e.valid && e.theta.allFinite()) c.push_back({&e, &sol, pc, relative_precision(sol, e.theta, mass_known)});
+  }
+  Recommendation rec;
+  if (c.empty()) {
+    rec.reason = "no least-squares set could be computed from this log";
+    return rec;
+  }
+  const Candidate* best = &c.front();
+  for (const auto& x : c)
+    if (x.precision < best->precision) best = &x;
+  const Candidate* other = nullptr;
+  for (const auto& x : c)
+    if (&x != best) other = &x;
+
+  std::string why;
+  if (other && std::isfinite(best->precision) && std::isfinite(other->precision))
+    why = fmt::format("{} has the smaller standard errors (RMS over the parameters, relative to each one's scale: "
+                      "{:.2g} % against {:.2g} % for {})",
+                      best->set->name, 100.0 * best->precision, 100.0 * other->precision, other->set->name);
+  else if (other)
+    why = fmt::format("{} is the set whose standard errors are defined", best->set->name);
+  else
+    why = fmt::format("{} is the only least-squares set", best->set->name);
+
+  const PhysicalConsistency pcheck = check_physical_consistency(best->set->theta);
+  rec.set = best->set->name;
+  if (!pcheck.physical) {
+    if (best->physical && best->physical->valid) {
+      rec.set = best->physical->name;
+      why += fmt::format("; it is not a physical body ({}), so its closest consistent set {} is recommended",
+                         pcheck.why, best->physical->name);
+    } else {
+      why += fmt::format("; it is not a physical body ({}) and no consistent set could be found: treat it with care",
+                         pcheck.why);
+    }
+  } else {
+    why += "; it is physically consistent";
+  }
+  // What the data do not settle, whatever the set.
+  if (!best->sol->poorly_determined.empty())
+    why += fmt::format(". Poorly determined by this flight: {}", fmt::join(best->sol->poorly_determined, ", "));
+  // The two models see the same flight: a disagreement beyond their
+  // uncertainty means the processing or the model does not suit the data.
+  if (other) {
+    std::vector<std::string> differ;
+    const Theta& sa = best->sol->uncertainty.computed ? best->sol->uncertainty.std_error : best->sol->std_error;
+    const Theta& sb = other->sol->uncertainty.computed ? other->sol->uncertainty.std_error : other->sol->std_error;
+    for (int j : {0, 1, 4, 6}) {
+      if (j == 0 && mass_known) continue;
+      const double d = std::abs(best->set->theta(j) - other->set->theta(j));
+      const double s = std::hypot(sa(j), sb(j));
+      if (std::isfinite(s) && d > 3.0 * s && d > 0.01 * std::abs(best->set->theta(j)))
+        differ.push_back(std::string(kThetaNames[static_cast<size_t>(j)]));
+    }
+    if (!differ.empty())
+      why += fmt::format(". {} and {} differ by more than three combined standard errors in {}: model error, not "
+                         "noise, dominates these parameters",
+                         best->set->name, other->set->name, fmt::join(differ, ", "));
+  }
+  rec.reason = why + ".";
+  return rec;
+}
+
+}  // namespace quadid
