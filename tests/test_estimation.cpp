@@ -251,6 +251,63 @@ TEST(Estimation, TinyOrZeroInitialGuessConvergesAndIsNotCalledDiverged) {
   EXPECT_NE(nan_gd.divergence_reason().find("non-finite"), std::string::npos);
 }
 
+TEST(Estimation, NormalizedGainConvergesAtItsRateWhateverTheVehiclesScale) {
+  // Issue 9: one default gain for a 30 g and a 2 kg vehicle. With a constant
+  // mass row Gamma_0 = a, nu = a^2 and the exact step gives
+  // m(t) - m* = exp(-rate t) (m(0) - m*) for any a: the closed form, checked
+  // for a = 0.098 and 98 (the rows' scale changed by 1000).
+  const double T = 0.002, rate = 0.5;
+  for (double a : {0.098, 9.81, 98.1}) {
+    GradientDescentOptions o;
+    o.gain = GdGain::Normalized;
+    o.rate = rate;
+    Theta start = Theta::Zero();
+    start(0) = 1.0;
+    GradientDescent gd(start, T, o);
+    Regressor4x7 G = Regressor4x7::Zero();
+    G(0, 0) = a;
+    const double m_star = 3.0;
+    const int n = 1000;  // 2 s
+    for (int k = 0; k < n; ++k) gd.step(G, Vec4(a * m_star, 0, 0, 0));
+    // Tolerance: the exact step is exact; 1e-12 leaves room for rounding.
+    EXPECT_NEAR(gd.theta()(0) - m_star, std::exp(-rate * n * T) * (1.0 - m_star), 1e-12) << a;
+  }
+  // Torque block: the whole trajectory of Theta is the same when the rows and
+  // outputs are scaled by c (units, vehicle size): the normalized law sees
+  // only directions, not magnitudes. Rounding-level agreement (1e-9 relative).
+  std::mt19937 rng(11);
+  std::vector<Regressor4x7> Gs;
+  for (int k = 0; k < 3000; ++k) Gs.push_back(random_regressor(rng));
+  const Theta star = virtual_theta();
+  GradientDescentOptions o;
+  o.gain = GdGain::Normalized;
+  Theta ends[2];
+  for (int i = 0; i < 2; ++i) {
+    const double c = i == 0 ? 1.0 : 1e-3;
+    GradientDescent gd(Params::qball2_nominal().theta(), T, o);
+    for (const auto& Gk : Gs) gd.step(c * Gk, c * (Gk * star));
+    ends[i] = gd.theta();
+  }
+  EXPECT_LT((ends[0] - ends[1]).norm(), 1e-9 * ends[0].norm());
+  // The paper's sigma is not scale-free: the same scaling moves its result.
+  Theta paper[2];
+  for (int i = 0; i < 2; ++i) {
+    const double c = i == 0 ? 1.0 : 1e-3;
+    GradientDescent gd(Params::qball2_nominal().theta(), T);
+    for (int k = 0; k < 200; ++k) gd.step(c * Gs[static_cast<size_t>(k)], c * (Gs[static_cast<size_t>(k)] * star));
+    paper[i] = gd.theta();
+  }
+  EXPECT_GT((paper[0] - paper[1]).norm(), 1e-3 * paper[0].norm());
+  // Invalid rate: named by its option.
+  o.rate = -1.0;
+  try {
+    o.validate();
+    FAIL() << "a negative rate was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("--gd-rate"), std::string::npos) << e.what();
+  }
+}
+
 TEST(Estimation, OptionsAreValidated) {
   GradientDescentOptions g;
   g.sigma = -1.0;

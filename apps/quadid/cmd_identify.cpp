@@ -24,6 +24,7 @@ struct IdentifyArgs {
   std::string window = "10:50";
   std::string error_window;
   double sigma = 30.0;
+  double gd_rate = GradientDescentOptions{}.rate;
   std::string gd_discretization = "exact";
   std::string gd_init = "nominal";
   std::string nominal = "qball2-nominal";
@@ -47,6 +48,7 @@ void run(const IdentifyArgs& a) {
   opt.lambda = a.proc.lambda;
   opt.gd_variant = a.proc.gd_variant();
   opt.gd.sigma = a.sigma;
+  opt.gd.rate = a.gd_rate;
   if (a.gd_discretization == "exact") opt.gd.discretization = GdDiscretization::Exact;
   else if (a.gd_discretization == "literal") opt.gd.discretization = GdDiscretization::ForwardEuler;
   else throw std::invalid_argument(fmt::format("--gd-discretization {}: expected exact or literal", a.gd_discretization));
@@ -100,7 +102,10 @@ void run(const IdentifyArgs& a) {
   fmt::print("{}\n", format_consistency(res));
   fmt::print("Least squares: column-scaled condition number {:.4g} (standard), {:.4g} (filtered)\n",
              res.ls_standard.condition, res.ls_filtered.condition);
-  fmt::print("Gradient descent: sigma = {:g}, {} discretization, max sigma*T*lambda_max = {:.3g}\n\n", opt.gd.sigma,
+  const GradientDescentOptions& gd = res.options.gd;
+  fmt::print("Gradient descent: {}, {} discretization, max sigma*T*lambda_max = {:.3g}\n\n",
+             gd.gain == GdGain::Paper ? fmt::format("sigma = {:g}", gd.sigma)
+                                      : fmt::format("normalized gain, rate {:g}/s", gd.rate),
              a.gd_discretization, std::max(res.gd_step_gain_standard, res.gd_step_gain_filtered));
   fmt::print("{}\n", format_prediction_table(res.errors_standard, "Table 5"));
   fmt::print("{}", format_prediction_table(res.errors_filtered, "Table 6"));
@@ -125,7 +130,14 @@ void register_identify(CLI::App& app) {
                       ->capture_default_str();
   sub->add_option("--error-window", a->error_window,
                   "window of the prediction-error tables (default: the whole log, as the paper's 0-50 s)");
-  sub->add_option("--sigma", a->sigma, "gradient-descent gain of eq. (41)")->capture_default_str();
+  sub->add_option("--sigma", a->sigma, "gradient-descent gain of eq. (41), with --gd-gain paper")->capture_default_str();
+  sub->add_option("--gd-gain", a->real.gd_gain,
+                  "gradient-descent gain: auto (normalized with --vehicle, else paper), paper (--sigma, the paper's "
+                  "law), or normalized (--gd-rate; the same default for a 30 g and a 2 kg vehicle)")
+      ->capture_default_str();
+  sub->add_option("--gd-rate", a->gd_rate,
+                  "normalized gradient descent: rate of a direction carrying all of its block's excitation, 1/s")
+      ->capture_default_str();
   sub->add_option("--gd-discretization", a->gd_discretization,
                   "exact (exact solution over each sample, always stable) or literal (eq. 42, forward Euler: "
                   "diverges at the paper's values, and says so)")

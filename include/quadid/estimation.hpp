@@ -244,8 +244,32 @@ enum class GdDiscretization {
   ForwardEuler,
 };
 
+/// The gain of the gradient law.
+enum class GdGain {
+  /// sigma of eq. (41) as it is (the paper's sigma = 30). The speed of each
+  /// direction is sigma lambda(Gamma^T Gamma): it depends on the flight (how
+  /// hard it accelerates) and on the units, so one sigma suits one vehicle and
+  /// trajectory (e.g. 30 converges within a second on the QBall 2's Table 2
+  /// flight, and then follows the last samples' noise on an aggressive one).
+  Paper,
+  /// Normalized gradient (Ioannou & Sun, Robust Adaptive Control, sec. 4.5):
+  /// each decoupled block of the regressor (the mass row; the three torque
+  /// rows) gets sigma_b = rate / nu_b, nu_b the running mean (time constant
+  /// `normalization_time`) of the block's |Gamma_b|^2. Its directions then
+  /// converge at `rate` (1/s) times their share of the block's excitation,
+  /// whatever the vehicle's size, the units or the flight's aggressiveness.
+  Normalized,
+};
+
 struct GradientDescentOptions {
-  double sigma = 30.0;  // adaptation gain of eq. (41), the paper's value
+  double sigma = 30.0;  // adaptation gain of eq. (41), the paper's value (GdGain::Paper)
+  GdGain gain = GdGain::Paper;
+  /// 1/s, GdGain::Normalized: the rate of a direction that carries all of its
+  /// block's excitation. 0.5/s: a time constant of 2 s for the best-excited
+  /// directions and 6-20 s for the weakest, short against a 30-60 s flight
+  /// and long against the regressor's noise (docs/identify.md, "Estimators").
+  double rate = 0.5;
+  double normalization_time = 1.0;  // s, GdGain::Normalized: running mean of |Gamma_b|^2
   GdDiscretization discretization = GdDiscretization::Exact;
   /// Divergence: a non-finite estimate, or an entry of Theta whose magnitude
   /// exceeds this bound in SI units (kg for m, kg m^2 for the inertias). The
@@ -279,6 +303,7 @@ class GradientDescent {
  private:
   Theta theta_;
   double sigma_T_;
+  double nu_force_ = 0.0, nu_torque_ = 0.0, alpha_ = 0.0;  // GdGain::Normalized running means, EMA weight
   GradientDescentOptions opt_;
   bool diverged_ = false;
   long steps_ = 0, diverged_at_ = -1;

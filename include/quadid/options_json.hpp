@@ -73,10 +73,12 @@ struct RealFlightArgs {
   std::optional<double> cutoff_force, cutoff_moment;  // --cutoff-force, --cutoff-moment (Hz)
   bool window_given = false;           // --window was given
   bool nominal_given = false;          // --nominal was given
+  std::string gd_gain = "auto";        // --gd-gain auto|paper|normalized (auto: normalized with a vehicle)
 };
 /// Applies them to `req`, with the defaults of docs/real-flights.md: with a
 /// vehicle, the real-flight terms, cutoffs chosen on held-out data, the whole
-/// log as window and the vehicle's nominal set as reference; without one, the
+/// log as window, the vehicle's nominal set as reference and the normalized
+/// gradient-descent gain (GdGain::Normalized); without one, the
 /// paper's model. Throws std::invalid_argument naming the option.
 void apply_real_flight(IdentifyRequest& req, const RealFlightArgs& a);
 

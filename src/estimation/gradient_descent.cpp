@@ -47,6 +47,13 @@ inline double psi(double x, double h) {
 void GradientDescentOptions::validate() const {
   if (!(sigma > 0.0) || !std::isfinite(sigma))
     throw std::invalid_argument(fmt::format("--sigma = {:g} (GD gain) must be finite and positive", sigma));
+  if (gain == GdGain::Normalized) {
+    if (!(rate > 0.0) || !std::isfinite(rate))
+      throw std::invalid_argument(fmt::format("--gd-rate {:g}: must be a positive rate in 1/s", rate));
+    if (!(normalization_time > 0.0) || !std::isfinite(normalization_time))
+      throw std::invalid_argument(
+          fmt::format("GradientDescentOptions: normalization_time={:g} must be a positive time in s", normalization_time));
+  }
   if (discretization != GdDiscretization::Exact && discretization != GdDiscretization::ForwardEuler)
     throw std::invalid_argument("GradientDescentOptions: unknown discretization");
   if (!(divergence_bound > 0.0) || !std::isfinite(divergence_bound))
@@ -61,20 +68,33 @@ GradientDescent::GradientDescent(const Theta& initial, double T, const GradientD
     throw std::invalid_argument(fmt::format("GradientDescent: sample period T={} must be positive", T));
   if (!initial.allFinite()) throw std::invalid_argument("GradientDescent: the initial guess is not finite");
   sigma_T_ = opt.sigma * T;
+  alpha_ = 1.0 - std::exp(-T / opt.normalization_time);
 }
 
 void GradientDescent::step(const Regressor4x7& G, const Vec4& Y) {
   if (diverged_) return;
   const Vec4 e = G * theta_ - Y;
   const Eigen::Matrix4d GG = G * G.transpose();
-  const double h = sigma_T_;
+  double h = sigma_T_;  // sigma T of the torque block (and of the whole G when it is not block diagonal)
+  double h0 = sigma_T_;  // sigma T of the mass row
   Vec4 pe;  // psi(G) e for Exact, h e for forward Euler
   double lmax = 0.0;
   const bool block = GG.row(0).tail<3>().isZero(0.0);
+  if (opt_.gain == GdGain::Normalized) {
+    // sigma_b = rate / nu_b, nu_b the running mean of |Gamma_b|^2 (the first
+    // sample starts it). A block with no excitation yet takes no step.
+    const double f = block ? GG(0, 0) : GG.trace(), t3 = block ? GG.bottomRightCorner<3, 3>().trace() : f;
+    nu_force_ = steps_ == 0 ? f : nu_force_ + alpha_ * (f - nu_force_);
+    nu_torque_ = steps_ == 0 ? t3 : nu_torque_ + alpha_ * (t3 - nu_torque_);
+    const double rT = opt_.rate * sigma_T_ / opt_.sigma;  // rate * T
+    h0 = nu_force_ > 0.0 ? rT / nu_force_ : 0.0;
+    h = nu_torque_ > 0.0 ? rT / nu_torque_ : 0.0;
+    if (!block) h0 = h;
+  }
   if (block) {
     const Eigen::Matrix3d G3 = GG.bottomRightCorner<3, 3>();
     const double tr = G3.trace();  // >= lambda_max(G3), as G3 is positive semidefinite
-    pe(0) = (opt_.discretization == GdDiscretization::Exact ? psi(GG(0, 0), h) : h) * e(0);
+    pe(0) = (opt_.discretization == GdDiscretization::Exact ? psi(GG(0, 0), h0) : h0) * e(0);
     if (opt_.discretization == GdDiscretization::ForwardEuler) {
       pe.tail<3>() = h * e.tail<3>();
       // The stability diagnostic: tr bounds lambda_max; refine only when it could exceed 2.
@@ -84,7 +104,7 @@ void GradientDescent::step(const Regressor4x7& G, const Vec4& Y) {
         es.computeDirect(G3, Eigen::EigenvaluesOnly);
         l3 = es.eigenvalues().maxCoeff();
       }
-      lmax = std::max(GG(0, 0), l3);
+      lmax = std::max(h0 * GG(0, 0), h * l3);
     } else if (h * tr <= 2.0) {
       // Moderate step gain (the usual case for the torque rows): psi(G) e by its
       // Taylor series h sum_k (-h G)^k e / (k+1)!, Horner form, with as many
@@ -97,19 +117,19 @@ void GradientDescent::step(const Regressor4x7& G, const Vec4& Y) {
       Eigen::Vector3d acc = kInvFact[K + 1] * e3;
       for (int k = K - 1; k >= 0; --k) acc = kInvFact[k + 1] * e3 - h * (G3 * acc);
       pe.tail<3>() = h * acc;
-      lmax = std::max(GG(0, 0), tr);
+      lmax = std::max(h0 * GG(0, 0), h * tr);
     } else {
       Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es;
       es.computeDirect(G3);
       const Eigen::Vector3d l = es.eigenvalues();
-      lmax = std::max(GG(0, 0), l.maxCoeff());
+      lmax = std::max(h0 * GG(0, 0), h * l.maxCoeff());
       const Eigen::Vector3d c = es.eigenvectors().transpose() * e.tail<3>();
       pe.tail<3>() = es.eigenvectors() * Eigen::Vector3d(psi(l(0), h) * c(0), psi(l(1), h) * c(1), psi(l(2), h) * c(2));
     }
   } else {
     const Eigen::SelfAdjointEigenSolver<Eigen::Matrix4d> es(GG);
     const Vec4 l = es.eigenvalues();
-    lmax = l.maxCoeff();
+    lmax = h * l.maxCoeff();
     if (opt_.discretization == GdDiscretization::Exact) {
       Vec4 c = es.eigenvectors().transpose() * e;
       for (int i = 0; i < 4; ++i) c(i) *= psi(l(i), h);
@@ -118,7 +138,7 @@ void GradientDescent::step(const Regressor4x7& G, const Vec4& Y) {
       pe = h * e;
     }
   }
-  max_gain_ = std::max(max_gain_, h * lmax);
+  max_gain_ = std::max(max_gain_, lmax);  // sigma T lambda_max
   const Theta next = theta_ - G.transpose() * pe;
   // Divergence: non-finite, or an entry beyond the absolute bound (see the option).
   const bool finite = next.allFinite();

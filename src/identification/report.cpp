@@ -111,6 +111,19 @@ std::string format_estimates_table(const IdentificationResult& r) {
     row.push_back(num(ref(j)));
     t.rows.push_back(std::move(row));
   }
+  // Sets that are not physical bodies are flagged here, not only in the
+  // consistency section, so that no one reads them as equals of the others.
+  std::vector<std::string> notes;
+  for (const auto* e : sets) {
+    if (!e->valid) continue;
+    const PhysicalConsistency c = check_physical_consistency(e->theta);
+    if (!c.physical) notes.push_back(fmt::format("{} is not a physical body ({}): shown for comparison only", e->name, c.why));
+  }
+  if (r.extended)
+    notes.push_back("GD and FMGD follow the paper's gradient law on the paper's model, without the real-flight terms: "
+                    "shown for comparison only");
+  if (!r.recommended.set.empty()) notes.push_back(fmt::format("Recommended: {} (see below)", r.recommended.set));
+  t.note = fmt::format("{}", fmt::join(notes, "\n"));
   return t.to_text();
 }
 
@@ -245,6 +258,8 @@ json to_json(const PredictionErrorTable& t) {
 json to_json(const IdentificationResult& r) {
   json est = json::object();
   json gd = {{"sigma", r.options.gd.sigma},
+             {"gain", r.options.gd.gain == GdGain::Paper ? "paper" : "normalized"},
+             {"rate", r.options.gd.rate},
              {"discretization",
               r.options.gd.discretization == GdDiscretization::Exact ? "exact" : "forward-euler (eq. 42)"},
              {"initial", theta_json(r.gd_initial)}};

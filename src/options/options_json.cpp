@@ -63,7 +63,9 @@ const std::vector<OptionSpec>& identify_specs() {
       {
           {"window", K::String, "estimation window T0:T1, seconds from the log's start (default 10:50)"},
           {"error-window", K::String, "window of the prediction-error tables (default: the whole log)"},
-          {"sigma", K::Number, "gradient-descent gain of eq. (41) (default 30)"},
+          {"sigma", K::Number, "gradient-descent gain of eq. (41) with gd-gain paper (default 30)"},
+          {"gd-gain", K::String, "auto (normalized with a vehicle, else paper), paper (sigma) or normalized (gd-rate)"},
+          {"gd-rate", K::Number, "normalized gradient descent: rate of a fully excited direction, 1/s (default 0.5)"},
           {"gd-discretization", K::String, "exact or literal (eq. 42) (default exact)"},
           {"gd-init", K::String, "GD initial guess: nominal, a preset or a params JSON (default nominal)"},
           {"nominal", K::String, "reference set: qball2-nominal, qball2-virtual or a params JSON"},
@@ -71,7 +73,7 @@ const std::vector<OptionSpec>& identify_specs() {
           {"evolution-interval", K::Number, "seconds between evolution rows, 0 = every sample (default 0.01)"},
           {"vehicle", K::String, "vehicle file or built-in name: the wrench from the rotor columns (docs/vehicles.md)"},
           {"known-mass", K::Number, "weighed mass, kg: estimate the thrust scale with the inertia"},
-          {"terms", K::String, "auto, paper, real, or a list of offsets,flapping,damping,rotor-inertia,drag,weighting"},
+          {"terms", K::String, "auto, paper, real, or a list of offsets,flapping,damping,rotor-inertia,drag,wind,weighting"},
           {"cutoffs", K::String, "auto (with a vehicle the moment rows at twice the cutoff), held-out, or fixed"},
           {"cutoff-force", K::Number, "pre-filter cutoff of the force row, Hz"},
           {"cutoff-moment", K::Number, "pre-filter cutoff of the moment rows, Hz"},
@@ -404,6 +406,7 @@ IdentifyRequest identify_options_from_json(const nlohmann::json& j) {
   if (const auto ew = r.string("error-window"))
     opt.error_window = r.with_option("error-window", [&] { return TimeWindow::parse(*ew); });
   opt.gd.sigma = r.number("sigma").value_or(30.0);
+  opt.gd.rate = r.number("gd-rate").value_or(opt.gd.rate);
   const std::string disc = r.string("gd-discretization").value_or("exact");
   if (disc == "exact") opt.gd.discretization = GdDiscretization::Exact;
   else if (disc == "literal") opt.gd.discretization = GdDiscretization::ForwardEuler;
@@ -426,6 +429,7 @@ IdentifyRequest identify_options_from_json(const nlohmann::json& j) {
   rf.known_mass = r.number("known-mass");
   rf.terms = r.string("terms").value_or("auto");
   rf.cutoffs = r.string("cutoffs").value_or("auto");
+  rf.gd_gain = r.string("gd-gain").value_or("auto");
   rf.cutoff_force = r.number("cutoff-force");
   rf.cutoff_moment = r.number("cutoff-moment");
   rf.window_given = j.contains("window");
@@ -444,6 +448,10 @@ void apply_real_flight(IdentifyRequest& req, const RealFlightArgs& a) {
     if (!a.window_given) opt.window = TimeWindow{};  // the whole log, clear of the filters' edges
   }
   const bool vehicle = req.vehicle.has_value();
+  if (a.gd_gain == "auto") opt.gd.gain = vehicle ? GdGain::Normalized : GdGain::Paper;
+  else if (a.gd_gain == "paper") opt.gd.gain = GdGain::Paper;
+  else if (a.gd_gain == "normalized") opt.gd.gain = GdGain::Normalized;
+  else throw std::invalid_argument(fmt::format("--gd-gain {}: expected auto, paper or normalized", a.gd_gain));
   if (a.terms == "auto") opt.terms = vehicle ? ModelTerms::real_flight(true) : ModelTerms{};
   else opt.terms = parse_model_terms(a.terms, vehicle);
   if (opt.terms.rotor_inertia && !vehicle)
