@@ -47,17 +47,36 @@ for name, opts in configs:
             print(f"{name}: {f}: failed: {p.stderr.strip()[:300]}")
             continue
         j = json.loads(p.stdout)
-        e = j["estimates"]["LS"]
+        rec = j.get("recommended", {}).get("set") or "LS"
+        e = j["estimates"][rec]
         s = e.get("extra", {}).get("thrust_scale", float("nan"))
         I = [e["Ixx"], e["Iyy"], e["Izz"]]
         rf = j.get("real_flight", {})
         cut = rf.get("cutoff_selection", {})
-        cons = j.get("consistency", {}).get("LS", {}).get("physical")
-        rows.append((f, s, I, cut.get("force_cutoff_hz"), cut.get("moment_cutoff_hz"), cons))
+        cons = j.get("consistency", {}).get(rec, {}).get("physical")
+        base = {"PC": "LS", "FMPC": "FMLS"}.get(rec, rec)
+        unc = j.get("uncertainty", {}).get(base, {})
+        ci = [unc.get(k, {}).get("ci95", [float("nan")] * 2) for k in ("Ixx", "Iyy", "Izz")]
+        poor = set(j.get("least_squares", {}).get(base, {}).get("poorly_determined", []))
+        rows.append((f, s, I, cut.get("force_cutoff_hz"), cut.get("moment_cutoff_hz"), cons, rec, ci, poor))
     print(f"\n== {name}")
-    print(f"{'flight':8} {'s':>7} {'Ixx':>8} {'Iyy':>8} {'Izz':>8}  (1e-6 kg m^2)  cutoffs F/M Hz  physical")
-    for f, s, I, cf, cm, cons in rows:
-        print(f"{f:8} {s:7.4f} {I[0]*1e6:8.2f} {I[1]*1e6:8.2f} {I[2]*1e6:8.2f}  {str(cf):>6}/{str(cm):<6} {cons}")
+    print(f"{'flight':8} {'set':5} {'s':>7} {'Ixx':>8} {'Iyy':>8} {'Izz':>8}  (1e-6 kg m^2)  cutoffs F/M Hz  physical  poorly determined")
+    for f, s, I, cf, cm, cons, rec, ci, poor in rows:
+        print(f"{f:8} {rec:5} {s:7.4f} {I[0]*1e6:8.2f} {I[1]*1e6:8.2f} {I[2]*1e6:8.2f}  {str(cf):>6}/{str(cm):<6} "
+              f"{str(cons):8}  {','.join(sorted(poor)) or '-'}")
     if len(rows) > 1:
-        print(f"{'CV %':8} {cv([r[1] for r in rows]):7.2f} {cv([r[2][0] for r in rows]):8.1f} "
+        print(f"{'CV %':14} {cv([r[1] for r in rows]):7.2f} {cv([r[2][0] for r in rows]):8.1f} "
               f"{cv([r[2][1] for r in rows]):8.1f} {cv([r[2][2] for r in rows]):8.1f}")
+        # Issue 11: the median of the other flights inside this flight's 95 %
+        # interval (or within 10 %), per moment.
+        hits, total = 0, 0
+        for i, r in enumerate(rows):
+            for k in range(3):
+                others = sorted(o[2][k] for j, o in enumerate(rows) if j != i)
+                med = others[len(others) // 2] if len(others) % 2 else 0.5 * (others[len(others) // 2 - 1] + others[len(others) // 2])
+                lo, hi = r[7][k]
+                ok = (lo <= med <= hi) or abs(med - r[2][k]) <= 0.1 * abs(r[2][k])
+                hits += ok
+                total += 1
+        print(f"median of the other flights inside the 95 % interval or within 10 %: {hits}/{total} "
+              f"({100.0 * hits / total:.0f} %)")

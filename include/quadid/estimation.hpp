@@ -156,6 +156,21 @@ struct UncertaintyOptions {
   void validate() const;
 };
 
+/// The long-run (HAC) covariance of a sum of influences: Bartlett kernel with
+/// the bandwidth from the series' correlation time (docs/uncertainty.md).
+struct LongRunCovariance {
+  Eigen::MatrixXd covariance;       // of sum_k psi_k: n times the long-run covariance
+  Eigen::MatrixXd white_covariance;  // lag 0 only (white residuals)
+  long correlation_time = 0;
+  bool correlation_time_capped = false;
+  long bandwidth = 0;
+  double dof = std::numeric_limits<double>::infinity();
+  double quantile = 1.959963984540054;  // Student t at opt.confidence, dof
+};
+/// psi: n x P influences, row-major (sample k's P numbers contiguous). The
+/// series is centred first. Needs n >= 8.
+LongRunCovariance long_run_covariance(const std::vector<double>& psi, int P, const UncertaintyOptions& opt);
+
 /// Second pass over the samples of a solved regression: stores the influence
 /// psi_k of each sample (7 numbers per sample).
 class InfluenceAccumulator {

@@ -35,7 +35,14 @@ struct ExtendedEstimate {
   /// m (or s), Ixx Ixy Ixz Iyy Iyz Izz, then the extra terms.
   std::vector<std::string> names;
   Eigen::VectorXd value, std_error;
-  Eigen::MatrixXd covariance;  // of `value`, inflated by the residuals' correlation length
+  /// Of `value`: HAC (Bartlett) from each sample's influence on the weighted
+  /// fit (long_run_covariance), honest about coloured residuals.
+  Eigen::MatrixXd covariance;
+  Eigen::VectorXd white_std_error;  // the same ignoring the residuals' correlation
+  long correlation_time = 0, bandwidth = 0;  // samples
+  bool correlation_time_capped = false;
+  double dof = std::numeric_limits<double>::infinity();
+  double quantile = 1.959963984540054;  // Student t of the 95 % intervals
   /// The rigid-body parameters (m = the known mass when it was given).
   Theta theta = Theta::Zero();
   /// The extra parameters (thrust_scale, offset_x, ... rotor_inertia), name -> value.
@@ -62,6 +69,7 @@ struct ExtendedOptions {
   ModelTerms terms{};
   Params reference = Params::qball2_nominal();  // prior in unidentifiable directions
   LeastSquaresOptions ls{};
+  UncertaintyOptions uncertainty{};
   /// Choose both cutoffs by prediction error on held-out time blocks
   /// (select_cutoffs); force_cutoff_hz and moment_cutoff_hz are then the
   /// starting point only.

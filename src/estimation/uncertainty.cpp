@@ -27,13 +27,6 @@ double normal_quantile(double p) {
   return 0.5 * (lo + hi);
 }
 
-// Lag-k autocovariance of column j of the n x 7 row-major series x (mean removed).
-double autocov(const std::vector<double>& x, long n, int j, long k) {
-  double s = 0.0;
-  for (long i = 0; i + k < n; ++i) s += x[static_cast<size_t>(7 * i + j)] * x[static_cast<size_t>(7 * (i + k) + j)];
-  return s / static_cast<double>(n);
-}
-
 }  // namespace
 
 void UncertaintyOptions::validate() const {
@@ -71,21 +64,27 @@ void InfluenceAccumulator::add(const Regressor4x7& G, const Vec4& Y) {
   for (int j = 0; j < 7; ++j) psi_.push_back(psi(j));
 }
 
-LeastSquaresUncertainty InfluenceAccumulator::finish(const UncertaintyOptions& opt) const {
+LongRunCovariance long_run_covariance(const std::vector<double>& psi, int P, const UncertaintyOptions& opt) {
   opt.validate();
-  LeastSquaresUncertainty u;
-  const long n = count();
-  u.samples = n;
-  if (n < 8 || !theta_.allFinite()) return u;
-
+  if (P < 1 || psi.size() % static_cast<size_t>(P) != 0)
+    throw std::invalid_argument("long_run_covariance: the influence series is not n x P");
+  const long n = static_cast<long>(psi.size() / static_cast<size_t>(P));
+  if (n < 8) throw std::invalid_argument("long_run_covariance: fewer than 8 samples");
+  const auto at = [P](long i, int j) { return static_cast<size_t>(P * i + j); };
+  LongRunCovariance r;
   // Centre the influence series (its sum is ~0 by the normal equations).
-  std::vector<double> x = psi_;
-  Theta mean = Theta::Zero();
+  std::vector<double> x = psi;
+  Eigen::VectorXd mean = Eigen::VectorXd::Zero(P);
   for (long i = 0; i < n; ++i)
-    for (int j = 0; j < 7; ++j) mean(j) += x[static_cast<size_t>(7 * i + j)];
+    for (int j = 0; j < P; ++j) mean(j) += x[at(i, j)];
   mean /= static_cast<double>(n);
   for (long i = 0; i < n; ++i)
-    for (int j = 0; j < 7; ++j) x[static_cast<size_t>(7 * i + j)] -= mean(j);
+    for (int j = 0; j < P; ++j) x[at(i, j)] -= mean(j);
+  const auto autocov = [&](int j, long k) {
+    double s = 0.0;
+    for (long i = 0; i + k < n; ++i) s += x[at(i, j)] * x[at(i + k, j)];
+    return s / static_cast<double>(n);
+  };
 
   // Correlation time: Politis & White (2004): the smallest lag m after which
   // |rho(m + k)| < 2 sqrt(log10(n)/n) for k = 1..5, the largest over the
@@ -94,38 +93,38 @@ LeastSquaresUncertainty InfluenceAccumulator::finish(const UncertaintyOptions& o
   constexpr long K = 5;
   const long lag_cap = std::max<long>(1, std::min<long>(opt.max_lag, n / 4));
   long m_hat = 0;
-  for (int j = 0; j < 7; ++j) {
-    const double c0 = autocov(x, n, j, 0);
+  for (int j = 0; j < P; ++j) {
+    const double c0 = autocov(j, 0);
     if (!(c0 > 0.0)) continue;
     long run = 0, m = 0;
     for (long k = 1; k <= lag_cap; ++k) {
-      if (std::abs(autocov(x, n, j, k) / c0) < thr) {
+      if (std::abs(autocov(j, k) / c0) < thr) {
         if (++run == K) break;
       } else {
         run = 0;
         m = k;
       }
     }
-    if (run < K) u.correlation_time_capped = true;
+    if (run < K) r.correlation_time_capped = true;
     m_hat = std::max(m_hat, m);
   }
-  u.correlation_time = m_hat;
+  r.correlation_time = m_hat;
   long L = opt.bandwidth > 0 ? opt.bandwidth
                              : static_cast<long>(std::ceil(opt.bandwidth_factor * static_cast<double>(std::max<long>(1, m_hat))));
   L = std::clamp<long>(L, 1, n);
-  u.bandwidth = L;
+  r.bandwidth = L;
 
   // Bartlett-kernel long-run covariance by overlapping batch sums (Meketon &
   // Schmeiser): E[S_k S_k^T] / L = sum_{|l|<L} (1 - |l|/L) Gamma(l) for the sum
   // S_k of L consecutive psi. O(n) with a running sum; positive semidefinite.
-  Mat7 lrv = Mat7::Zero(), white = Mat7::Zero();
-  Theta S = Theta::Zero();
+  Eigen::MatrixXd lrv = Eigen::MatrixXd::Zero(P, P), white = Eigen::MatrixXd::Zero(P, P);
+  Eigen::VectorXd S = Eigen::VectorXd::Zero(P);
   long batches = 0;
   for (long i = 0; i < n; ++i) {
-    const Eigen::Map<const Theta> xi(&x[static_cast<size_t>(7 * i)]);
+    const Eigen::Map<const Eigen::VectorXd> xi(&x[at(i, 0)], P);
     white.noalias() += xi * xi.transpose();
     S += xi;
-    if (i >= L) S -= Eigen::Map<const Theta>(&x[static_cast<size_t>(7 * (i - L))]);
+    if (i >= L) S -= Eigen::Map<const Eigen::VectorXd>(&x[at(i - L, 0)], P);
     if (i >= L - 1) {
       lrv.noalias() += S * S.transpose();
       ++batches;
@@ -138,11 +137,28 @@ LeastSquaresUncertainty InfluenceAccumulator::finish(const UncertaintyOptions& o
   const double b = static_cast<double>(L) / static_cast<double>(n);
   lrv /= std::max(0.25, 1.0 - b + b * b / 3.0);
   // theta_hat - theta ~ sum_k psi_k: Cov = n * long-run covariance.
-  u.covariance = static_cast<double>(n) * lrv;
-  u.white_std_error = white.diagonal().cwiseSqrt();
+  r.covariance = static_cast<double>(n) * lrv;
+  r.white_covariance = white;
+  r.dof = std::max(1.0, 1.5 * static_cast<double>(n) / static_cast<double>(L));
+  r.quantile = student_t_quantile(0.5 + 0.5 * opt.confidence, r.dof);
+  return r;
+}
+
+LeastSquaresUncertainty InfluenceAccumulator::finish(const UncertaintyOptions& opt) const {
+  opt.validate();
+  LeastSquaresUncertainty u;
+  const long n = count();
+  u.samples = n;
+  if (n < 8 || !theta_.allFinite()) return u;
+  const LongRunCovariance r = long_run_covariance(psi_, 7, opt);
+  u.correlation_time = r.correlation_time;
+  u.correlation_time_capped = r.correlation_time_capped;
+  u.bandwidth = r.bandwidth;
+  u.covariance = r.covariance;
+  u.white_std_error = r.white_covariance.diagonal().cwiseSqrt();
   u.std_error = u.covariance.diagonal().cwiseSqrt();
-  u.dof = std::max(1.0, 1.5 * static_cast<double>(n) / static_cast<double>(L));
-  u.quantile = student_t_quantile(0.5 + 0.5 * opt.confidence, u.dof);
+  u.dof = r.dof;
+  u.quantile = r.quantile;
   u.ci_low = theta_ - u.quantile * u.std_error;
   u.ci_high = theta_ + u.quantile * u.std_error;
   u.computed = true;

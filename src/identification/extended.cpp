@@ -403,7 +403,6 @@ ExtendedResult identify_extended(const FlightLog& log, const ExtendedOptions& op
   const RawSignals raw = raw_signals(log, opt, f_force, f_moment);
   res.force_processing = raw.pf;
   res.moment_processing = raw.pm;
-  const double fs = 1.0 / raw.T;
 
   const RegressionModel models[2] = {RegressionModel::Standard, RegressionModel::Filtered};
   for (int mi = 0; mi < 2; ++mi) {
@@ -413,19 +412,47 @@ ExtendedResult identify_extended(const FlightLog& log, const ExtendedOptions& op
       res.window = {static_cast<double>(k0) * raw.T, static_cast<double>(k1 - 1) * raw.T};
       res.window_samples = k1 - k0;
     }
-    const Fit f = fit(discretize(raw, model, opt), k0, k1, assemble, prior, opt);
+    const Discrete disc = discretize(raw, model, opt);
+    const Fit f = fit(disc, k0, k1, assemble, prior, opt);
     ExtendedEstimate e;
     e.name = mi == 0 ? "LS" : "FMLS";
     e.model = model;
     e.names = names;
-    // Residuals of filtered data are correlated over ~fs / (2 f) samples: the
-    // standard errors grow by the square root of that length (as for the
-    // paper's model in identify.cpp).
-    double fc = std::min(res.force_processing.filter_f3db, res.moment_processing.filter_f3db);
-    if (model == RegressionModel::Filtered) fc = std::min(fc, opt.lambda / (2.0 * std::numbers::pi));
-    const double corr = std::max(1.0, fs / (2.0 * fc));
+    // Covariance: each sample's influence on the weighted fit,
+    // psi_k = (A^T W^2 A)^-1 sum_r w_r^2 G_r^T e_r, and their long-run
+    // (HAC) covariance: filtered residuals are coloured, and on real flights
+    // model error colours them far beyond the filters' own correlation length.
+    {
+      Eigen::Matrix<double, 4, Eigen::Dynamic> G(4, P);
+      Vec4 Y;
+      std::vector<double> psi;
+      psi.reserve(static_cast<size_t>((k1 - k0) * P));
+      Eigen::VectorXd g(P);
+      double wss = 0.0;
+      for (Eigen::Index k = k0; k < k1; ++k) {
+        assemble(disc.DA.row(k).data(), disc.BV.row(k).data(), G, Y);
+        const Vec4 r = Y - G * f.sol.x;
+        g.noalias() = G.transpose() * (f.w.cwiseAbs2().cwiseProduct(r));
+        wss += f.w.cwiseProduct(r).squaredNorm();
+        for (Eigen::Index j = 0; j < P; ++j) psi.push_back(g(j));
+      }
+      // sol.covariance = sigma^2 (A^T W^2 A)^-1 on the identifiable subspace.
+      const double sigma2 = wss / static_cast<double>(std::max<Eigen::Index>(1, 4 * (k1 - k0) - P));
+      const Eigen::MatrixXd Ainv = f.sol.covariance / sigma2;
+      for (size_t i = 0; i < psi.size(); i += static_cast<size_t>(P)) {
+        Eigen::Map<Eigen::VectorXd> pk(&psi[i], P);
+        pk = Ainv * Eigen::VectorXd(pk);
+      }
+      const LongRunCovariance lr = long_run_covariance(psi, static_cast<int>(P), opt.uncertainty);
+      e.covariance = lr.covariance;
+      e.white_std_error = lr.white_covariance.diagonal().cwiseSqrt();
+      e.correlation_time = lr.correlation_time;
+      e.correlation_time_capped = lr.correlation_time_capped;
+      e.bandwidth = lr.bandwidth;
+      e.dof = lr.dof;
+      e.quantile = lr.quantile;
+    }
     Eigen::VectorXd x = f.sol.x;
-    e.covariance = f.sol.covariance * corr;
     if (terms.known_mass) {
       // "Weigh it, fly it": the regression found m' = m / s and every other
       // parameter divided by s; with m known, s = m / m' and the others are
@@ -446,6 +473,7 @@ ExtendedResult identify_extended(const FlightLog& log, const ExtendedOptions& op
         J(j, 0) = -m0 * f.sol.x(j) / (x0 * x0);
       }
       e.covariance = J * e.covariance * J.transpose();
+      e.white_std_error *= sc;  // the leading term of the same map
     }
     e.value = x;
     e.std_error = e.covariance.diagonal().cwiseSqrt();

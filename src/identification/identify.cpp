@@ -209,6 +209,7 @@ IdentificationResult identify(const FlightLog& log, const IdentificationOptions&
     xo.terms = opt.terms;
     xo.reference = opt.reference.params;
     xo.ls = opt.ls;
+    xo.uncertainty = opt.uncertainty;
     xo.auto_cutoffs = opt.auto_cutoffs;
     auto xr = std::make_shared<ExtendedResult>(identify_extended(log, xo));
     for (int i : {0, 1}) {
@@ -223,8 +224,8 @@ IdentificationResult identify(const FlightLog& log, const IdentificationOptions&
       sol.poorly_determined.clear();
       for (const auto& n : x.poorly_determined)
         if (n != "thrust_scale") sol.poorly_determined.push_back(n);
-      // Intervals of the real-flight regression: its standard errors (white
-      // residuals inflated by the filters' correlation length), normal quantile.
+      // Intervals of the real-flight regression: its HAC standard errors,
+      // Student t quantile.
       Mat7 cov = x.covariance.topLeftCorner<7, 7>();
       if (opt.terms.known_mass) {  // m is given: no variance, no correlation
         cov.row(0).setZero();
@@ -236,11 +237,17 @@ IdentificationResult identify(const FlightLog& log, const IdentificationOptions&
       u.samples = xr->window_samples;
       u.covariance = cov;
       u.std_error = sol.std_error;
-      u.white_std_error = sol.std_error;
+      u.white_std_error = x.white_std_error.head<7>();
+      if (opt.terms.known_mass) u.white_std_error(0) = 0.0;
+      u.correlation_time = x.correlation_time;
+      u.correlation_time_capped = x.correlation_time_capped;
+      u.bandwidth = x.bandwidth;
+      u.dof = x.dof;
+      u.quantile = x.quantile;
       u.ci_low = x.theta - u.quantile * sol.std_error;
       u.ci_high = x.theta + u.quantile * sol.std_error;
-      sol.std_error_method = "real-flight regression: QR covariance, residual variance inflated by the pre-filters' "
-                             "correlation length";
+      sol.std_error_method = "real-flight regression: HAC (Bartlett) covariance of each sample's influence on the "
+                             "weighted fit";
       // The physically consistent set closest to it, in the metric of its
       // covariance (m held at the known mass when given).
       Mat7 info = Mat7::Zero();
