@@ -111,9 +111,14 @@ void register_design(CLI::App& app) {
     nlohmann::json j = design_to_json(res, opt);
     std::optional<PrecisionResult> pred;
     if (popt) {
-      pred = predict_precision(res.trajectory, *popt);
-      j["predicted_precision"] = to_json(*pred);
-      j["predicted_precision"]["flown_by"] = args->precision.flown();
+      try {
+        pred = predict_precision(res.trajectory, *popt);
+        j["predicted_precision"] = to_json(*pred);
+        j["predicted_precision"]["flown_by"] = args->precision.flown();
+      } catch (const InputError& e) {  // e.g. the vehicle cannot fly it: the design itself stands
+        j["predicted_precision"] = {{"error", e.what()}};
+        fmt::print(stderr, "design: predicted precision not available: {}\n", e.what());
+      }
     }
     if (!args->out.empty()) write_file_atomic(args->out, j.dump(2) + "\n");
     if (!args->export_file.empty()) {

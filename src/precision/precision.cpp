@@ -212,7 +212,16 @@ PrecisionResult predict_precision(const Trajectory& traj, const PrecisionOptions
     so.rotor_noise = 0.0;  // only the log sees it
     for (int f = 0; f < opt.closed_loop_flights; ++f) {
       so.sensors.seed = static_cast<std::uint64_t>(f + 1);
-      const SimulationResult flight = simulate(traj, so);
+      const SimulationResult flight = [&] {
+        try {
+          return simulate(traj, so);
+        } catch (const SimulationDiverged& e) {
+          throw InputError(fmt::format(
+              "predicted precision: the simulated flight of {} diverged at t = {:.3f} s ({}): the vehicle cannot fly "
+              "this plan with its controller; --closed-loop-flights 0 leaves the closed-loop term out",
+              traj.describe(), e.time(), e.reason()));
+        }
+      }();
       for (int m = 0; m < 2; ++m)
         jitter[static_cast<size_t>(m)].push_back(true_state_residual(
             flight.truth, opt, m == 0 ? RegressionModel::Standard : RegressionModel::Filtered, theta));
