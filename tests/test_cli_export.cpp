@@ -43,3 +43,22 @@ TEST_F(CliTest, CheckTrajectoryPrintsThePredictedPrecision) {
   EXPECT_EQ(r.rc, 1);
   EXPECT_NE(r.err.find("--closed-loop-flights"), std::string::npos) << r.err;
 }
+
+TEST_F(CliTest, DesignExportsTheFlightItDesigned) {
+  // A small, fast design (as python/tests/test_commands.py's) with its export.
+  auto r = run("design --starts 1 --max-evals 40 --seed 1 --harmonics 3 --quiet --no-precision -o " + path("t.json") +
+               " --export " + path("t.csv") + " --export-rate 10");
+  ASSERT_EQ(r.rc, 0) << r.err;
+  ASSERT_TRUE(fs::exists(path("t.json")));
+  ASSERT_TRUE(fs::exists(path("t.csv")));
+  // The exported flight holds the designed trajectory: the same CSV as quadid export of the file.
+  r = run("export " + path("t.json") + " -o " + path("u.csv") + " --export-rate 10");
+  ASSERT_EQ(r.rc, 0) << r.err;
+  auto body = [](std::string s) { return s.substr(s.find("t,x,y,z")); };  // past the comment lines
+  EXPECT_EQ(body(quadid::read_file(path("t.csv"))), body(quadid::read_file(path("u.csv"))));
+  // A bad export name fails before the optimization, nothing written.
+  r = run("design --starts 1 --max-evals 40 --quiet -o " + path("v.json") + " --export " + path("v.txt"));
+  EXPECT_EQ(r.rc, 1);
+  EXPECT_NE(r.err.find("--export"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(path("v.json")));
+}

@@ -30,8 +30,8 @@ MonteCarloOptions short_study(int runs) {
 TEST(Precision, LinearPartScalesWithTheNoise) {
   PrecisionOptions o;
   o.closed_loop_flights = 0;  // the linear propagation alone
-  o.duration = 20.0;
-  o.window = {4.0, 20.0};
+  o.duration = 12.0;
+  o.window = {3.0, 12.0};
   const auto traj = FourierTrajectory::table2();
   const PrecisionResult a = predict_precision(traj, o);
   o.sensors.noise.position *= 2.0;
