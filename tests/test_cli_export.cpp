@@ -12,6 +12,12 @@ TEST_F(CliTest, ExportWritesEachFormatAndRefusesAnUnknownOne) {
   ASSERT_EQ(r.rc, 0) << r.err;
   EXPECT_NE(r.out.find("24 pieces"), std::string::npos) << r.out;
   EXPECT_EQ(quadid::read_crazyflie_poly_csv(path("f.poly.csv")).size(), 24u);
+  r = run("export table2 -o " + path("g.poly.csv") + " --json");
+  ASSERT_EQ(r.rc, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["pieces"], 24);
+  EXPECT_EQ(j["segments"].size(), 5u);
+  EXPECT_TRUE(j["fits_crazyflie_memory"].get<bool>());
   r = run("export table2 -o " + path("f.csv") + " --export-rate 20");
   ASSERT_EQ(r.rc, 0) << r.err;
   EXPECT_NE(quadid::read_file(path("f.csv")).find("t,x,y,z,vx,vy,vz,ax,ay,az,yaw,yaw_rate\n"), std::string::npos);

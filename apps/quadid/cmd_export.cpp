@@ -15,6 +15,7 @@ namespace {
 
 struct ExportCmdArgs {
   std::string trajectory, out;
+  bool json = false;
   ExportArgs exp;
 };
 
@@ -37,12 +38,14 @@ void register_export(CLI::App& app) {
       "  quadid export traj.json -o flight.poly.csv --piece 0.5");
   sub->add_option("trajectory", args->trajectory, "trajectory JSON file, or built-in: table2")->required();
   sub->add_option("-o,--out", args->out, "file to write (its name chooses the format)")->required();
+  sub->add_flag("--json", args->json, "print the summary as JSON on stdout (files, segments, pieces, fit)");
   args->exp.add_to(sub);
   sub->callback([args] {
     std::shared_ptr<const Trajectory> traj = load_trajectory(args->trajectory);
     const ExportSummary s =
         export_flight(traj, args->out, args->exp.opt, {fmt::format("quadid export of {}", args->trajectory)});
-    fmt::print("{}", format_export_summary(s));
+    if (args->json) fmt::print("{}\n", to_json(s).dump(2));
+    else fmt::print("{}", format_export_summary(s));
   });
 }
 

@@ -166,5 +166,7 @@ struct ExportSummary {
 ExportSummary export_flight(const std::shared_ptr<const Trajectory>& traj, const std::filesystem::path& path,
                             const ExportOptions& opt = {}, const std::vector<std::string>& comments = {});
 std::string format_export_summary(const ExportSummary& s);
+/// {"format", "files", "duration", "segments": [{"name", "t0", "t1"}], "setpoints" | "pieces", "bytes", "fit"}.
+nlohmann::json to_json(const ExportSummary& s);
 
 }  // namespace quadid

@@ -518,6 +518,26 @@ ExportSummary export_flight(const std::shared_ptr<const Trajectory>& traj, const
   return sum;
 }
 
+nlohmann::json to_json(const ExportSummary& s) {
+  static const char* names[] = {"setpoints", "crazyflie", "mavsdk"};
+  nlohmann::json j;
+  j["format"] = names[static_cast<int>(s.format)];
+  j["files"] = nlohmann::json::array();
+  for (const auto& f : s.files) j["files"].push_back(f.string());
+  j["duration"] = s.duration;
+  j["segments"] = nlohmann::json::array();
+  for (const auto& seg : s.segments) j["segments"].push_back({{"name", seg.name}, {"t0", seg.t0}, {"t1", seg.t1}});
+  if (s.format == ExportFormat::Crazyflie) {
+    j["pieces"] = s.pieces;
+    j["bytes"] = s.pieces * kPoly4dBytesPerPiece;
+    j["fits_crazyflie_memory"] = s.pieces * kPoly4dBytesPerPiece <= kCrazyflieTrajectoryMemory;
+    j["fit"] = {{"position", s.fit.position}, {"velocity", s.fit.velocity}, {"yaw", s.fit.yaw}};
+  } else {
+    j["setpoints"] = s.setpoints;
+  }
+  return j;
+}
+
 std::string format_export_summary(const ExportSummary& s) {
   static const char* names[] = {"setpoints CSV", "Crazyflie piecewise polynomial (poly4d, Crazyswarm CSV)",
                                 "MAVSDK-Python offboard script + setpoint CSV"};
