@@ -2,6 +2,7 @@
 // cond(W) of eq. (20) for a trajectory file or a built-in one.
 #include "commands.hpp"
 #include "common.hpp"
+#include "flight_args.hpp"
 #include "quadid/design.hpp"
 #include "quadid/io.hpp"
 
@@ -11,6 +12,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 
 namespace quadid::cli {
@@ -24,6 +26,7 @@ struct CheckArgs {
   CheckOptions opt;
   // People's units for the angle limits.
   LimitArgs limits;
+  PrecisionArgs precision;
 };
 
 }  // namespace
@@ -55,6 +58,7 @@ void register_check_trajectory(CLI::App& app) {
   sub->add_option("--endpoint-tol", o.endpoint_tol, "tolerance of the start/end conditions, SI units")
       ->capture_default_str();
   args->limits.add_to(sub);
+  args->precision.add_to(sub);
   sub->callback([args] {
     CheckOptions opt = args->opt;
     // A designed trajectory file records the limits it was designed for: check
@@ -70,8 +74,22 @@ void register_check_trajectory(CLI::App& app) {
     opt.validate();
     const auto traj = load_trajectory(spec);
     const CheckReport rep = check_trajectory(*traj, opt);
+    // Predicted standard errors of the estimates (docs/fly-it.md); a trajectory the
+    // regression cannot use (singular information) is reported, not an error of the check.
+    std::optional<PrecisionResult> pred;
+    std::string no_pred;
+    if (!args->precision.off) {
+      const PrecisionOptions popt = args->precision.options();
+      try {
+        pred = predict_precision(*traj, popt);
+      } catch (const InputError& e) {
+        no_pred = e.what();
+      }
+    }
     if (args->json) {
       nlohmann::json j = to_json(rep);
+      if (pred) j["predicted_precision"] = to_json(*pred);
+      else if (!no_pred.empty()) j["predicted_precision"] = {{"error", no_pred}};
       j["source"] = args->trajectory;
       j["limits"] = to_json(opt.limits);
       j["limits_from"] = limits_from;
@@ -79,6 +97,9 @@ void register_check_trajectory(CLI::App& app) {
     } else {
       fmt::print("limits: {}{}\n", limits_from, args->limits.any_given() ? ", with those given on the command line" : "");
       fmt::print("{}", format_check_report(rep));
+      if (pred) fmt::print("\n{} flown by {}\n{}", "predicted precision of LS and FMLS", args->precision.flown(),
+                           format_precision(*pred));
+      else if (!no_pred.empty()) fmt::print("\npredicted precision: not available: {}\n", no_pred);
     }
     std::fflush(stdout);
     if (args->strict && !rep.all_hold()) throw CLI::RuntimeError(2);

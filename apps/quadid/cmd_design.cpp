@@ -3,6 +3,7 @@
 // section III-B, with NLopt SLSQP from random starts.
 #include "commands.hpp"
 #include "common.hpp"
+#include "flight_args.hpp"
 #include "quadid/design.hpp"
 #include "quadid/io.hpp"
 
@@ -10,6 +11,7 @@
 
 #include <cstdio>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 
 namespace quadid::cli {
@@ -22,6 +24,9 @@ struct DesignArgs {
   DesignOptions opt;
   double wf_deg = 36.0;
   LimitArgs limits;
+  PrecisionArgs precision;
+  std::string export_file;
+  ExportArgs exp;
 };
 
 }  // namespace
@@ -66,6 +71,11 @@ void register_design(CLI::App& app) {
   sub->add_option("--cond-dt", o.cond_dt, "sampling period T of W for the reported criteria (eq. 20), s")
       ->capture_default_str();
   args->limits.add_to(sub);
+  args->precision.add_to(sub);
+  sub->add_option("--export", args->export_file,
+                  "also write the flight for an autopilot (take-off, settle, trajectory, landing): .csv setpoints, "
+                  ".poly.csv Crazyflie polynomial, .py MAVSDK script (docs/fly-it.md)");
+  args->exp.add_to(sub);
   sub->callback([args] {
     DesignOptions opt = args->opt;
     opt.wf = args->wf_deg * kDeg;
@@ -74,6 +84,13 @@ void register_design(CLI::App& app) {
     opt.reference = load_params(args->reference);
     opt.validate();
     if (!args->out.empty()) check_output_file(args->out, "-o/--out");
+    if (!args->export_file.empty()) {
+      args->exp.opt.validate();
+      if (args->exp.opt.format.empty()) export_format_for(args->export_file, "--export");
+      check_output_file(args->export_file, "--export");
+    }
+    const std::optional<PrecisionOptions> popt =
+        args->precision.off ? std::nullopt : std::optional<PrecisionOptions>(args->precision.options());
     if (!args->quiet)
       fmt::print(stderr, "design: {} starts, criterion {}, N = {}, period {:.4g} s, seed {}\n", opt.starts,
                  criterion_name(opt.criterion), opt.harmonics, 2 * M_PI / opt.wf, opt.seed);
@@ -91,8 +108,24 @@ void register_design(CLI::App& app) {
           "no start met every limit on the {:g} ms grid (best violation {:.3g}); try more --starts or a "
           "different --seed",
           opt.check_dt * 1e3, res.starts[static_cast<size_t>(res.best)].worst_violation));
-    const nlohmann::json j = design_to_json(res, opt);
+    nlohmann::json j = design_to_json(res, opt);
+    std::optional<PrecisionResult> pred;
+    if (popt) {
+      try {
+        pred = predict_precision(res.trajectory, *popt);
+        j["predicted_precision"] = to_json(*pred);
+        j["predicted_precision"]["flown_by"] = args->precision.flown();
+      } catch (const InputError& e) {  // e.g. the vehicle cannot fly it: the design itself stands
+        j["predicted_precision"] = {{"error", e.what()}};
+        fmt::print(stderr, "design: predicted precision not available: {}\n", e.what());
+      }
+    }
     if (!args->out.empty()) write_file_atomic(args->out, j.dump(2) + "\n");
+    if (!args->export_file.empty()) {
+      const ExportSummary es = export_flight(std::make_shared<FourierTrajectory>(res.trajectory), args->export_file,
+                                             args->exp.opt, {"quadid design --seed " + std::to_string(opt.seed)});
+      if (!args->quiet) fmt::print(stderr, "{}", format_export_summary(es));
+    }
     if (!args->quiet)
       fmt::print(stderr, "design: best start {} in {:.2f} s{}\n", res.best + 1, res.seconds,
                  args->out.empty() ? "" : fmt::format(", written to {}", args->out));
@@ -101,6 +134,9 @@ void register_design(CLI::App& app) {
     } else {
       fmt::print("criterion {} = {:.6f}\n\n{}", criterion_name(opt.criterion),
                  res.check.criteria.value(opt.criterion), format_check_report(res.check));
+      if (pred)
+        fmt::print("\npredicted precision of LS and FMLS flown by {}\n{}", args->precision.flown(),
+                   format_precision(*pred));
       if (args->out.empty()) fmt::print(stderr, "design: no -o given, the trajectory was not saved\n");
     }
   });

@@ -16,5 +16,6 @@ void register_log_info(CLI::App& app);
 void register_import(CLI::App& app);
 void register_batch(CLI::App& app);
 void register_montecarlo(CLI::App& app);
+void register_export(CLI::App& app);
 
 }  // namespace quadid::cli

@@ -35,6 +35,7 @@ int main(int argc, char** argv) {
   quadid::cli::register_log_info(app);
   quadid::cli::register_batch(app);
   quadid::cli::register_montecarlo(app);
+  quadid::cli::register_export(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -28,7 +28,8 @@ def test_simulate_divergence_and_bad_options():
 
 
 def test_check_trajectory_equals_the_command_line():
-    cli = cli_json("check-trajectory", "table2", "--tilt-max", "6")
+    # --no-precision: the Python API does not predict the precision (docs/fly-it.md) yet.
+    cli = cli_json("check-trajectory", "table2", "--tilt-max", "6", "--no-precision")
     assert_same(quadid.check_trajectory("table2", tilt_max=6), cli, 1e-12)
 
 
@@ -47,7 +48,7 @@ def drop_times(j):
 
 def test_design_equals_the_command_line():
     args = dict(starts=1, max_evals=40, seed=1, harmonics=3)  # feasible in ~1 s
-    cli = cli_json("design", *design_cli_args(args), "--quiet")
+    cli = cli_json("design", *design_cli_args(args), "--quiet", "--no-precision")
     assert_same(drop_times(quadid.design(**args)), drop_times(cli), 1e-9)
 
 

@@ -1,6 +1,7 @@
 // Metadata of simulated logs: trajectory specs and the options as JSON, so a
 // log can be re-flown (quadid validate) from its own header.
 #include "quadid/simulation.hpp"
+#include "quadid/export.hpp"
 
 #include <fmt/format.h>
 
@@ -42,6 +43,7 @@ std::string trajectory_spec(const Trajectory& traj) {
     if (!default_shape) s += fmt::format(" period={} psi_amplitude={}", c->period(), amp);
     return s;
   }
+  if (const auto* p = dynamic_cast<const PolynomialTrajectory*>(&traj)) return to_json(*p).dump();  // export.hpp
   throw std::invalid_argument(fmt::format("trajectory '{}' has no spec (only Fourier and circle trajectories do)",
                                           traj.describe()));
 }
@@ -96,8 +98,12 @@ std::unique_ptr<Trajectory> trajectory_from_spec(std::string_view spec) {
     } catch (const json::parse_error& e) {
       throw InputError(fmt::format("trajectory spec: invalid JSON ({})", e.what()));
     }
+    if (j.is_object() && j.value("type", "") == "poly4d")  // an exported Crazyflie polynomial (export.hpp)
+      return std::make_unique<PolynomialTrajectory>(polynomial_from_json(j, "trajectory spec"));
     return std::make_unique<FourierTrajectory>(trajectory_from_json(j, "trajectory spec"));
   }
+  if (spec.size() > 9 && spec.substr(spec.size() - 9) == ".poly.csv")
+    return std::make_unique<PolynomialTrajectory>(read_crazyflie_poly_csv(std::string(spec)));
   return load_trajectory(std::string(spec));
 }
 

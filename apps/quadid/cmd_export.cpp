@@ -1,0 +1,52 @@
+// quadid export: a trajectory (designed JSON or built-in) -> the whole flight
+// (take-off, settle, excitation, settle, landing) for an autopilot: setpoint
+// CSV, Crazyflie piecewise polynomial, or MAVSDK-Python offboard script.
+#include "commands.hpp"
+#include "flight_args.hpp"
+#include "quadid/io.hpp"
+
+#include <fmt/format.h>
+
+#include <memory>
+
+namespace quadid::cli {
+
+namespace {
+
+struct ExportCmdArgs {
+  std::string trajectory, out;
+  bool json = false;
+  ExportArgs exp;
+};
+
+}  // namespace
+
+void register_export(CLI::App& app) {
+  auto args = std::make_shared<ExportCmdArgs>();
+  auto* sub = app.add_subcommand(
+      "export", "a trajectory -> setpoints / Crazyflie polynomial / PX4 MAVSDK script, with take-off and landing");
+  sub->footer(
+      "Writes the flight: take-off from (x0, y0, --ground-z) to the trajectory's start (a rest-to-rest\n"
+      "polynomial, peak speed --climb-speed), hover --settle s, --cycles periods of the trajectory, hover,\n"
+      "landing. Formats (from the file name, or --export-format):\n"
+      "  .csv       setpoints t,x,y,z,vx,vy,vz,ax,ay,az,yaw,yaw_rate every 1/--export-rate s (SI, z up)\n"
+      "  .poly.csv  Crazyflie poly4d pieces (Crazyswarm CSV: Duration,x^0..x^7,y^0..,z^0..,yaw^0..yaw^7)\n"
+      "  .py        MAVSDK-Python script flying the setpoints in PX4 offboard mode (+ FILE.csv beside it)\n"
+      "Files are written atomically. See docs/fly-it.md.\n\n"
+      "Examples:\n"
+      "  quadid export table2 -o flight.csv\n"
+      "  quadid export traj.json -o flight.poly.csv --piece 0.5");
+  sub->add_option("trajectory", args->trajectory, "trajectory JSON file, or built-in: table2")->required();
+  sub->add_option("-o,--out", args->out, "file to write (its name chooses the format)")->required();
+  sub->add_flag("--json", args->json, "print the summary as JSON on stdout (files, segments, pieces, fit)");
+  args->exp.add_to(sub);
+  sub->callback([args] {
+    std::shared_ptr<const Trajectory> traj = load_trajectory(args->trajectory);
+    const ExportSummary s =
+        export_flight(traj, args->out, args->exp.opt, {fmt::format("quadid export of {}", args->trajectory)});
+    if (args->json) fmt::print("{}\n", to_json(s).dump(2));
+    else fmt::print("{}", format_export_summary(s));
+  });
+}
+
+}  // namespace quadid::cli

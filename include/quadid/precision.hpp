@@ -1,0 +1,122 @@
+// Predicted precision of an identification flight before flying it
+// (issue 14, item 2): the standard error of each parameter of Theta that the
+// least-squares estimates LS (eq. 34) and FMLS (eq. 38) will have when the
+// planned trajectory is flown and logged with given sensor noise, from the
+// information matrix of the regression along the reference and the exact
+// linear propagation of the sensor noise through the processing quadid applies
+// (pre-filter, central differences of eq. 33, v = R^T p_dot, products of the
+// rates, f_D / g_D of eqs. 35-36). See docs/fly-it.md ("Predicted precision").
+//
+// Model: every logged signal = its value along the reference + white noise,
+// sampled and held at its sensor's rate (motion capture: x y z psi; IMU: phi
+// theta p q r; the wrench: from the logged rotor speeds, or with its own
+// noise). The estimate error is, to first order in the noise,
+//   delta_theta = P sum_k Gamma_k^T delta_e_k,   P = (sum_k Gamma_k^T Gamma_k)^-1 (eq. 40),
+// delta_e_k linear in the noise; its covariance is computed exactly by running
+// the adjoint of the processing backwards over the weights P Gamma_k^T, so the
+// correlation of the filtered (and differentiated) noise over many samples is
+// accounted for sample by sample rather than by one correlation length.
+// The errors-in-variables bias (second order in the noise) is left out.
+//
+// Closed loop: the sensor noise also drives the controller, so the vehicle's
+// true rates jitter (at the motion-capture rate chiefly). The processing
+// multiplies filtered rates (p q, q r, ...) where the dynamics multiply true
+// ones, and the product of two jitters has low-frequency content the
+// pre-filter keeps: a residual of second order in the noise that no
+// linearization sees, and that dominates the inertia products in the paper's
+// setting. With `closed_loop_flights` >= 2 it is measured on simulated flights
+// of the plan (the simulator's controller, same sensors): the residual of the
+// true states of each flight less their mean over the flights (which removes
+// the part every flight shares), whose covariance is the HAC sandwich of the
+// existing uncertainty code (InfluenceAccumulator), added to the linear part.
+#pragma once
+
+#include "quadid/identification.hpp"
+#include "quadid/model.hpp"
+#include "quadid/simulation.hpp"
+#include "quadid/trajectory.hpp"
+#include "quadid/vehicle.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <array>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace quadid {
+
+/// The planned flight, its sensors and the processing of its log.
+struct PrecisionOptions {
+  /// The vehicle flown (its true parameters: they set the wrench along the
+  /// reference, eq. 11, and the scale of the relative errors).
+  Params params = Params::qball2_virtual();
+  double rate = 500.0;        // Hz, log (controller) rate
+  double duration = 50.0;     // s, the log holds t = 0 .. duration (the trajectory repeats past one period)
+  TimeWindow window{10.0, 50.0};  // s, estimation window, as identify --window
+  /// Sensor rates and white-noise standard deviations (the simulator's struct; its seed is unused).
+  SensorOptions sensors{};
+  /// Logged rotor speeds with white noise rotor_noise (rad/s or rpm) turned into the
+  /// wrench by this rotor model (a vehicle flown by simulate --vehicle). Without a rotor
+  /// model the wrench has the white noise `wrench_noise` instead (N, N m, N m, N m).
+  std::optional<RotorModel> rotors{};
+  double rotor_noise = 0.0;
+  Eigen::Vector4d wrench_noise = Eigen::Vector4d::Zero();
+  /// The processing identify applies (pre-filter, gravity) and the filtered model's lambda.
+  ProcessingOptions processing{};
+  double lambda = 30.0;  // rad/s
+  signal::GdVariant gd_variant = signal::GdVariant::Consistent;
+  double g = kDefaultGravity;  // m/s^2
+  /// The closed-loop term (see above): flights simulated with `simulation` (its
+  /// sensors, plant and controller; seeds 1..closed_loop_flights), 0 = left out, else >= 2.
+  int closed_loop_flights = 4;
+  std::optional<SimulationOptions> simulation{};  // default: SimulationOptions{} with this struct's rate, sensors, plant, duration
+
+  /// The same flight as a simulation and identification with these options
+  /// (quadid simulate / montecarlo / identify): rate, duration, plant, sensors,
+  /// rotors and rotor noise from `sim`; window, pre-filter and lambda from `id`.
+  static PrecisionOptions from(const SimulationOptions& sim, const IdentificationOptions& id);
+  /// Throws std::invalid_argument naming the bad option.
+  void validate() const;
+};
+
+/// The predicted standard errors of one least-squares set.
+struct PredictedSet {
+  std::string name;        // "LS" (standard regression, eq. 34) or "FMLS" (filtered, eq. 38)
+  Theta std_error = Theta::Zero();   // kg, kg m^2
+  /// std_error / scale, scale = |m| for the mass, |I_ii| for a moment, the mean
+  /// principal moment for a product of inertia (as montecarlo reports bias and spread).
+  Theta relative = Theta::Zero();
+  Eigen::Matrix<double, 7, 7> covariance = Eigen::Matrix<double, 7, 7>::Zero();
+  /// Variance of each parameter from each noise source, in the order of
+  /// PrecisionResult::sources (rows: parameters).
+  Eigen::Matrix<double, 7, Eigen::Dynamic> variance_by_source;
+  double condition = 0.0;  // cond of the column-scaled regressor stack (as LeastSquaresSolution::condition)
+  /// The linear part alone (sensor noise to first order) and the closed-loop part.
+  Theta linear_std_error = Theta::Zero();
+  Theta closed_loop_std_error = Theta::Zero();
+};
+
+struct PrecisionResult {
+  std::string trajectory;            // Trajectory::describe()
+  Eigen::Index samples = 0;          // regression rows (log samples in the window)
+  TimeWindow window;                 // used, after the edges are left out
+  std::vector<std::string> sources;  // "position", "yaw", "attitude", "gyro", "rotor" or "wrench", then "closed loop"
+  std::array<PredictedSet, 2> sets;  // LS, FMLS
+  Theta truth = Theta::Zero();
+};
+
+/// The relative-error scale of each parameter (see PredictedSet::relative).
+Theta precision_scale(const Theta& theta);
+
+/// Predicts the standard errors of LS and FMLS for `traj` flown with `opt`.
+/// Throws std::invalid_argument on bad options, InputError when the window
+/// leaves too few samples.
+PrecisionResult predict_precision(const Trajectory& traj, const PrecisionOptions& opt = {});
+
+/// A table: parameter, predicted std error (SI), relative % for each set, and
+/// the dominant noise source.
+std::string format_precision(const PrecisionResult& r);
+nlohmann::json to_json(const PrecisionResult& r);
+
+}  // namespace quadid

@@ -1,0 +1,436 @@
+// Predicted standard errors of LS and FMLS along a planned flight (see
+// include/quadid/precision.hpp for the model).
+//
+// The nominal signals come from the library's own pipeline run on a noise-free
+// log of the reference: reference_at (eqs. 26-27 and the kinematics below
+// eq. 20) for the states, the regressor of eq. (11) times the true Theta for
+// the wrench, process_log (section II-C) and Regression (eqs. 34, 38) for
+// Gamma_k. The noise is then propagated to first order:
+//   x_k (the 15 processed signals of RegressionSignals) = x_k^0 + J_k z_k,
+//   z = the pre-filtered noise of [p_dot(3) eta(3) omega(3) F(4)],
+//   e_k = M_a a_k + M_b b_k - y_k (Gamma theta is linear in the signals a, b),
+//   delta_theta = sum_k P Gamma_k^T delta_e_k.
+// Each linear operator (pre-filter H, central difference D of eq. 33, f_D and
+// g_D of eqs. 35-36) is applied in its adjoint form to the weight series
+// P Gamma_k^T, which gives delta_theta = sum_j g_j n_j over the raw noise
+// samples n_j, hence Cov = sum sigma^2 sum_blocks (sum_{j in block} g_j)(...)^T
+// with a block per held sensor sample.
+#include "quadid/precision.hpp"
+
+#include "quadid/regressor.hpp"
+#include "quadid/signal.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <stdexcept>
+
+namespace quadid {
+namespace {
+
+using Mat7 = Eigen::Matrix<double, 7, 7>;
+// Inputs of the Jacobian J_k: [p_dot(3) eta(3) omega(3) F(4)].
+constexpr int kIn = 13;
+enum : int { kPdot = 0, kEta = 3, kOmega = 6, kF = 9 };
+
+// The sensor sample that log sample k holds: the first tick at or after each
+// sensor instant, as the simulator samples (simulation/sensors.cpp).
+long long held_index(Eigen::Index k, double sensor_rate, double log_rate) {
+  return static_cast<long long>(std::floor(static_cast<double>(k) * sensor_rate / log_rate + 1e-9));
+}
+
+// Adjoint of f_D as Regression::for_each applies it (s_k = alpha s_{k-1} + (1 - alpha) x_{k-1}):
+// (f_D^T u)_j = (1 - alpha) sum_{k > j} alpha^(k-1-j) u_k, by a backward recursion.
+void fD_adjoint(double* u, Eigen::Index n, double alpha, double one_minus) {
+  double t = 0.0;  // sum_{k > j} alpha^(k-1-j) u_k
+  for (Eigen::Index j = n - 1; j >= 0; --j) {
+    const double uj = u[j];
+    u[j] = one_minus * t;
+    t = uj + alpha * t;
+  }
+}
+
+// Adjoint of the central difference of eq. (33) in the interior: D^T = -D.
+void difference_adjoint(double* u, Eigen::Index n, double T) {
+  signal::central_difference_inplace(u, n, T);
+  for (Eigen::Index j = 0; j < n; ++j) u[j] = -u[j];
+}
+
+// Residual Gamma_k theta - y_k of one regression model on the true states of a
+// simulated flight, at every sample (0 outside the window).
+Eigen::MatrixXd true_state_residual(const FlightLog& truth, const PrecisionOptions& opt, RegressionModel model,
+                                    const Theta& theta) {
+  const auto sig = process_log(truth, opt.processing);
+  const Regression reg(sig, model, opt.window, opt.lambda, opt.gd_variant);
+  Eigen::MatrixXd e = Eigen::MatrixXd::Zero(sig->size(), 4);
+  reg.for_each([&](Eigen::Index k, const Regressor4x7& G, const Vec4& y) { e.row(k) = (G * theta - y).transpose(); });
+  return e;
+}
+
+}  // namespace
+
+PrecisionOptions PrecisionOptions::from(const SimulationOptions& sim, const IdentificationOptions& id) {
+  PrecisionOptions o;
+  o.params = sim.plant;
+  o.rate = sim.controller.rate;
+  o.duration = sim.duration;
+  o.window = id.window;
+  o.sensors = sim.sensors;
+  o.rotors = sim.rotors;
+  o.rotor_noise = sim.rotor_noise;
+  o.processing = id.processing;
+  o.lambda = id.lambda;
+  o.gd_variant = id.gd_variant;
+  o.g = sim.g;
+  o.simulation = sim;
+  return o;
+}
+
+void PrecisionOptions::validate() const {
+  if (!(rate > 0.0) || !std::isfinite(rate)) throw std::invalid_argument(fmt::format("--rate = {} must be > 0 Hz", rate));
+  if (!(duration > 0.0) || !std::isfinite(duration) || duration * rate > SimulationOptions::kMaxSamples)
+    throw std::invalid_argument(
+        fmt::format("--duration = {} s must be > 0 and hold at most {:g} samples at {} Hz", duration,
+                    SimulationOptions::kMaxSamples, rate));
+  if (!(params.m > 0.0)) throw std::invalid_argument("precision: the vehicle's mass must be > 0");
+  sensors.validate(rate);
+  if (!std::isfinite(rotor_noise) || rotor_noise < 0.0)
+    throw std::invalid_argument(fmt::format("--sigma-rotor = {} must be finite and >= 0", rotor_noise));
+  if (rotor_noise > 0.0 && (!rotors || rotors->input == RotorInput::kCommand))
+    throw std::invalid_argument("--sigma-rotor applies to logged rotor speeds (a vehicle with rotors.input = speed or rpm)");
+  if (rotors) rotors->validate();
+  for (int i = 0; i < 4; ++i)
+    if (!std::isfinite(wrench_noise(i)) || wrench_noise(i) < 0.0)
+      throw std::invalid_argument(fmt::format("--sigma-wrench = {} must be finite and >= 0", wrench_noise(i)));
+  processing.validate();
+  if (!(lambda > 0.0) || !std::isfinite(lambda)) throw std::invalid_argument(fmt::format("--lambda = {} must be > 0", lambda));
+  if (!(g > 0.0) || !std::isfinite(g)) throw std::invalid_argument(fmt::format("--g = {} must be > 0", g));
+  if (closed_loop_flights == 1 || closed_loop_flights < 0 || closed_loop_flights > 100)
+    throw std::invalid_argument(fmt::format(
+        "--closed-loop-flights = {} must be 0 (left out) or 2..100 (their spread is measured)", closed_loop_flights));
+  if (simulation) simulation->validate();
+}
+
+Theta precision_scale(const Theta& th) {
+  const double mean_moment = (std::abs(th(1)) + std::abs(th(4)) + std::abs(th(6))) / 3.0;
+  Theta s;
+  s << std::abs(th(0)), std::abs(th(1)), mean_moment, mean_moment, std::abs(th(4)), mean_moment, std::abs(th(6));
+  return s;
+}
+
+PrecisionResult predict_precision(const Trajectory& traj, const PrecisionOptions& opt) {
+  opt.validate();
+  const double T = 1.0 / opt.rate;
+  const Eigen::Index n = static_cast<Eigen::Index>(std::floor(opt.duration * opt.rate + 1e-9)) + 1;
+  const Theta theta = opt.params.theta();
+
+  // Noise-free log of the reference, and the nominal states for the Jacobians.
+  FlightLog log;
+  log.columns = standard_log_columns();
+  log.data.resize(n, static_cast<Eigen::Index>(log.columns.size()));
+  std::vector<Reference> ref(static_cast<size_t>(n));
+  Eigen::Matrix<double, Eigen::Dynamic, 4> wrench(n, 4);
+  for (Eigen::Index k = 0; k < n; ++k) {
+    const double t = static_cast<double>(k) * T;
+    const Reference& r = ref[static_cast<size_t>(k)] = reference_at(traj, t, opt.g);
+    const Eigen::Vector4d F = regressor<double>(r.v, r.omega, r.eta, r.v_dot, r.omega_dot, opt.g) * theta;  // eq. (11)
+    wrench.row(k) = F.transpose();
+    log.data.row(k) << t, r.p(0), r.p(1), r.p(2), r.eta(0), r.eta(1), r.eta(2), r.omega(0), r.omega(1), r.omega(2),
+        F(0), F(1), F(2), F(3);
+  }
+  const auto signals = process_log(log, opt.processing);
+
+  // Gamma theta = M_a a + M_b b: the regressor is linear in its 4 + 7 signals.
+  Eigen::Matrix4d Ma;
+  Eigen::Matrix<double, 4, 7> Mb;
+  for (int i = 0; i < 4; ++i)
+    Ma.col(i) = assemble_regressor(Vec4::Unit(i), Eigen::Matrix<double, 7, 1>::Zero()) * theta;
+  for (int j = 0; j < 7; ++j) Mb.col(j) = assemble_regressor(Vec4::Zero(), Eigen::Matrix<double, 7, 1>::Unit(j)) * theta;
+
+  // J_k: d x_k (15 processed signals) / d [p_dot eta omega F] at the nominal state.
+  std::vector<Eigen::Matrix<double, 15, kIn>> J(static_cast<size_t>(n));
+  for (Eigen::Index k = 0; k < n; ++k) {
+    const Reference& r = ref[static_cast<size_t>(k)];
+    const Mat3 Rt = rotation<double>(r.eta).transpose();
+    Mat3 dv_deta;  // d (R^T p_dot) / d eta, central differences (error ~1e-10 relative)
+    for (int i = 0; i < 3; ++i) {
+      constexpr double h = 1e-6;
+      Vec3 ep = r.eta, em = r.eta;
+      ep(i) += h;
+      em(i) -= h;
+      dv_deta.col(i) = (rotation<double>(ep).transpose() - rotation<double>(em).transpose()) * r.p_dot / (2.0 * h);
+    }
+    const Vec3 v = Rt * r.p_dot;
+    const double p = r.omega(0), q = r.omega(1), rr = r.omega(2);
+    const double phi = r.eta(0), th = r.eta(1);
+    auto& Jk = J[static_cast<size_t>(k)];
+    Jk.setZero();
+    Jk.block<1, 3>(0, kPdot) = Rt.row(2);     // w = (R^T p_dot)_z, eq. (3)
+    Jk.block<1, 3>(0, kEta) = dv_deta.row(2);
+    Jk.block<3, 3>(1, kOmega).setIdentity();  // p q r
+    // c = p v - q u + g cos(theta) cos(phi), eq. (7)
+    Jk.block<1, 3>(4, kPdot) = p * Rt.row(1) - q * Rt.row(0);
+    Jk.block<1, 3>(4, kEta) = p * dv_deta.row(1) - q * dv_deta.row(0);
+    Jk(4, kEta + 0) += -opt.g * std::sin(phi) * std::cos(th);
+    Jk(4, kEta + 1) += -opt.g * std::cos(phi) * std::sin(th);
+    Jk(4, kOmega + 0) = v(1);
+    Jk(4, kOmega + 1) = -v(0);
+    // pq pr qr p^2 q^2 r^2
+    Jk(5, kOmega + 0) = q;  Jk(5, kOmega + 1) = p;
+    Jk(6, kOmega + 0) = rr; Jk(6, kOmega + 2) = p;
+    Jk(7, kOmega + 1) = rr; Jk(7, kOmega + 2) = q;
+    Jk(8, kOmega + 0) = 2.0 * p;
+    Jk(9, kOmega + 1) = 2.0 * q;
+    Jk(10, kOmega + 2) = 2.0 * rr;
+    Jk.block<4, 4>(11, kF).setIdentity();     // Fz tau
+  }
+
+  // Rotor-speed noise -> wrench: dF/dw_i = B_i 2 k w_i at the nominal rotor speeds.
+  const bool rotor_mode = opt.rotors && opt.rotor_noise > 0.0;
+  Eigen::Matrix<double, 4, Eigen::Dynamic> B;
+  Eigen::Matrix<double, Eigen::Dynamic, 4> mixer;
+  if (rotor_mode) {
+    B = opt.rotors->allocation();
+    mixer = opt.rotors->mixer();
+  }
+
+  // Closed-loop term: residuals of the true states of noisy flights of the plan, less
+  // their mean over the flights (which removes what every flight shares: the
+  // processing's deterministic error and the mean of the second-order terms, a bias).
+  std::array<std::vector<Eigen::MatrixXd>, 2> jitter;
+  if (opt.closed_loop_flights > 0) {
+    SimulationOptions so = opt.simulation.value_or(SimulationOptions{});
+    if (!opt.simulation) {
+      so.plant = opt.params;
+      so.set_rate(opt.rate);
+      so.sensors = opt.sensors;
+      so.g = opt.g;
+      so.controller.g = opt.g;
+    }
+    so.duration = opt.duration;
+    so.record_truth = true;
+    so.rotor_noise = 0.0;  // only the log sees it
+    for (int f = 0; f < opt.closed_loop_flights; ++f) {
+      so.sensors.seed = static_cast<std::uint64_t>(f + 1);
+      const SimulationResult flight = [&] {
+        try {
+          return simulate(traj, so);
+        } catch (const SimulationDiverged& e) {
+          throw InputError(fmt::format(
+              "predicted precision: the simulated flight of {} diverged at t = {:.3f} s ({}): the vehicle cannot fly "
+              "this plan with its controller; --closed-loop-flights 0 leaves the closed-loop term out",
+              traj.describe(), e.time(), e.reason()));
+        }
+      }();
+      for (int m = 0; m < 2; ++m)
+        jitter[static_cast<size_t>(m)].push_back(true_state_residual(
+            flight.truth, opt, m == 0 ? RegressionModel::Standard : RegressionModel::Filtered, theta));
+    }
+    for (auto& e : jitter) {
+      Eigen::MatrixXd mean = Eigen::MatrixXd::Zero(e[0].rows(), e[0].cols());
+      for (const auto& x : e) {
+        if (x.rows() != mean.rows()) throw std::logic_error("precision: simulated flights of different lengths");
+        mean += x;
+      }
+      mean /= static_cast<double>(e.size());
+      for (auto& x : e) x -= mean;
+    }
+  }
+
+  signal::ZeroPhaseFilter zf(opt.processing.lowpass, opt.rate);
+  PrecisionResult res;
+  res.trajectory = traj.describe();
+  res.truth = theta;
+  res.sources = {"position", "yaw", "attitude", "gyro", rotor_mode ? "rotor" : "wrench", "closed loop"};
+  const Theta scale = precision_scale(theta);
+
+  for (int m = 0; m < 2; ++m) {
+    const RegressionModel model = m == 0 ? RegressionModel::Standard : RegressionModel::Filtered;
+    const Regression reg(signals, model, opt.window, opt.lambda, opt.gd_variant);
+    std::vector<Regressor4x7> G(static_cast<size_t>(n), Regressor4x7::Zero());
+    Mat7 A = Mat7::Zero();
+    reg.for_each([&](Eigen::Index k, const Regressor4x7& Gk, const Vec4&) {
+      G[static_cast<size_t>(k)] = Gk;
+      A.noalias() += Gk.transpose() * Gk;
+    });
+    // P = A^-1 with the columns scaled to unit norm (the parameters differ by ~100x).
+    const Theta d = A.diagonal().cwiseSqrt().cwiseInverse();
+    const Mat7 As = d.asDiagonal() * A * d.asDiagonal();
+    Eigen::SelfAdjointEigenSolver<Mat7> es(As);
+    const auto ev = es.eigenvalues();
+    if (!(ev(0) > 1e-12 * ev(6)))
+      throw InputError(fmt::format("predicted precision: the {} regression along {} does not determine every "
+                                   "parameter (information matrix singular)", to_string(model), res.trajectory));
+    const Mat7 P = d.asDiagonal() * es.eigenvectors() * ev.cwiseInverse().asDiagonal() *
+                   es.eigenvectors().transpose() * d.asDiagonal();
+
+    // Weight series on the processed signals: columns [a(4) b(7) y(4)] x 7 parameters.
+    Eigen::MatrixXd U = Eigen::MatrixXd::Zero(n, 15 * 7);
+    for (Eigen::Index k = reg.begin(); k < reg.end(); ++k) {
+      const Eigen::Matrix<double, 7, 4> Q = P * G[static_cast<size_t>(k)].transpose();
+      Eigen::Matrix<double, 7, 15> V;
+      V << Q * Ma, Q * Mb, -Q;
+      for (int s = 0; s < 15; ++s) U.block<1, 7>(k, 7 * s) = V.col(s).transpose();
+    }
+    // Adjoint of the regression's operators on a, b and y.
+    const double alpha = std::exp(-opt.lambda * T), one_minus = -std::expm1(-opt.lambda * T);
+    const double c = (opt.gd_variant == signal::GdVariant::Printed) ? opt.lambda : one_minus / T;
+    for (int col = 0; col < 15 * 7; ++col) {
+      double* u = U.col(col).data();
+      const bool is_a = col < 4 * 7;
+      if (model == RegressionModel::Standard) {
+        if (is_a) difference_adjoint(u, n, T);  // a = D [w p q r], eq. (33)
+      } else if (is_a) {                       // a = g_D x = c (x - f_D x), eq. (36)
+        Eigen::VectorXd f = U.col(col);
+        fD_adjoint(f.data(), n, alpha, one_minus);
+        U.col(col) = c * (U.col(col) - f);
+      } else {                                 // b = f_D x, y = f_D F, eq. (35)
+        fD_adjoint(u, n, alpha, one_minus);
+      }
+    }
+    // Through J_k onto the 13 pre-filtered inputs, then the pre-filter's adjoint
+    // (filtfilt is symmetric: H^T = H away from the edges, which the window leaves out).
+    Eigen::MatrixXd Z = Eigen::MatrixXd::Zero(n, kIn * 7);
+    for (Eigen::Index k = 0; k < n; ++k) {
+      Eigen::Matrix<double, 7, 15> V;
+      for (int s = 0; s < 15; ++s) V.col(s) = U.block<1, 7>(k, 7 * s).transpose();
+      if (V.isZero(0.0)) continue;
+      const Eigen::Matrix<double, 7, kIn> W = V * J[static_cast<size_t>(k)];
+      for (int i = 0; i < kIn; ++i) Z.block<1, 7>(k, 7 * i) = W.col(i).transpose();
+    }
+    for (int col = 0; col < kIn * 7; ++col) {
+      double* z = Z.col(col).data();
+      if (col < 3 * 7) difference_adjoint(z, n, T);  // p_dot = D H x, eq. (33)
+      zf.apply(z, n);
+    }
+
+    PredictedSet& out = res.sets[static_cast<size_t>(m)];
+    out.name = m == 0 ? "LS" : "FMLS";
+    out.condition = std::sqrt(ev(6) / ev(0));
+    out.variance_by_source = Eigen::Matrix<double, 7, Eigen::Dynamic>::Zero(7, 6);
+    Mat7 cov = Mat7::Zero();
+    // sigma^2 sum_blocks (sum_{k in block} g_k)(...)^T for one input held at `rate`.
+    auto add = [&](int src, const Eigen::MatrixXd& g, double sigma, double rate) {
+      if (!(sigma > 0.0)) return;
+      Mat7 C = Mat7::Zero();
+      Theta s = Theta::Zero();
+      long long blk = held_index(0, rate, opt.rate);
+      for (Eigen::Index k = 0; k < n; ++k) {
+        const long long b = held_index(k, rate, opt.rate);
+        if (b != blk) {
+          C.noalias() += s * s.transpose();
+          s.setZero();
+          blk = b;
+        }
+        s += g.row(k).transpose();
+      }
+      C.noalias() += s * s.transpose();
+      C *= sigma * sigma;
+      cov += C;
+      out.variance_by_source.col(src) += C.diagonal();
+    };
+    auto input = [&](int i) -> Eigen::MatrixXd { return Z.middleCols(7 * i, 7); };
+    const NoiseSigmas& ns = opt.sensors.noise;
+    for (int i = 0; i < 3; ++i) add(0, input(kPdot + i), ns.position, opt.sensors.mocap_rate);
+    add(1, input(kEta + 2), ns.yaw, opt.sensors.mocap_rate);
+    for (int i = 0; i < 2; ++i) add(2, input(kEta + i), ns.attitude, opt.sensors.imu_rate);
+    for (int i = 0; i < 3; ++i) add(3, input(kOmega + i), ns.gyro, opt.sensors.imu_rate);
+    if (rotor_mode) {
+      const RotorModel& rm = *opt.rotors;
+      const int nr = rm.count();
+      for (int i = 0; i < nr; ++i) {
+        Eigen::MatrixXd g = Eigen::MatrixXd::Zero(n, 7);
+        for (Eigen::Index k = 0; k < n; ++k) {
+          const Eigen::VectorXd thrusts = mixer * wrench.row(k).transpose();
+          const double w = rm.speed_for_thrust(thrusts(i));
+          const Eigen::Vector4d dF = B.col(i) * (2.0 * rm.thrust_coefficient() * w);  // T = k w^2
+          for (int j = 0; j < 4; ++j) g.row(k) += dF(j) * Z.block<1, 7>(k, 7 * (kF + j));
+        }
+        add(4, g, opt.rotor_noise, opt.rate);
+      }
+    } else {
+      for (int j = 0; j < 4; ++j) add(4, input(kF + j), opt.wrench_noise(j), opt.rate);
+    }
+    out.linear_std_error = cov.diagonal().cwiseSqrt();
+    // Closed loop: HAC covariance of the influence P Gamma_k^T e_k of the jitter residual
+    // (the uncertainty code's estimator, docs/uncertainty.md), averaged over the flights.
+    if (!jitter[static_cast<size_t>(m)].empty()) {
+      LeastSquaresSolution sol;
+      sol.theta = theta;
+      sol.normal_pinv = P;
+      Mat7 C = Mat7::Zero();
+      for (const auto& e : jitter[static_cast<size_t>(m)]) {
+        InfluenceAccumulator acc(sol);
+        for (Eigen::Index k = reg.begin(); k < reg.end(); ++k) {
+          const Regressor4x7& Gk = G[static_cast<size_t>(k)];
+          acc.add(Gk, Gk * theta + e.row(k).transpose());
+        }
+        C += acc.finish().covariance;
+      }
+      // sum_f (d_f d_f^T) / (F - 1) estimates one flight's covariance (d_f = e_f - mean).
+      C /= static_cast<double>(std::max<size_t>(1, jitter[static_cast<size_t>(m)].size() - 1));
+      out.closed_loop_std_error = C.diagonal().cwiseSqrt();
+      out.variance_by_source.col(5) = C.diagonal();
+      cov += C;
+    }
+    out.covariance = cov;
+    out.std_error = cov.diagonal().cwiseSqrt();
+    out.relative = out.std_error.cwiseQuotient(scale);
+    if (m == 0) {
+      res.samples = reg.size();
+      res.window = reg.window();
+    }
+  }
+  return res;
+}
+
+std::string format_precision(const PrecisionResult& r) {
+  std::string s = fmt::format("predicted precision ({} regression rows, window {}):\n", r.samples, r.window.to_string());
+  s += fmt::format("  {:<5} {:>12} {:>13} {:>8} {:>13} {:>8}  {}\n", "param", "value", "LS std err", "LS %",
+                   "FMLS std err", "FMLS %", "main noise source (LS)");
+  const Theta scale = precision_scale(r.truth);
+  for (int j = 0; j < 7; ++j) {
+    Eigen::Index src = 0;
+    r.sets[0].variance_by_source.row(j).maxCoeff(&src);
+    const double total = r.sets[0].variance_by_source.row(j).sum();
+    const double share = total > 0.0 ? r.sets[0].variance_by_source(j, src) / total : 0.0;
+    s += fmt::format("  {:<5} {:>12.5g} {:>13.3e} {:>8.3f} {:>13.3e} {:>8.3f}  {} ({:.0f}% of the variance)\n",
+                     kThetaNames[static_cast<size_t>(j)], r.truth(j), r.sets[0].std_error(j),
+                     100.0 * r.sets[0].relative(j), r.sets[1].std_error(j), 100.0 * r.sets[1].relative(j),
+                     r.sources[static_cast<size_t>(src)], 100.0 * share);
+  }
+  s += fmt::format("  units: kg for m, kg m^2 for the inertia; % of |m|, |I_ii|, or of the mean principal moment "
+                   "({:.4g} kg m^2) for a product of inertia\n",
+                   scale(2));
+  const double worst = std::max(r.sets[0].relative.maxCoeff(), 0.0);
+  Eigen::Index jw = 0;
+  r.sets[0].relative.maxCoeff(&jw);
+  s += fmt::format("  worst relative std error (LS): {} at {:.3f}%\n", kThetaNames[static_cast<size_t>(jw)], 100.0 * worst);
+  return s;
+}
+
+nlohmann::json to_json(const PrecisionResult& r) {
+  nlohmann::json j;
+  j["trajectory"] = r.trajectory;
+  j["samples"] = r.samples;
+  j["window"] = {r.window.t0, r.window.t1};
+  j["sources"] = r.sources;
+  for (const auto& set : r.sets) {
+    nlohmann::json s;
+    for (int p = 0; p < 7; ++p) {
+      nlohmann::json e;
+      e["std_error"] = set.std_error(p);
+      e["relative"] = set.relative(p);
+      nlohmann::json by;
+      for (size_t k = 0; k < r.sources.size(); ++k)
+        by[r.sources[k]] = std::sqrt(std::max(0.0, set.variance_by_source(p, static_cast<Eigen::Index>(k))));
+      e["std_error_by_source"] = by;
+      s[kThetaNames[static_cast<size_t>(p)]] = e;
+    }
+    s["condition"] = set.condition;
+    j["sets"][set.name] = s;
+  }
+  return j;
+}
+
+}  // namespace quadid
