@@ -514,7 +514,13 @@ IdentificationInput prepare_identification(const std::string& path, const Identi
     try {
       const logs::ULog u = logs::read_ulog(path);
       if (u.parameter("CA_ROTOR_COUNT")) {
-        req.vehicle = px4_vehicle(u, path);
+        try {
+          req.vehicle = px4_vehicle(u, path);
+        } catch (const InputError& e) {
+          throw InputError(fmt::format("the imported log has no column Fz (nor the torques), and its CA_ROTOR* "
+                                       "parameters do not give a rotor model: {}; give a vehicle file with --vehicle",
+                                       e.what()));
+        }
         from_log = true;
       }
     } catch (const InputError& e) {
