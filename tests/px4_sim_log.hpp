@@ -43,21 +43,6 @@ inline Vehicle px4_test_vehicle(double time_constant = 0.03) {
   return v;
 }
 
-/// The CA_ROTOR* geometry of a vehicle (FLU, as logs::RotorGeometry holds it).
-inline logs::RotorGeometry px4_geometry_of(const RotorModel& r) {
-  logs::RotorGeometry g;
-  g.count = r.count();
-  for (int i = 0; i < r.count(); ++i) {
-    const auto k = static_cast<std::size_t>(i);
-    g.position.push_back(r.positions[k]);
-    g.axis.emplace_back(0.0, 0.0, 1.0);
-    g.ct.push_back(r.thrust_max);
-    g.km.push_back(r.torque_ratio);
-    g.spin.push_back(r.spin[k] < 0 ? "ccw" : "cw");
-  }
-  return g;
-}
-
 struct Px4SimOptions {
   double duration = 20.0;   // s
   double speedup = 1.0;     // Table 2 played this many times faster
@@ -80,7 +65,7 @@ inline std::string px4_sim_ulog(const Vehicle& v, const Px4SimOptions& o = {}) {
   if (o.gyro_offset != 0.0) log = shift_columns(log, {"p", "q", "r"}, -o.gyro_offset);
   logs::Px4UlogWriteOptions wo;
   wo.motor_columns = v.rotors.columns;
-  wo.geometry = px4_geometry_of(v.rotors);
+  wo.geometry = px4_geometry(v.rotors);
   return logs::px4_ulog_from_flight_log(log, wo);
 }
 

@@ -86,7 +86,7 @@ TEST(Px4RotorModel, FromControlAllocationParameters) {
   // The allocation is the vehicle's: same wrench for the same thrusts.
   EXPECT_LT((p.rotors.allocation() - v.rotors.allocation()).cwiseAbs().maxCoeff(), 1e-7);
 
-  logs::RotorGeometry g = px4_geometry_of(v.rotors);
+  logs::RotorGeometry g = px4_geometry(v.rotors);
   g.ct[2] = 9.0;
   try {
     (void)px4_rotor_model(g);
@@ -94,7 +94,7 @@ TEST(Px4RotorModel, FromControlAllocationParameters) {
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("CA_ROTOR2_CT"), std::string::npos) << e.what();
   }
-  g = px4_geometry_of(v.rotors);
+  g = px4_geometry(v.rotors);
   g.axis[1] = Eigen::Vector3d(0.2, 0.0, 1.0).normalized();  // 11 degrees
   try {
     (void)px4_rotor_model(g);

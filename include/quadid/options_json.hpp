@@ -116,7 +116,8 @@ struct IdentificationInput {
 IdentificationInput prepare_identification(const std::string& path, const IdentifyRequest& req);
 /// identify() on a prepared log; the estimated timing joins the LS and FMLS extras.
 IdentificationResult identify_prepared(const IdentificationInput& in);
-/// Adds "vehicle" ({name, source}), "wrench_source", "rotors" and "timing" to a result JSON.
+/// With a rotor model: adds "wrench_source", "vehicle" ({name, source}), "rotors" and
+/// "timing" to a result JSON (nothing for a log with its own wrench).
 void add_input_json(nlohmann::json& j, const IdentificationInput& in);
 /// Text: where the wrench came from (and the rotor model), then the timing.
 std::string format_input(const IdentificationInput& in);

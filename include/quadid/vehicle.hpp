@@ -166,6 +166,11 @@ FlightLog with_rotor_wrench(const FlightLog& log, const RotorModel& rotors);
 /// magnitude by more than 1 % (one coefficient per model) or a rotor is tilted
 /// more than 5 degrees from the body z axis.
 RotorModel px4_rotor_model(const logs::RotorGeometry& g);
+/// The other way: the CA_ROTOR* geometry of a rotor model that takes commands
+/// (thrust axes along body z, CT = thrust_max, KM = torque_ratio), e.g. to write a
+/// simulated flight as a PX4 ULog (logs::px4_ulog_from_flight_log). InputError
+/// unless the input is "command".
+logs::RotorGeometry px4_geometry(const RotorModel& m);
 /// A vehicle known only from a ULog: px4_rotor_model(px4_rotor_geometry(log)) and a
 /// rough nominal set (rough_nominal, filled in once the log's wrench is known;
 /// until then a placeholder of 1 kg). `source` names the log.

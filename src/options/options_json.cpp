@@ -576,8 +576,8 @@ IdentificationResult identify_prepared(const IdentificationInput& in) {
 }
 
 void add_input_json(nlohmann::json& j, const IdentificationInput& in) {
-  j["wrench_source"] = in.wrench_source;
-  if (in.vehicle) {
+  if (in.vehicle) {  // a log with its own wrench adds nothing (the result of identify() on it)
+    j["wrench_source"] = in.wrench_source;
     j["vehicle"] = {{"name", in.vehicle->name}, {"source", in.vehicle->source}};
     j["rotors"] = to_json(in.vehicle->rotors);
   }

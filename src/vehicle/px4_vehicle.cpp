@@ -51,6 +51,23 @@ RotorModel px4_rotor_model(const logs::RotorGeometry& g) {
   return m;
 }
 
+logs::RotorGeometry px4_geometry(const RotorModel& m) {
+  if (m.input != RotorInput::kCommand)
+    throw InputError(fmt::format("a PX4 ULog holds normalised motor commands (actuator_motors); the rotor model takes "
+                                 "'{}': give a vehicle whose rotors.input is \"command\"",
+                                 to_string(m.input)));
+  logs::RotorGeometry g;
+  g.count = m.count();
+  for (std::size_t i = 0; i < m.positions.size(); ++i) {
+    g.position.push_back(m.positions[i]);
+    g.axis.emplace_back(0.0, 0.0, 1.0);
+    g.ct.push_back(m.thrust_max);
+    g.km.push_back(m.torque_ratio);
+    g.spin.push_back(m.spin[i] < 0 ? "ccw" : "cw");
+  }
+  return g;
+}
+
 Vehicle px4_vehicle(const logs::ULog& log, const std::string& source) {
   Vehicle v;
   v.name = "px4-control-allocation";
