@@ -66,6 +66,8 @@ struct TimingEstimate {
   /// s, the motor time constant used: estimated, or the rotor model's.
   double time_constant = 0.0;
   bool time_constant_estimated = false;
+  /// The rotor model takes commands: the lag applies (measured speeds already lag).
+  bool lag_applies = true;
   /// s, offsets (see the file comment); applied only when estimated and determined.
   double gyro_offset = 0.0, rotor_offset = 0.0;
   bool gyro_offset_estimated = false, rotor_offset_estimated = false;

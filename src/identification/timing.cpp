@@ -200,6 +200,7 @@ TimingEstimate estimate_timing(const FlightLog& log, const RotorModel& rotors, c
   rotors.validate();
   TimingEstimate est;
   est.time_constant = rotors.time_constant;
+  est.lag_applies = rotors.input == RotorInput::kCommand;
   ExtendedOptions xo = xo_in;
   xo.auto_cutoffs = false;
   // The rows do not share a parameter but the products of inertia, so their
@@ -288,7 +289,9 @@ FlightLog apply_timing(const FlightLog& log, const RotorModel& rotors, const Tim
 
 nlohmann::json to_json(const TimingEstimate& t) {
   auto item = [](double v, bool estimated) { return nlohmann::json{{"value", v}, {"estimated", estimated}}; };
-  return {{"motor_time_constant", item(t.time_constant, t.time_constant_estimated)},
+  nlohmann::json lag = item(t.time_constant, t.time_constant_estimated);
+  lag["applies"] = t.lag_applies;
+  return {{"motor_time_constant", lag},
           {"gyro_offset", item(t.gyro_offset, t.gyro_offset_estimated)},
           {"rotor_offset", item(t.rotor_offset, t.rotor_offset_estimated)},
           {"moment_residual_cost", t.cost},
@@ -298,8 +301,11 @@ nlohmann::json to_json(const TimingEstimate& t) {
 
 std::string format_timing(const TimingEstimate& t) {
   std::string s = "Timing (offsets: how late a group's time stamps are against the pose's):\n";
-  s += fmt::format("  motor time constant {:.1f} ms ({})\n", 1e3 * t.time_constant,
-                   t.time_constant_estimated ? "estimated" : "the rotor model's");
+  if (t.lag_applies)
+    s += fmt::format("  motor time constant {:.1f} ms ({})\n", 1e3 * t.time_constant,
+                     t.time_constant_estimated ? "estimated" : "the rotor model's");
+  else
+    s += "  motor time constant: not used (the log holds rotor speeds, which already lag)\n";
   s += fmt::format("  gyro offset         {:+.1f} ms ({})\n", 1e3 * t.gyro_offset,
                    t.gyro_offset_estimated ? "estimated, applied" : "not estimated");
   s += fmt::format("  rotor offset        {:+.1f} ms ({})\n", 1e3 * t.rotor_offset,

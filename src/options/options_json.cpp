@@ -556,6 +556,7 @@ IdentificationInput prepare_identification(const std::string& path, const Identi
                                   rotors.time_constant == 0.0;
     TimingEstimate t;
     t.time_constant = rotors.time_constant;
+    t.lag_applies = rotors.input == RotorInput::kCommand;
     if (topt.estimate_time_constant || topt.estimate_offsets)
       t = estimate_timing(raw, rotors, extended_options(in.options), topt);
     in.log = apply_timing(raw, rotors, t);
