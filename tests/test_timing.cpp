@@ -219,3 +219,21 @@ TEST_F(Px4Identify, SmallQuadWithoutVehicleFileTextSaysWhereTheModelCameFrom) {
   EXPECT_NE(r.out.find("Wrench (Fz, torques): from the CA_ROTOR* parameters of"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("motor time constant"), std::string::npos) << r.out;
 }
+
+TEST_F(Px4Identify, SimulateUlogNeedsAVehicleThatTakesCommands) {
+  // A ULog holds normalised commands in actuator_motors: a vehicle logging rpm cannot be written as one.
+  CliRun r = run("simulate --vehicle crazyflie21 --trajectory table2 --duration 1 --ulog " + path("cf.ulg"));
+  EXPECT_NE(r.rc, 0);
+  EXPECT_NE(r.err.find("rotors.input is \"command\""), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(path("cf.ulg")));
+  r = run("simulate --trajectory table2 --duration 1 --ulog " + path("q.ulg"));
+  EXPECT_NE(r.rc, 0);
+  EXPECT_NE(r.err.find("--ulog needs --vehicle"), std::string::npos) << r.err;
+  // jmavsim-quad takes commands: the file is a ULog whose CA_ROTOR* give the vehicle's model back.
+  r = run("simulate --vehicle jmavsim-quad --trajectory table2 --duration 1 --ulog " + path("j.ulg"));
+  ASSERT_EQ(r.rc, 0) << r.err;
+  const Vehicle back = px4_vehicle(logs::read_ulog(path("j.ulg")), "j.ulg");
+  const Vehicle j = load_vehicle("jmavsim-quad");
+  EXPECT_EQ(back.rotors.spin, j.rotors.spin);
+  EXPECT_LT((back.rotors.allocation() - j.rotors.allocation()).cwiseAbs().maxCoeff(), 1e-6);  // float32 parameters
+}
