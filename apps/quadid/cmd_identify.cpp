@@ -70,12 +70,14 @@ void run(const IdentifyArgs& a) {
   // Output paths checked before the work starts.
   if (!a.out.empty()) check_output_file(a.out, "-o/--out");
   if (!a.evolution.empty()) check_output_file(a.evolution, "--evolution");
-  const std::optional<Vehicle>& vehicle = req.vehicle;
-  const FlightLog log = load_identification_log(a.log, req);
+  // The wrench from a rotor model (--vehicle, or a ULog's CA_ROTOR* parameters), the
+  // motor time constant and the time offsets estimated and applied (timing.hpp).
+  const IdentificationInput in = prepare_identification(a.log, req);
+  const IdentificationOptions& opt_used = in.options;
 
   IdentificationResult res;
   try {
-    res = identify(log, req.options);
+    res = identify_prepared(in);
   } catch (const std::exception& e) {
     throw std::runtime_error(fmt::format("{}: {}", a.log, e.what()));
   }
@@ -83,7 +85,7 @@ void run(const IdentifyArgs& a) {
 
   nlohmann::json j = to_json(res);
   j["log"] = a.log;
-  if (vehicle) j["vehicle"] = {{"name", vehicle->name}, {"source", vehicle->source}};
+  add_input_json(j, in);
   // Files first (atomically), so that a failed write leaves no partial report.
   if (!a.evolution.empty()) write_file_atomic(a.evolution, format_evolution_csv(res.evolution));
   if (!a.out.empty()) write_file_atomic(a.out, j.dump(2) + "\n");
@@ -94,7 +96,8 @@ void run(const IdentifyArgs& a) {
   fmt::print("{}: {} samples at {:g} Hz ({:g} s); pre-filter {} (-3 dB at {:.3g} Hz, zero-phase, settles in {:.3g} s{})\n\n",
              a.log, res.processing.samples, res.processing.fs, res.processing.duration, res.processing.filter,
              res.processing.filter_f3db, res.processing.filter_settling,
-             opt.processing.exclude_edges ? ", left out at both ends of the log" : "");
+             opt_used.processing.exclude_edges ? ", left out at both ends of the log" : "");
+  fmt::print("{}\n", format_input(in));
   if (!res.input_findings.empty()) fmt::print("Input checks:\n{}\n", format_findings(res.input_findings));
   fmt::print("{}\n", format_estimates_table(res));
   if (res.extended) fmt::print("{}\n", format_real_flight(*res.extended));
@@ -102,7 +105,7 @@ void run(const IdentifyArgs& a) {
   fmt::print("{}\n", format_consistency(res));
   fmt::print("Least squares: column-scaled condition number {:.4g} (standard), {:.4g} (filtered)\n",
              res.ls_standard.condition, res.ls_filtered.condition);
-  const GradientDescentOptions& gd = res.options.gd;
+  const GradientDescentOptions& gd = opt_used.gd;
   fmt::print("Gradient descent: {}, {} discretization, max sigma*T*lambda_max = {:.3g}\n\n",
              gd.gain == GdGain::Paper ? fmt::format("sigma = {:g}", gd.sigma)
                                       : fmt::format("normalized gain, rate {:g}/s", gd.rate),
@@ -151,7 +154,8 @@ void register_identify(CLI::App& app) {
   sub->add_option("--vehicle", a->real.vehicle,
                   "vehicle file or built-in (qball2, crazyflie21, jmavsim-quad): compute Fz and the torques from the "
                   "log's rotor columns with its rotor model, take its [nominal] as the reference set, and use the "
-                  "real-flight regression (docs/vehicles.md, docs/real-flights.md)");
+                  "real-flight regression (docs/vehicles.md, docs/real-flights.md). Without it, a PX4 ULog's "
+                  "CA_ROTOR* parameters give the rotor model (docs/import.md)");
   sub->add_option("--known-mass", a->real.known_mass,
                   "weighed mass, kg: estimate the thrust scale s (true wrench = s x the rotor model's) with the "
                   "inertia, instead of the mass (motion alone cannot fix mass, thrust and inertia together)");
@@ -169,6 +173,15 @@ void register_identify(CLI::App& app) {
                   "pre-filter cutoff of the force row (positions differentiated twice), Hz; default --cutoff");
   sub->add_option("--cutoff-moment", a->real.cutoff_moment,
                   "pre-filter cutoff of the moment rows (gyro differentiated once), Hz; default --cutoff");
+  sub->add_option("--motor-time-constant", a->real.motor_time_constant,
+                  "motor time constant, s (first-order lag of the rotor speed behind a command): auto = the rotor "
+                  "model's, estimated from the flight when the log holds commands and the model gives none (PX4 "
+                  "does not log it); or a value in seconds (docs/real-flights.md)")
+      ->capture_default_str();
+  sub->add_option("--time-offsets", a->real.time_offsets,
+                  "with a rotor model: estimate (the gyro's and the rotor signals' time offsets against the pose, "
+                  "estimated and applied) or none (docs/real-flights.md)")
+      ->capture_default_str();
   sub->add_flag("--allow-rank-deficient", a->allow_rank_deficient,
                 "warn instead of failing when the data do not determine some parameters (they keep the nominal values)");
   sub->add_flag("--ignore-input-errors", a->ignore_input_errors,

@@ -3,6 +3,7 @@
 #include "common.hpp"
 #include "quadid/io.hpp"
 #include "quadid/simulation.hpp"
+#include "quadid/logs.hpp"
 #include "quadid/vehicle.hpp"
 
 #include <fmt/format.h>
@@ -22,6 +23,7 @@ struct SimulateArgs {
   std::string trajectory;
   std::optional<double> radius, altitude;
   std::string out, truth;
+  std::string ulog;  // --ulog: the flight as a PX4 ULog too
   std::string plant = "qball2-virtual";
   std::string controller_params = "qball2-nominal";
   std::string torque_map = "WT";
@@ -98,17 +100,26 @@ void run(SimulateArgs& a) {
   o.validate();
   if (!a.out.empty()) check_output_file(a.out, "-o/--out");
   if (!a.truth.empty()) check_output_file(a.truth, "--truth");
+  logs::Px4UlogWriteOptions ulog_opt;
+  if (!a.ulog.empty()) {
+    if (!o.rotors) throw std::invalid_argument("--ulog needs --vehicle (the rotors' commands go to actuator_motors)");
+    check_output_file(a.ulog, "--ulog");
+    ulog_opt.geometry = px4_geometry(*o.rotors);  // InputError unless the rotors take commands
+    ulog_opt.motor_columns = o.rotors->columns;
+  }
   const SimulationResult res = simulate(*traj, o);  // SimulationDiverged propagates: exit 1, nothing written
 
   // Truth first, then the log: a failure leaves neither file half-done.
   namespace fs = std::filesystem;
   if (!a.truth.empty()) write_flight_log(res.truth, a.truth);
-  if (!a.out.empty()) {
+  if (!a.out.empty() || !a.ulog.empty()) {
     try {
-      write_flight_log(res.log, a.out);
+      if (!a.out.empty()) write_flight_log(res.log, a.out);
+      if (!a.ulog.empty()) write_file_atomic(a.ulog, logs::px4_ulog_from_flight_log(res.log, ulog_opt));
     } catch (...) {
       std::error_code ec;
       if (!a.truth.empty()) fs::remove(a.truth, ec);
+      if (!a.out.empty() && !a.ulog.empty()) fs::remove(a.out, ec);
       throw;
     }
   }
@@ -152,7 +163,8 @@ void run(SimulateArgs& a) {
                i + 1 == s.rotor_columns.size() ? "\n" : "");
   if (!a.out.empty()) fmt::print("wrote {} ({} rows)\n", a.out, s.samples);
   if (!a.truth.empty()) fmt::print("wrote {} (true state)\n", a.truth);
-  if (a.out.empty() && a.truth.empty()) fmt::print(stderr, "note: no -o/--out given, no log written\n");
+  if (!a.ulog.empty()) fmt::print("wrote {} (PX4 ULog: vehicle_local_position, vehicle_attitude, vehicle_angular_velocity, actuator_motors, CA_ROTOR*)\n", a.ulog);
+  if (a.out.empty() && a.truth.empty() && a.ulog.empty()) fmt::print(stderr, "note: no -o/--out given, no log written\n");
 }
 
 }  // namespace
@@ -183,6 +195,9 @@ void register_simulate(CLI::App& app) {
   sub->add_option("--duration", o.duration, "flight length, s")->capture_default_str();
   sub->add_option("-o,--out", args->out, "flight log CSV to write (atomically)");
   sub->add_option("--truth", args->truth, "also write the true state (CSV, same instants) to this file");
+  sub->add_option("--ulog", args->ulog,
+                  "with --vehicle whose rotors take commands: also write the flight as a PX4 ULog (PX4's topics, "
+                  "frames and motor order; the commands in actuator_motors, the geometry as CA_ROTOR* parameters)");
   sub->add_option("--plant", args->plant, "the simulated vehicle: qball2-virtual (Table 3 LS), qball2-nominal or a parameters JSON")
       ->capture_default_str();
   sub->add_option("--controller-params", args->controller_params,

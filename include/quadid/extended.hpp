@@ -110,6 +110,11 @@ struct ExtendedResult {
 
 ExtendedResult identify_extended(const FlightLog& log, const ExtendedOptions& opt);
 
+/// The real-flight regression's options of an identification (identify() uses
+/// them for LS and FMLS when opt.extended()): its processing, the two cutoffs
+/// (default the processing's), window, lambda, terms, reference and LS options.
+ExtendedOptions extended_options(const IdentificationOptions& opt);
+
 /// {"sets": {"LS": {"parameters": {name: {value, std_error}}, row_weight, residual_rms, ...}}, "window", ...}
 nlohmann::json to_json(const ExtendedResult& x);
 /// Text: the cutoffs (and how they were chosen), then every parameter of LS

@@ -18,6 +18,7 @@
 #include "quadid/identification.hpp"
 #include "quadid/vehicle.hpp"
 #include "quadid/simulation.hpp"
+#include "quadid/timing.hpp"
 #include "quadid/validation.hpp"
 
 #include <nlohmann/json.hpp>
@@ -49,21 +50,6 @@ const std::vector<OptionSpec>& command_option_specs(std::string_view command);
 /// "gd_init" -> "gd-init", "lambda_" -> "lambda".
 std::string normalize_option_key(std::string_view key);
 
-/// Everything `quadid identify` needs besides the log: the identification and
-/// the log reader's options (--map, --period-tolerance).
-struct IdentifyRequest {
-  IdentificationOptions options;
-  CsvReadOptions csv;
-  /// --vehicle: the wrench comes from the log's rotor columns by its rotor model.
-  std::optional<Vehicle> vehicle;
-};
-/// Options of `quadid identify` (and `quadid batch`): window, error-window,
-/// sigma, gd-discretization, gd-init, nominal, allow-rank-deficient,
-/// evolution-interval, and the processing group filter, cutoff, order, taps,
-/// lambda, derivative-filter, g, period-tolerance, keep-edges, map.
-/// Defaults: those of `quadid identify --help`. Validated.
-IdentifyRequest identify_options_from_json(const nlohmann::json& j);
-
 /// The real-flight choices of `quadid identify` as given (unset = default).
 struct RealFlightArgs {
   std::string vehicle;                 // --vehicle NAME|FILE
@@ -74,7 +60,33 @@ struct RealFlightArgs {
   bool window_given = false;           // --window was given
   bool nominal_given = false;          // --nominal was given
   std::string gd_gain = "auto";        // --gd-gain auto|paper|normalized (auto: normalized with a vehicle)
+  std::string motor_time_constant = "auto";  // --motor-time-constant auto|S
+  std::string time_offsets = "estimate";     // --time-offsets estimate|none
 };
+
+/// Everything `quadid identify` needs besides the log: the identification and
+/// the log reader's options (--map, --period-tolerance).
+struct IdentifyRequest {
+  IdentificationOptions options;
+  CsvReadOptions csv;
+  /// --vehicle: the wrench comes from the log's rotor columns by its rotor model.
+  std::optional<Vehicle> vehicle;
+  /// The real-flight choices as given (apply_real_flight records them): a rotor
+  /// model found in the log (PX4's CA_ROTOR* parameters) gets the defaults a
+  /// --vehicle gets.
+  RealFlightArgs real;
+  /// Motor time constant and time offsets, estimated with a rotor model (timing.hpp).
+  TimingOptions timing;
+  /// --motor-time-constant S: the rotors' lag as given (not estimated).
+  std::optional<double> motor_time_constant;
+};
+/// Options of `quadid identify` (and `quadid batch`): window, error-window,
+/// sigma, gd-discretization, gd-init, nominal, allow-rank-deficient,
+/// evolution-interval, and the processing group filter, cutoff, order, taps,
+/// lambda, derivative-filter, g, period-tolerance, keep-edges, map.
+/// Defaults: those of `quadid identify --help`. Validated.
+IdentifyRequest identify_options_from_json(const nlohmann::json& j);
+
 /// Applies them to `req`, with the defaults of docs/real-flights.md: with a
 /// vehicle, the real-flight terms, cutoffs chosen on held-out data, the whole
 /// log as window, the vehicle's nominal set as reference and the normalized
@@ -86,6 +98,31 @@ void apply_real_flight(IdentifyRequest& req, const RealFlightArgs& a);
 /// vehicle, the rotor columns instead of the wrench, which the rotor model
 /// computes (with_rotor_wrench). InputError names the file.
 FlightLog load_identification_log(const std::string& path, const IdentifyRequest& req);
+
+/// A log made ready for identify(): read (any format), the wrench computed by a
+/// rotor model with the motor time constant and time offsets estimated and
+/// applied (timing.hpp) when the log holds rotor signals and a model is known.
+/// The model is --vehicle's, else, for a PX4 ULog without --vehicle, the one its
+/// CA_ROTOR* parameters describe (px4_rotor_model; the reference set then a rough
+/// one from the log, rough_nominal), with the defaults a --vehicle gets.
+struct IdentificationInput {
+  FlightLog log;
+  IdentificationOptions options;  // the request's, with a log's rotor model's defaults
+  std::optional<Vehicle> vehicle;  // the rotor model used (time_constant as used)
+  /// Where the wrench came from: "the log's Fz and torque columns", "vehicle file X",
+  /// "the CA_ROTOR* parameters of FILE".
+  std::string wrench_source = "the log's Fz and torque columns";
+  std::optional<TimingEstimate> timing;
+};
+/// InputError names the file.
+IdentificationInput prepare_identification(const std::string& path, const IdentifyRequest& req);
+/// identify() on a prepared log; the estimated timing joins the LS and FMLS extras.
+IdentificationResult identify_prepared(const IdentificationInput& in);
+/// With a rotor model: adds "wrench_source", "vehicle" ({name, source}), "rotors" and
+/// "timing" to a result JSON (nothing for a log with its own wrench).
+void add_input_json(nlohmann::json& j, const IdentificationInput& in);
+/// Text: where the wrench came from (and the rotor model), then the timing.
+std::string format_input(const IdentificationInput& in);
 
 /// `quadid simulate`: the trajectory (required: table2, circle1..3, circle,
 /// or a trajectory JSON file) and the SimulationOptions.

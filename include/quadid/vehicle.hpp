@@ -31,6 +31,11 @@
 
 namespace quadid {
 
+namespace logs {
+struct ULog;
+struct RotorGeometry;
+}  // namespace logs
+
 /// What a log holds per rotor.
 enum class RotorInput {
   kSpeed,    // rotor speed, rad/s
@@ -148,5 +153,34 @@ double log_sample_period(const FlightLog& log);
 /// `log` with Fz tau_phi tau_theta tau_psi computed from its rotor columns by the
 /// rotor model (replacing them when present, appended otherwise).
 FlightLog with_rotor_wrench(const FlightLog& log, const RotorModel& rotors);
+
+// --- PX4's rotor model from its control-allocation parameters (docs/import.md) ---------
+
+/// The rotor model PX4's CA_ROTOR* parameters describe (logs::px4_rotor_geometry):
+/// input "command" on the columns actuator_motors.control[0..n-1] (motor n+1 = CA_ROTORn),
+/// thrust_max = CA_ROTORn_CT (PX4's allocation is linear in the normalised thrust
+/// setpoint u = actuator_motors.control: T = CT u in steady state; THR_MDL_FAC maps u
+/// to the ESC signal after the log), torque_ratio = |CA_ROTORn_KM|, spin ccw for
+/// KM > 0, positions CA_ROTORn_PX/PY/PZ in FLU, time_constant 0 (PX4 does not log
+/// it). InputError naming the parameter when the rotors differ in CT or KM
+/// magnitude by more than 1 % (one coefficient per model) or a rotor is tilted
+/// more than 5 degrees from the body z axis.
+RotorModel px4_rotor_model(const logs::RotorGeometry& g);
+/// The other way: the CA_ROTOR* geometry of a rotor model that takes commands
+/// (thrust axes along body z, CT = thrust_max, KM = torque_ratio), e.g. to write a
+/// simulated flight as a PX4 ULog (logs::px4_ulog_from_flight_log). InputError
+/// unless the input is "command".
+logs::RotorGeometry px4_geometry(const RotorModel& m);
+/// A vehicle known only from a ULog: px4_rotor_model(px4_rotor_geometry(log)) and a
+/// rough nominal set (rough_nominal, filled in once the log's wrench is known;
+/// until then a placeholder of 1 kg). `source` names the log.
+Vehicle px4_vehicle(const logs::ULog& log, const std::string& source);
+/// A rough reference set for a vehicle known only by its rotors: m = mean Fz / g over
+/// `log` (its wrench columns: hover-dominated flights give the weight), Ixx = Iyy =
+/// m r^2 / 4 and Izz = m r^2 / 2 with r the mean rotor distance from the centre of mass
+/// (between a Crazyflie's 0.17 m r^2 and a QBall 2's 0.42 m r^2 per axis). Only the
+/// gradient descent's start and the prediction tables' reference; never a prior
+/// unless the data leave a direction undetermined.
+Params rough_nominal(const FlightLog& log, const RotorModel& rotors, double g);
 
 }  // namespace quadid

@@ -29,10 +29,10 @@ FlightLog load_log_file(const std::string& path, const CsvReadOptions& csv) {
 }
 
 nlohmann::json identify_log_file(const std::string& path, const IdentifyRequest& req, Evolution* evolution) {
-  const FlightLog log = load_identification_log(path, req);  // InputError names the file
+  const IdentificationInput in = prepare_identification(path, req);  // InputError names the file
   IdentificationResult res;
   try {
-    res = identify(log, req.options);
+    res = identify_prepared(in);
   } catch (const InputError& e) {
     throw InputError(fmt::format("{}: {}", path, e.what()));
   } catch (const std::invalid_argument& e) {
@@ -42,6 +42,7 @@ nlohmann::json identify_log_file(const std::string& path, const IdentifyRequest&
   }
   nlohmann::json j = to_json(res);
   j["log"] = path;
+  add_input_json(j, in);
   if (evolution) *evolution = std::move(res.evolution);
   return j;
 }

@@ -90,6 +90,22 @@ void IdentificationOptions::validate() const {
   physical.validate();
 }
 
+ExtendedOptions extended_options(const IdentificationOptions& opt) {
+  ExtendedOptions xo;
+  xo.processing = opt.processing;
+  xo.force_cutoff_hz = opt.force_cutoff_hz.value_or(opt.processing.lowpass.cutoff_hz);
+  xo.moment_cutoff_hz = opt.moment_cutoff_hz.value_or(opt.processing.lowpass.cutoff_hz);
+  xo.window = opt.window;
+  xo.lambda = opt.lambda;
+  xo.gd_variant = opt.gd_variant;
+  xo.terms = opt.terms;
+  xo.reference = opt.reference.params;
+  xo.ls = opt.ls;
+  xo.uncertainty = opt.uncertainty;
+  xo.auto_cutoffs = opt.auto_cutoffs;
+  return xo;
+}
+
 bool IdentificationOptions::extended() const {
   const double c = processing.lowpass.cutoff_hz;
   return terms.any() || auto_cutoffs || force_cutoff_hz.value_or(c) != c || moment_cutoff_hz.value_or(c) != c;
@@ -199,19 +215,7 @@ IdentificationResult identify(const FlightLog& log, const IdentificationOptions&
   if (opt.extended()) {
     // LS and FMLS from the real-flight regression (extended.hpp); the paper's
     // model above still gives GD, FMGD and the identifiability diagnostics.
-    ExtendedOptions xo;
-    xo.processing = opt.processing;
-    xo.force_cutoff_hz = opt.force_cutoff_hz.value_or(opt.processing.lowpass.cutoff_hz);
-    xo.moment_cutoff_hz = opt.moment_cutoff_hz.value_or(opt.processing.lowpass.cutoff_hz);
-    xo.window = opt.window;
-    xo.lambda = opt.lambda;
-    xo.gd_variant = opt.gd_variant;
-    xo.terms = opt.terms;
-    xo.reference = opt.reference.params;
-    xo.ls = opt.ls;
-    xo.uncertainty = opt.uncertainty;
-    xo.auto_cutoffs = opt.auto_cutoffs;
-    auto xr = std::make_shared<ExtendedResult>(identify_extended(log, xo));
+    auto xr = std::make_shared<ExtendedResult>(identify_extended(log, extended_options(opt)));
     for (int i : {0, 1}) {
       const ExtendedEstimate& x = xr->estimates[static_cast<size_t>(i)];
       SetEstimate& e = res.estimates[static_cast<size_t>(2 * i)];

@@ -29,6 +29,10 @@ struct Series {
   std::vector<std::string> names;  // output column names
   Eigen::MatrixXd x;               // t.size() x names.size()
   bool quaternion = false;         // 4 columns q0..q3 (scalar first)
+  /// Resampled values kept within each column's range of samples: the
+  /// anti-aliasing filter rings past a step (a motor command at its limit 1
+  /// overshoots to ~1.006), which a rotor model would refuse as out of range.
+  bool bounded = false;
 };
 
 double median_period(const std::vector<double>& t) {
@@ -226,6 +230,9 @@ FlightLog assemble(std::vector<Series> series, const ImportOptions& opt, ImportR
     }
     std::string how;
     Eigen::MatrixXd y = resample(s, grid, opt, how);
+    if (s.bounded)
+      for (Eigen::Index j = 0; j < y.cols(); ++j)
+        y.col(j) = y.col(j).cwiseMax(s.x.col(j).minCoeff()).cwiseMin(s.x.col(j).maxCoeff());
     if (s.quaternion) {
       Eigen::MatrixXd e(rows, 3);
       for (Eigen::Index i = 0; i < rows; ++i) {
@@ -398,6 +405,7 @@ FlightLog import_ulog(const ULog& log, const ImportOptions& opt, ImportReport* r
       std::vector<std::string> names;
       for (const auto& f : fields) names.push_back(motors + "." + f);
       series.push_back(from_topic(log, motors, fields, names, std::vector<double>(fields.size(), 1.0)));
+      series.back().bounded = true;
     }
   }
   FlightLog out = assemble(std::move(series), opt, rep, "ulog");

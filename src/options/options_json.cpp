@@ -77,6 +77,8 @@ const std::vector<OptionSpec>& identify_specs() {
           {"cutoffs", K::String, "auto (with a vehicle the moment rows at twice the cutoff), held-out, or fixed"},
           {"cutoff-force", K::Number, "pre-filter cutoff of the force row, Hz"},
           {"cutoff-moment", K::Number, "pre-filter cutoff of the moment rows, Hz"},
+          {"motor-time-constant", K::String, "auto (the rotor model's; estimated when it takes commands and gives none) or seconds"},
+          {"time-offsets", K::String, "estimate (gyro and rotor groups against the pose, with a rotor model) or none"},
       },
       processing_specs());
   return s;
@@ -432,6 +434,8 @@ IdentifyRequest identify_options_from_json(const nlohmann::json& j) {
   rf.gd_gain = r.string("gd-gain").value_or("auto");
   rf.cutoff_force = r.number("cutoff-force");
   rf.cutoff_moment = r.number("cutoff-moment");
+  rf.motor_time_constant = r.string("motor-time-constant").value_or("auto");
+  rf.time_offsets = r.string("time-offsets").value_or("estimate");
   rf.window_given = j.contains("window");
   rf.nominal_given = j.contains("nominal");
   r.finish();
@@ -442,11 +446,30 @@ IdentifyRequest identify_options_from_json(const nlohmann::json& j) {
 
 void apply_real_flight(IdentifyRequest& req, const RealFlightArgs& a) {
   IdentificationOptions& opt = req.options;
-  if (!a.vehicle.empty()) {
-    req.vehicle = load_vehicle(a.vehicle);
+  req.real = a;
+  if (!a.vehicle.empty()) req.vehicle = load_vehicle(a.vehicle);
+  if (req.vehicle) {  // --vehicle, or a rotor model found in the log (prepare_identification)
     if (!a.nominal_given) opt.reference = NamedParams{"nom", req.vehicle->nominal};
     if (!a.window_given) opt.window = TimeWindow{};  // the whole log, clear of the filters' edges
   }
+  if (a.motor_time_constant == "auto") {
+    req.motor_time_constant.reset();
+  } else {
+    double v = NAN;
+    try {
+      std::size_t used = 0;
+      v = std::stod(a.motor_time_constant, &used);
+      if (used != a.motor_time_constant.size()) v = NAN;
+    } catch (const std::exception&) {
+    }
+    if (!(v >= 0.0 && v <= 1.0))
+      throw std::invalid_argument(fmt::format("--motor-time-constant {}: expected auto or a time in [0, 1] s",
+                                              a.motor_time_constant));
+    req.motor_time_constant = v;
+  }
+  if (a.time_offsets == "estimate") req.timing.estimate_offsets = true;
+  else if (a.time_offsets == "none") req.timing.estimate_offsets = false;
+  else throw std::invalid_argument(fmt::format("--time-offsets {}: expected estimate or none", a.time_offsets));
   const bool vehicle = req.vehicle.has_value();
   if (a.gd_gain == "auto") opt.gd.gain = vehicle ? GdGain::Normalized : GdGain::Paper;
   else if (a.gd_gain == "paper") opt.gd.gain = GdGain::Paper;
@@ -488,6 +511,104 @@ FlightLog load_identification_log(const std::string& path, const IdentifyRequest
   } catch (const std::exception& e) {
     throw InputError(fmt::format("{}: {}", path, e.what()));
   }
+}
+
+IdentificationInput prepare_identification(const std::string& path, const IdentifyRequest& req_in) {
+  IdentifyRequest req = req_in;
+  IdentificationInput in;
+  bool from_log = false;
+  if (!req.vehicle && logs::detect_log_kind(path) == logs::LogKind::Ulog) {
+    // No --vehicle: PX4's control-allocation parameters describe the rotors.
+    try {
+      const logs::ULog u = logs::read_ulog(path);
+      if (u.parameter("CA_ROTOR_COUNT")) {
+        try {
+          req.vehicle = px4_vehicle(u, path);
+        } catch (const InputError& e) {
+          throw InputError(fmt::format("the imported log has no column Fz (nor the torques), and its CA_ROTOR* "
+                                       "parameters do not give a rotor model: {}; give a vehicle file with --vehicle",
+                                       e.what()));
+        }
+        from_log = true;
+      }
+    } catch (const InputError& e) {
+      const std::string what = e.what();
+      if (what.rfind(path, 0) == 0) throw;
+      throw InputError(fmt::format("{}: {}", path, what));
+    }
+  }
+  if (!req.vehicle) {
+    in.log = load_identification_log(path, req);
+    in.options = req.options;
+    return in;
+  }
+  in.wrench_source = from_log ? req.vehicle->source : fmt::format("the rotor model of vehicle {}", req.vehicle->source);
+  if (req.motor_time_constant) req.vehicle->rotors.time_constant = *req.motor_time_constant;
+  const RotorModel& rotors = req.vehicle->rotors;
+  logs::LoadOptions load;
+  load.csv = req.csv;
+  const auto& std_cols = standard_log_columns();  // t x y z phi theta psi p q r, then the wrench
+  load.csv.required.assign(std_cols.begin(), std_cols.begin() + 10);
+  load.csv.required.insert(load.csv.required.end(), rotors.columns.begin(), rotors.columns.end());
+  load.check_required = false;  // an imported autopilot log has no wrench: the rotor model adds it
+  const FlightLog raw = logs::load_any_log(path, load);
+  try {
+    if (from_log) {
+      // The reference set from the log itself (rough_nominal), then the defaults a --vehicle gets.
+      req.vehicle->nominal = rough_nominal(with_rotor_wrench(raw, rotors), rotors, req.options.processing.g);
+      apply_real_flight(req, req.real);
+    }
+    in.options = req.options;
+    TimingOptions topt = req.timing;
+    topt.estimate_time_constant = !req.motor_time_constant && rotors.input == RotorInput::kCommand &&
+                                  rotors.time_constant == 0.0;
+    TimingEstimate t;
+    t.time_constant = rotors.time_constant;
+    t.lag_applies = rotors.input == RotorInput::kCommand;
+    if (topt.estimate_time_constant || topt.estimate_offsets)
+      t = estimate_timing(raw, rotors, extended_options(in.options), topt);
+    in.log = apply_timing(raw, rotors, t);
+    in.vehicle = req.vehicle;
+    in.vehicle->rotors.time_constant = t.time_constant;
+    in.timing = std::move(t);
+  } catch (const InputError& e) {
+    throw InputError(fmt::format("{}: {}", path, e.what()));
+  }
+  return in;
+}
+
+IdentificationResult identify_prepared(const IdentificationInput& in) {
+  IdentificationResult res = identify(in.log, in.options);
+  if (in.timing)
+    for (int i : {0, 2}) add_timing_extras(res.estimates[static_cast<std::size_t>(i)].extra, *in.timing);
+  return res;
+}
+
+void add_input_json(nlohmann::json& j, const IdentificationInput& in) {
+  if (in.vehicle) {  // a log with its own wrench adds nothing (the result of identify() on it)
+    j["wrench_source"] = in.wrench_source;
+    j["vehicle"] = {{"name", in.vehicle->name}, {"source", in.vehicle->source}};
+    j["rotors"] = to_json(in.vehicle->rotors);
+  }
+  if (in.timing) j["timing"] = to_json(*in.timing);
+}
+
+std::string format_input(const IdentificationInput& in) {
+  std::string s = fmt::format("Wrench (Fz, torques): from {}\n", in.wrench_source);
+  if (in.vehicle) {
+    const RotorModel& r = in.vehicle->rotors;
+    s += fmt::format("  {} rotors, input {} ({}), {} = {:.6g}, torque_ratio = {:.6g} m\n", r.count(),
+                     to_string(r.input), fmt::join(r.columns, ", "),
+                     r.input == RotorInput::kCommand ? "thrust_max" : "kf", r.thrust_coefficient(), r.torque_ratio);
+    s += fmt::format("  reference set '{}': m = {:.4g} kg, Ixx = {:.3g}, Iyy = {:.3g}, Izz = {:.3g} kg m^2{}\n",
+                     in.options.reference.name, in.options.reference.params.m, in.options.reference.params.I(0, 0),
+                     in.options.reference.params.I(1, 1), in.options.reference.params.I(2, 2),
+                     in.vehicle->name == "px4-control-allocation"
+                         ? " (a rough guess from the log: mean thrust / g, arm length)"
+                         : "");
+  }
+  if (in.timing) s += format_timing(*in.timing);
+  return s;
 }
 
 SimulateRequest simulate_options_from_json(const nlohmann::json& j) {
