@@ -27,11 +27,22 @@ double normal_quantile(double p) {
   return 0.5 * (lo + hi);
 }
 
-// Lag-k autocovariance of column j of the n x 7 row-major series x (mean removed).
-double autocov(const std::vector<double>& x, long n, int j, long k) {
-  double s = 0.0;
-  for (long i = 0; i + k < n; ++i) s += x[static_cast<size_t>(7 * i + j)] * x[static_cast<size_t>(7 * (i + k) + j)];
-  return s / static_cast<double>(n);
+// Autocovariances of the series c (n values, mean removed) at the kLags lags
+// k, k+1, ...: out[l] = sum_i c[i] c[i + k + l] / n. One pass for the kLags
+// sums, each still summed in the order of i (the same bits as one lag at a
+// time); the kLags independent sums keep the processor's adders busy.
+constexpr int kLags = 8;
+void autocov_lags(const double* c, long n, long k, double out[kLags]) {
+  double s[kLags] = {};
+  const long full = std::max<long>(0, n - k - (kLags - 1));  // rows where every lag has a partner
+  for (long i = 0; i < full; ++i) {
+    const double a = c[i];
+    const double* b = c + i + k;
+    for (int l = 0; l < kLags; ++l) s[l] += a * b[l];
+  }
+  for (int l = 0; l < kLags; ++l)  // the last rows, for the shorter lags
+    for (long i = full; i + k + l < n; ++i) s[l] += c[i] * c[i + k + l];
+  for (int l = 0; l < kLags; ++l) out[l] = s[l] / static_cast<double>(n);
 }
 
 }  // namespace
@@ -93,13 +104,21 @@ LeastSquaresUncertainty InfluenceAccumulator::finish(const UncertaintyOptions& o
   const double thr = 2.0 * std::sqrt(std::log10(static_cast<double>(n)) / static_cast<double>(n));
   constexpr long K = 5;
   const long lag_cap = std::max<long>(1, std::min<long>(opt.max_lag, n / 4));
+  // Each parameter's series contiguous (column-major copy), its lags computed
+  // kLags at a time as the search reaches them.
+  std::vector<double> col(static_cast<size_t>(n));
   long m_hat = 0;
   for (int j = 0; j < 7; ++j) {
-    const double c0 = autocov(x, n, j, 0);
+    for (long i = 0; i < n; ++i) col[static_cast<size_t>(i)] = x[static_cast<size_t>(7 * i + j)];
+    double ac[kLags];
+    autocov_lags(col.data(), n, 0, ac);
+    const double c0 = ac[0];
     if (!(c0 > 0.0)) continue;
+    long first = 0;  // ac holds lags first .. first + kLags - 1
     long run = 0, m = 0;
     for (long k = 1; k <= lag_cap; ++k) {
-      if (std::abs(autocov(x, n, j, k) / c0) < thr) {
+      if (k >= first + kLags) autocov_lags(col.data(), n, first = k, ac);
+      if (std::abs(ac[k - first] / c0) < thr) {
         if (++run == K) break;
       } else {
         run = 0;
