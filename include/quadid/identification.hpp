@@ -62,6 +62,12 @@ struct ProcessingOptions {
   /// Also keep the body-frame horizontal velocity [u v] (RegressionSignals::uv),
   /// for the blade-flapping term of the real-flight regression.
   bool keep_body_velocity = false;
+  /// Threads for the independent parts of the processing and of identify()
+  /// (the pre-filter's columns, the two regressions, the input checks):
+  /// 0 = two when the machine has two cores or more, 1 = one (e.g. inside a
+  /// pool that already keeps every core busy, as montecarlo does), 2 = two.
+  /// The results are the same bits whatever the value.
+  int threads = 0;
   void validate() const;
 };
 
