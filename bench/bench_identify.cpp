@@ -17,6 +17,12 @@
 
 namespace {
 
+// The program timed: this build's, or $QUADID_BENCH_EXE (e.g. an older build, for before/after).
+const char* program() {
+  const char* e = std::getenv("QUADID_BENCH_EXE");
+  return e && *e ? e : QUADID_EXE;
+}
+
 struct Fixture {
   std::filesystem::path csv;
   quadid::FlightLog log;
@@ -61,7 +67,7 @@ void BM_Identify50s_FromCsv(benchmark::State& state) {
 // sets with intervals, Tables 3, 5, 6 printed), through the shell.
 void BM_IdentifyProcess50s(benchmark::State& state) {
   const auto& f = fixture();
-  const std::string cmd = std::string("\"") + QUADID_EXE + "\" identify \"" + f.csv.string() + "\" > /dev/null";
+  const std::string cmd = std::string("\"") + program() + "\" identify \"" + f.csv.string() + "\" > /dev/null";
   for (auto _ : state)
     if (std::system(cmd.c_str()) != 0) return state.SkipWithError("quadid identify failed");
 }

@@ -15,6 +15,12 @@
 
 namespace {
 
+// The program timed: this build's, or $QUADID_BENCH_EXE (e.g. an older build, for before/after).
+const char* program() {
+  const char* e = std::getenv("QUADID_BENCH_EXE");
+  return e && *e ? e : QUADID_EXE;
+}
+
 namespace fs = std::filesystem;
 
 fs::path temp_dir(const char* what) {
@@ -45,7 +51,7 @@ void BM_ReproduceTable2_Library(benchmark::State& state) {
 void process(benchmark::State& state, const std::string& args) {
   const fs::path dir = temp_dir("cli");
   const std::string cmd =
-      std::string("\"") + QUADID_EXE + "\" reproduce " + args + " --out \"" + dir.string() + "\" > /dev/null 2>&1";
+      std::string("\"") + program() + "\" reproduce " + args + " --out \"" + dir.string() + "\" > /dev/null 2>&1";
   for (auto _ : state)
     if (std::system(cmd.c_str()) != 0) return state.SkipWithError("quadid reproduce failed");
   state.counters["folder_MB"] = static_cast<double>(folder_bytes(dir)) / 1e6;

@@ -235,6 +235,9 @@ struct IdentificationOptions {
   bool allow_rank_deficient = false;
   /// Spacing of the recorded evolution (s); 0 records every sample.
   double evolution_interval = 0.01;
+  /// false: leave IdentificationResult::evolution empty (it costs two 7x7
+  /// solves per recorded row; the estimates do not depend on it).
+  bool record_evolution = true;
   /// The real-flight regression's terms (extended.hpp). With any of them on, or
   /// with cutoffs of their own for the force and moment rows, LS and FMLS come
   /// from the real-flight regression; GD and FMGD stay the paper's model.

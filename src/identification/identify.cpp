@@ -25,9 +25,11 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 // Which samples of the window are recorded in the evolution.
 struct Recorder {
   Eigen::Index begin, end, stride;
+  bool enabled = true;
   Eigen::Index rows() const { return (end - 1 - begin) / stride + 1 + (((end - 1 - begin) % stride) ? 1 : 0); }
   // Row of sample k, or -1.
   Eigen::Index row(Eigen::Index k) const {
+    if (!enabled) return -1;
     const Eigen::Index j = k - begin;
     if (j % stride == 0) return j / stride;
     if (k == end - 1) return rows() - 1;
@@ -176,11 +178,13 @@ IdentificationResult identify(const FlightLog& log, const IdentificationOptions&
   const double T = sig->T;
   const Eigen::Index stride =
       opt.evolution_interval <= 0.0 ? 1 : std::max<Eigen::Index>(1, std::llround(opt.evolution_interval / T));
-  const Recorder rec{std_reg.begin(), std_reg.end(), stride};
-  res.evolution.columns.push_back("t");
-  for (const char* set : {"LS", "GD", "FMLS", "FMGD"})
-    for (const char* p : kThetaNames) res.evolution.columns.push_back(fmt::format("{}_{}", set, p));
-  res.evolution.data.setConstant(rec.rows(), 29, kNaN);
+  const Recorder rec{std_reg.begin(), std_reg.end(), stride, opt.record_evolution};
+  if (opt.record_evolution) {
+    res.evolution.columns.push_back("t");
+    for (const char* set : {"LS", "GD", "FMLS", "FMGD"})
+      for (const char* p : kThetaNames) res.evolution.columns.push_back(fmt::format("{}_{}", set, p));
+    res.evolution.data.setConstant(rec.rows(), 29, kNaN);
+  }
 
   // The two regressions are independent until the tables: each runs LS and GD,
   // solves, computes its HAC intervals and its physically consistent set, on

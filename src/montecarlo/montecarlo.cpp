@@ -26,7 +26,7 @@ MonteCarloRun fly(const MonteCarloOptions& o, const Trajectory& traj, int i) {
     so.record_truth = false;
     const SimulationResult sim = simulate(traj, so);
     IdentificationOptions io = o.identification;
-    io.evolution_interval = std::max(io.evolution_interval, 1.0);  // not used here: keep it small
+    io.record_evolution = false;  // not used here
     const IdentificationResult id = identify(sim.log, io);
     for (const auto* e : id.all_sets()) {
       run.sets.push_back(e->name);
