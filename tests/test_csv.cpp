@@ -240,6 +240,42 @@ TEST_F(Csv, LongFilesCrossChunksAndCapacityGuesses) {
   }
 }
 
+// Issue 13: a chunk's lines are parsed in two halves on two threads. The
+// numbers are the same as on one thread, and an error is the first bad line's
+// (the serial reader's), whichever half holds it and whatever the other half holds.
+TEST_F(Csv, TwoThreadsReadTheSameNumbersAndReportTheFirstBadLine) {
+  const int n = 20000;  // one chunk: far more than the 4096 lines a second thread needs
+  std::string body = standard_rows(n / 2);
+  body += "# a comment in the middle\n\n";  // lines n/2 + 2 and n/2 + 3
+  body += standard_rows(n / 2, 0.002, n / 2);
+  const std::string good = std::string(kHeader) + "\n" + body;
+  CsvReadOptions one, two;
+  one.threads = 1;
+  two.threads = 2;
+  const std::string p = write("good.csv", good);
+  const FlightLog a = read_flight_log(p, one), b = read_flight_log(p, two);
+  ASSERT_EQ(a.rows(), n);
+  EXPECT_EQ(a.data, b.data);
+  EXPECT_EQ(a.data(n - 1, 1), n - 1 + 0.01);
+  // Line L (1-based, header on line 1) of `good` replaced by text.
+  auto with_line = [&](std::string text, int L, const std::string& line) {
+    size_t pos = 0;
+    for (int i = 1; i < L; ++i) pos = text.find('\n', pos) + 1;
+    text.replace(pos, text.find('\n', pos) - pos, line);
+    return text;
+  };
+  const int late = n / 2 + 3000, early = 2000;  // a line in each half
+  const std::string bad_late = with_line(good, late, "0.1,oops,2,3,4,5,6,7,8,9,10,11,12,13");
+  const std::string bad_both = with_line(with_line(bad_late, early, "1,2,3"), late + 10, "x");
+  for (const CsvReadOptions& o : {one, two}) {
+    const std::string m1 = error_of(bad_late, o);
+    EXPECT_NE(m1.find(fmt::format("bad.csv:{}: column 2 ('x'): 'oops' is not a finite number", late)),
+              std::string::npos) << m1;
+    const std::string m2 = error_of(bad_both, o);
+    EXPECT_NE(m2.find(fmt::format("bad.csv:{}: row has 3 field(s), expected 14", early)), std::string::npos) << m2;
+  }
+}
+
 TEST_F(Csv, LinesLongerThanTheReadChunk) {
   std::string comment = "# " + std::string(600000, 'x') + "\n";
   std::string header = "t,x,y,z,phi,theta,psi,p,q,r,Fz,tau_phi,tau_theta,tau_psi";

@@ -258,6 +258,45 @@ TEST(Identification, EvolutionEndsAtTheEstimates) {
   EXPECT_EQ(format_evolution_csv(ev).substr(0, 10), "t,LS_m,LS_");
 }
 
+// Issue 13: one thread or two (the pre-filter's columns, input checks beside
+// the processing, the two regressions at once) compute the same bits, and an
+// evolution left out changes no estimate.
+TEST(Identification, TwoThreadsAndNoEvolutionGiveTheSameBits) {
+  SimulationOptions so;  // default noise: intervals, input checks and all sets are exercised
+  so.duration = 20.0;
+  so.record_truth = false;
+  const FlightLog log = simulate(FourierTrajectory::table2(), so).log;
+  IdentificationOptions one;
+  one.window = {5.0, 20.0};
+  one.processing.threads = 1;
+  IdentificationOptions two = one;
+  two.processing.threads = 2;
+  two.record_evolution = false;
+  const IdentificationResult a = identify(log, one), b = identify(log, two);
+  const auto sa = a.all_sets(), sb = b.all_sets();
+  ASSERT_EQ(sa.size(), sb.size());
+  for (size_t i = 0; i < sa.size(); ++i) {
+    EXPECT_EQ(sa[i]->name, sb[i]->name);
+    EXPECT_EQ(sa[i]->theta, sb[i]->theta) << sa[i]->name;
+  }
+  for (auto [x, y] : {std::pair{&a.ls_standard, &b.ls_standard}, std::pair{&a.ls_filtered, &b.ls_filtered}}) {
+    EXPECT_EQ(x->uncertainty.covariance, y->uncertainty.covariance);
+    EXPECT_EQ(x->uncertainty.correlation_time, y->uncertainty.correlation_time);
+  }
+  EXPECT_EQ(a.errors_standard.rows.at(0).rms, b.errors_standard.rows.at(0).rms);
+  EXPECT_EQ(a.errors_filtered.reference.rms, b.errors_filtered.reference.rms);
+  EXPECT_EQ(a.warnings, b.warnings);
+  EXPECT_GT(a.evolution.data.rows(), 1400);  // every 10 ms over the ~14.4 s window clear of the edges
+  EXPECT_EQ(b.evolution.data.size(), 0);
+  EXPECT_THROW(
+      [] {
+        IdentificationOptions bad;
+        bad.processing.threads = 3;
+        bad.validate();
+      }(),
+      std::invalid_argument);
+}
+
 TEST(Identification, PredictionErrorIsTheRmsOfEq43) {
   const auto sig = process_log(perfect_table2());
   const Regression reg(sig, RegressionModel::Filtered, {0.0, 50.0});

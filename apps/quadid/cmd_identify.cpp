@@ -57,6 +57,7 @@ void run(const IdentifyArgs& a) {
   opt.allow_rank_deficient = a.allow_rank_deficient;
   opt.ignore_input_errors = a.ignore_input_errors;
   opt.evolution_interval = a.evolution_interval;
+  opt.record_evolution = !a.evolution.empty();  // only --evolution writes it
 
   IdentifyRequest req;
   req.options = opt;

@@ -18,6 +18,7 @@ struct ReproduceArgs {
   int starts = 8;
   std::string noise = "default";
   bool json = false;
+  bool full_logs = false;
 };
 
 void run(const ReproduceArgs& a) {
@@ -26,6 +27,7 @@ void run(const ReproduceArgs& a) {
   opt.trajectory = a.trajectory;
   opt.duration = a.duration;
   opt.design.starts = a.starts;
+  opt.full_logs = a.full_logs;
   if (a.noise == "default") opt.noise = true;
   else if (a.noise == "none") opt.noise = false;
   else throw std::invalid_argument(fmt::format("--noise {}: expected none or default", a.noise));
@@ -68,6 +70,9 @@ void register_reproduce(CLI::App& app) {
   sub->add_option("--noise", a->noise, "sensor noise of the virtual experiments: default or none")
       ->capture_default_str();
   sub->add_flag("--json", a->json, "print summary.json on stdout instead of the tables");
+  sub->add_flag("--full-logs", a->full_logs,
+                "also write the circle experiments' and the Table 4 re-flights' logs (flight_circle1..3.csv, "
+                "simulation_<set>.csv: ~70 MB more for 50 s flights)");
   sub->callback([a] { run(*a); });
 }
 

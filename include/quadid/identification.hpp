@@ -64,6 +64,12 @@ struct ProcessingOptions {
   /// (RegressionSignals::world_axes), for the blade-flapping and wind terms of
   /// the real-flight regression.
   bool keep_body_velocity = false;
+  /// Threads for the independent parts of the processing and of identify()
+  /// (the pre-filter's columns, the two regressions, the input checks):
+  /// 0 = two when the machine has two cores or more, 1 = one (e.g. inside a
+  /// pool that already keeps every core busy, as montecarlo does), 2 = two.
+  /// The results are the same bits whatever the value.
+  int threads = 0;
   void validate() const;
 };
 
@@ -238,6 +244,9 @@ struct IdentificationOptions {
   bool allow_rank_deficient = false;
   /// Spacing of the recorded evolution (s); 0 records every sample.
   double evolution_interval = 0.01;
+  /// false: leave IdentificationResult::evolution empty (it costs two 7x7
+  /// solves per recorded row; the estimates do not depend on it).
+  bool record_evolution = true;
   /// The real-flight regression's terms (extended.hpp). With any of them on, or
   /// with cutoffs of their own for the force and moment rows, LS and FMLS come
   /// from the real-flight regression; GD and FMGD stay the paper's model.

@@ -62,6 +62,9 @@ struct CsvReadOptions {
   /// false: keep only the `required` columns (the others are skipped unparsed,
   /// which saves time and memory on wide logs; the field count is still checked).
   bool keep_extra_columns = true;
+  /// Threads parsing the rows: 0 = two when the machine has two cores or more,
+  /// 1 = one, 2 = two. The result (and the first error reported) is the same.
+  int threads = 0;
 };
 
 /// Reads a flight log; throws InputError naming file, line and column on any

@@ -26,6 +26,11 @@ struct ReproduceOptions {
   IdentificationOptions identification{};     // window 10-50 s
   TimeWindow simulation_window{10.0, 50.0};   // Table 4
   TimeWindow error_window{0.0, 50.0};         // Tables 5-12
+  /// write_reproduction: also write the logs of the circle experiments and of
+  /// the Table 4 re-flights (8 x ~9 MB of CSV for 50 s flights). Without it the
+  /// folder keeps the identification experiment's log only (~14 MB in all);
+  /// summary.json and tables.md are the same either way (the page lists the files).
+  bool full_logs = false;
   void validate() const;
 };
 
@@ -60,8 +65,8 @@ std::string format_reproduction_tables(const Reproduction& r);
 
 /// Writes DIR: report.html (self-contained, SVG figures), tables.md, summary.json,
 /// trajectory.json, identification.json, evolution.csv, flight_identification.csv,
-/// flight_circle{1,2,3}.csv, simulation_<set>.csv. Creates DIR if needed; each
-/// file is written atomically.
+/// and with options.full_logs flight_circle{1,2,3}.csv and simulation_<set>.csv.
+/// Creates DIR if needed; each file is written atomically.
 void write_reproduction(const Reproduction& r, const std::filesystem::path& dir);
 
 /// The report page alone.

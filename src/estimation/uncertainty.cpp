@@ -27,6 +27,24 @@ double normal_quantile(double p) {
   return 0.5 * (lo + hi);
 }
 
+// Autocovariances of the series c (n values, mean removed) at the kLags lags
+// k, k+1, ...: out[l] = sum_i c[i] c[i + k + l] / n. One pass for the kLags
+// sums, each still summed in the order of i (the same bits as one lag at a
+// time); the kLags independent sums keep the processor's adders busy.
+constexpr int kLags = 8;
+void autocov_lags(const double* c, long n, long k, double out[kLags]) {
+  double s[kLags] = {};
+  const long full = std::max<long>(0, n - k - (kLags - 1));  // rows where every lag has a partner
+  for (long i = 0; i < full; ++i) {
+    const double a = c[i];
+    const double* b = c + i + k;
+    for (int l = 0; l < kLags; ++l) s[l] += a * b[l];
+  }
+  for (int l = 0; l < kLags; ++l)  // the last rows, for the shorter lags
+    for (long i = full; i + k + l < n; ++i) s[l] += c[i] * c[i + k + l];
+  for (int l = 0; l < kLags; ++l) out[l] = s[l] / static_cast<double>(n);
+}
+
 }  // namespace
 
 void UncertaintyOptions::validate() const {
@@ -80,11 +98,6 @@ LongRunCovariance long_run_covariance(const std::vector<double>& psi, int P, con
   mean /= static_cast<double>(n);
   for (long i = 0; i < n; ++i)
     for (int j = 0; j < P; ++j) x[at(i, j)] -= mean(j);
-  const auto autocov = [&](int j, long k) {
-    double s = 0.0;
-    for (long i = 0; i + k < n; ++i) s += x[at(i, j)] * x[at(i + k, j)];
-    return s / static_cast<double>(n);
-  };
 
   // Correlation time: Politis & White (2004): the smallest lag m after which
   // |rho(m + k)| < 2 sqrt(log10(n)/n) for k = 1..5, the largest over the
@@ -92,13 +105,21 @@ LongRunCovariance long_run_covariance(const std::vector<double>& psi, int P, con
   const double thr = 2.0 * std::sqrt(std::log10(static_cast<double>(n)) / static_cast<double>(n));
   constexpr long K = 5;
   const long lag_cap = std::max<long>(1, std::min<long>(opt.max_lag, n / 4));
+  // Each parameter's series contiguous (column-major copy), its lags computed
+  // kLags at a time as the search reaches them.
+  std::vector<double> col(static_cast<size_t>(n));
   long m_hat = 0;
   for (int j = 0; j < P; ++j) {
-    const double c0 = autocov(j, 0);
+    for (long i = 0; i < n; ++i) col[static_cast<size_t>(i)] = x[at(i, j)];
+    double ac[kLags];
+    autocov_lags(col.data(), n, 0, ac);
+    const double c0 = ac[0];
     if (!(c0 > 0.0)) continue;
+    long first = 0;  // ac holds lags first .. first + kLags - 1
     long run = 0, m = 0;
     for (long k = 1; k <= lag_cap; ++k) {
-      if (std::abs(autocov(j, k) / c0) < thr) {
+      if (k >= first + kLags) autocov_lags(col.data(), n, first = k, ac);
+      if (std::abs(ac[k - first] / c0) < thr) {
         if (++run == K) break;
       } else {
         run = 0;

@@ -5,11 +5,14 @@
 
 #include "quadid/extended.hpp"
 
+#include "../common/parallel.hpp"
+
 #include <fmt/format.h>
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 #include <cmath>
+#include <exception>
 #include <numbers>
 #include <stdexcept>
 #include <tuple>
@@ -22,9 +25,11 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 // Which samples of the window are recorded in the evolution.
 struct Recorder {
   Eigen::Index begin, end, stride;
+  bool enabled = true;
   Eigen::Index rows() const { return (end - 1 - begin) / stride + 1 + (((end - 1 - begin) % stride) ? 1 : 0); }
   // Row of sample k, or -1.
   Eigen::Index row(Eigen::Index k) const {
+    if (!enabled) return -1;
     const Eigen::Index j = k - begin;
     if (j % stride == 0) return j / stride;
     if (k == end - 1) return rows() - 1;
@@ -37,8 +42,11 @@ struct RunOutput {
   std::unique_ptr<GradientDescent> gd;
 };
 
+// Accumulates LS and runs GD over the regression, recording both in columns
+// ls_col.. and gd_col.. of the evolution (and the time in column 0 when asked:
+// the two regressions run at once and share the rows).
 RunOutput run(const Regression& reg, const Theta& init, const GradientDescentOptions& gdo, const Recorder& rec,
-              Eigen::MatrixXd& evo, Eigen::Index ls_col, Eigen::Index gd_col) {
+              Eigen::MatrixXd& evo, Eigen::Index ls_col, Eigen::Index gd_col, bool write_time) {
   RunOutput out;
   out.gd = std::make_unique<GradientDescent>(init, reg.T(), gdo);
   reg.for_each([&](Eigen::Index k, const Regressor4x7& G, const Vec4& Y) {
@@ -46,7 +54,7 @@ RunOutput run(const Regression& reg, const Theta& init, const GradientDescentOpt
     out.gd->step(G, Y);
     const Eigen::Index r = rec.row(k);
     if (r >= 0) {
-      evo(r, 0) = reg.time(k);
+      if (write_time) evo(r, 0) = reg.time(k);
       evo.row(r).segment<7>(ls_col) = out.acc.solve_quick().transpose();
       const Theta gd_now = out.gd->diverged() ? Theta::Constant(kNaN) : out.gd->theta();
       evo.row(r).segment<7>(gd_col) = gd_now.transpose();
@@ -135,11 +143,29 @@ IdentificationResult identify(const FlightLog& log, const IdentificationOptions&
   opt.validate();
   IdentificationResult res;
   std::vector<std::string> input_warnings;  // listed after the estimation's own warnings
+  // The input checks and the processing read the log independently: at once
+  // when two threads are allowed. A failed check is reported first, as if the
+  // processing had not started.
+  const bool two = detail::use_second_thread(opt.processing.threads);
+  std::shared_ptr<const RegressionSignals> sig;
+  std::exception_ptr processing_error;
+  detail::run_both(
+      two,
+      [&] {
+        if (!opt.input_checks) return;
+        InputCheckOptions ic;
+        ic.g = opt.processing.g;
+        ic.reference_mass = opt.reference.params.m;
+        res.input_findings = check_input(log, ic);
+      },
+      [&] {
+        try {
+          sig = process_log(log, opt.processing, &res.processing);
+        } catch (...) {
+          processing_error = std::current_exception();
+        }
+      });
   if (opt.input_checks) {
-    InputCheckOptions ic;
-    ic.g = opt.processing.g;
-    ic.reference_mass = opt.reference.params.m;
-    res.input_findings = check_input(log, ic);
     std::vector<std::string> errors;
     for (const auto& f : res.input_findings) {
       if (f.severity == Severity::Error) errors.push_back(fmt::format("{}: {} ({})", f.check, f.saw, f.action));
@@ -154,7 +180,7 @@ IdentificationResult identify(const FlightLog& log, const IdentificationOptions&
       for (const auto& e : errors) input_warnings.push_back("input check " + e + " (ignored)");
     }
   }
-  const auto sig = process_log(log, opt.processing, &res.processing);
+  if (processing_error) std::rethrow_exception(processing_error);
   const Regression std_reg(sig, RegressionModel::Standard, opt.window);
   const Regression filt_reg(sig, RegressionModel::Filtered, opt.window, opt.lambda, opt.gd_variant);
   res.window = std_reg.window();
@@ -168,25 +194,35 @@ IdentificationResult identify(const FlightLog& log, const IdentificationOptions&
   const double T = sig->T;
   const Eigen::Index stride =
       opt.evolution_interval <= 0.0 ? 1 : std::max<Eigen::Index>(1, std::llround(opt.evolution_interval / T));
-  const Recorder rec{std_reg.begin(), std_reg.end(), stride};
-  res.evolution.columns.push_back("t");
-  for (const char* set : {"LS", "GD", "FMLS", "FMGD"})
-    for (const char* p : kThetaNames) res.evolution.columns.push_back(fmt::format("{}_{}", set, p));
-  res.evolution.data.setConstant(rec.rows(), 29, kNaN);
-
-  RunOutput s = run(std_reg, res.gd_initial, opt.gd, rec, res.evolution.data, 1, 8);
-  RunOutput f = run(filt_reg, res.gd_initial, opt.gd, rec, res.evolution.data, 15, 22);
-
-  const double fs = res.processing.fs, f3 = res.processing.filter_f3db;
-  res.ls_standard = solve_least_squares(s.acc, prior, opt.ls, correlation_length(fs, f3, opt.lambda, false));
-  res.ls_filtered = solve_least_squares(f.acc, prior, opt.ls, correlation_length(fs, f3, opt.lambda, true));
-  // Second pass: the influence of each sample on the estimate, for the HAC
-  // covariance (docs/uncertainty.md).
-  for (auto [reg, sol] : {std::pair{&std_reg, &res.ls_standard}, std::pair{&filt_reg, &res.ls_filtered}}) {
-    InfluenceAccumulator infl(*sol);
-    reg->for_each([&](Eigen::Index, const Regressor4x7& G, const Vec4& Y) { infl.add(G, Y); });
-    attach_uncertainty(*sol, infl.finish(opt.uncertainty), prior, opt.ls);
+  const Recorder rec{std_reg.begin(), std_reg.end(), stride, opt.record_evolution};
+  if (opt.record_evolution) {
+    res.evolution.columns.push_back("t");
+    for (const char* set : {"LS", "GD", "FMLS", "FMGD"})
+      for (const char* p : kThetaNames) res.evolution.columns.push_back(fmt::format("{}_{}", set, p));
+    res.evolution.data.setConstant(rec.rows(), 29, kNaN);
   }
+
+  // The two regressions are independent until the tables: each runs LS and GD,
+  // solves, computes its HAC intervals and its physically consistent set, on
+  // its own thread when two are allowed.
+  const double fs = res.processing.fs, f3 = res.processing.filter_f3db;
+  RunOutput s, f;
+  PhysicalProjection pc_std, pc_filt;
+  auto chain = [&](const Regression& reg, RunOutput& out, LeastSquaresSolution& sol, PhysicalProjection& pc,
+                   Eigen::Index ls_col, Eigen::Index gd_col, bool filtered) {
+    out = run(reg, res.gd_initial, opt.gd, rec, res.evolution.data, ls_col, gd_col, !filtered);
+    sol = solve_least_squares(out.acc, prior, opt.ls, correlation_length(fs, f3, opt.lambda, filtered));
+    // Second pass: the influence of each sample on the estimate, for the HAC
+    // covariance (docs/uncertainty.md).
+    InfluenceAccumulator infl(sol);
+    reg.for_each([&](Eigen::Index, const Regressor4x7& G, const Vec4& Y) { infl.add(G, Y); });
+    attach_uncertainty(sol, infl.finish(opt.uncertainty), prior, opt.ls);
+    // The physically consistent set: the closest consistent Theta in the LS metric.
+    pc = closest_physical(sol, prior, opt.physical);
+  };
+  detail::run_both(
+      two, [&] { chain(std_reg, s, res.ls_standard, pc_std, 1, 8, false); },
+      [&] { chain(filt_reg, f, res.ls_filtered, pc_filt, 15, 22, true); });
   res.gd_step_gain_standard = s.gd->max_step_gain();
   res.gd_step_gain_filtered = f.gd->max_step_gain();
 
@@ -202,14 +238,12 @@ IdentificationResult identify(const FlightLog& log, const IdentificationOptions&
   res.estimates[1] = gd_estimate("GD", RegressionModel::Standard, *s.gd);
   res.estimates[2] = SetEstimate{"FMLS", RegressionModel::Filtered, true, res.ls_filtered.theta, true, "", {}};
   res.estimates[3] = gd_estimate("FMGD", RegressionModel::Filtered, *f.gd);
-  // Physically consistent sets: the closest consistent Theta in each LS metric.
-  for (const auto& [name, model, sol] : {std::tuple{"PC", RegressionModel::Standard, &res.ls_standard},
-                                         std::tuple{"FMPC", RegressionModel::Filtered, &res.ls_filtered}}) {
-    PhysicalProjection pr = closest_physical(*sol, prior, opt.physical);
-    SetEstimate e{name, model, true, pr.theta, pr.theta.allFinite(), "", {}};
-    if (!e.valid) e.note = fmt::format("{}: no consistent set ({})", name, pr.status);
+  for (auto [name, model, pr] : {std::tuple{"PC", RegressionModel::Standard, &pc_std},
+                                  std::tuple{"FMPC", RegressionModel::Filtered, &pc_filt}}) {
+    SetEstimate e{name, model, true, pr->theta, pr->theta.allFinite(), "", {}};
+    if (!e.valid) e.note = fmt::format("{}: no consistent set ({})", name, pr->status);
     res.physical_sets.push_back(e);
-    res.projections.push_back(std::move(pr));
+    res.projections.push_back(std::move(*pr));
   }
 
   if (opt.extended()) {
@@ -348,8 +382,10 @@ IdentificationResult identify(const FlightLog& log, const IdentificationOptions&
         v.push_back({res.estimates[static_cast<size_t>(i)].name, res.estimates[static_cast<size_t>(i)].params()});
     return v;
   };
-  res.errors_standard = prediction_error(std_reg.with_window(ew), sets_of(0, 1), opt.reference);
-  res.errors_filtered = prediction_error(filt_reg.with_window(ew), sets_of(2, 3), opt.reference);
+  const std::vector<NamedParams> std_sets = sets_of(0, 1), filt_sets = sets_of(2, 3);
+  detail::run_both(
+      two, [&] { res.errors_standard = prediction_error(std_reg.with_window(ew), std_sets, opt.reference); },
+      [&] { res.errors_filtered = prediction_error(filt_reg.with_window(ew), filt_sets, opt.reference); });
   res.warnings.insert(res.warnings.end(), input_warnings.begin(), input_warnings.end());
   res.recommended = recommend_set(res);
   return res;

@@ -6,6 +6,8 @@
 // that is 144 MB + 10 MB beside the log.
 #include "quadid/identification.hpp"
 
+#include "../common/parallel.hpp"
+
 #include <fmt/format.h>
 
 #include <cmath>
@@ -62,6 +64,8 @@ void ProcessingOptions::validate() const {
     throw std::invalid_argument(fmt::format("--g = {:g} m/s^2 must be finite and positive", g));
   if (!(period_tolerance >= 0.0 && period_tolerance < 0.5))
     throw std::invalid_argument(fmt::format("--period-tolerance = {:g} must be in [0, 0.5)", period_tolerance));
+  if (threads < 0 || threads > 2)
+    throw std::invalid_argument(fmt::format("ProcessingOptions: threads={} must be 0 (automatic), 1 or 2", threads));
   // lowpass is validated against the log's sample rate in process_log.
 }
 
@@ -132,22 +136,35 @@ std::shared_ptr<const RegressionSignals> process_log(const FlightLog& log, const
   out->edge = opt.exclude_edges ? settling : 0.0;
   auto& X = out->x;
   X.resize(n, RegressionSignals::kCols);
-  // Step 1: zero-phase low-pass (as scipy sosfiltfilt: odd padding, steady-state starts).
-  auto filter_into = [&](int log_col, int x_col) {
+  // Step 1: zero-phase low-pass (as scipy sosfiltfilt: odd padding, steady-state
+  // starts), and step 2: p_dot by eq. (33) from the filtered position. The
+  // columns are independent: rates and wrench on one thread, attitude and
+  // position on the other (each with its own filter work buffer).
+  auto filter_into = [&](signal::ZeroPhaseFilter& f, int log_col, int x_col) {
     X.col(x_col) = log.data.col(log_col);
-    zf.apply(X.col(x_col).data(), n);
+    f.apply(X.col(x_col).data(), n);
   };
-  for (int i = 0; i < 3; ++i) filter_into(col[7 + i], 1 + i);    // p q r
-  for (int i = 0; i < 4; ++i) filter_into(col[10 + i], 11 + i);  // Fz tau
-  filter_into(col[4], 8);                                          // phi
-  filter_into(col[5], 9);                                          // theta
-  X.col(10) = log.data.col(col[6]);                                // psi
-  if (opt.unwrap_yaw) unwrap(X.col(10).data(), n);
-  zf.apply(X.col(10).data(), n);
-  // Step 2: p_dot by eq. (33) from the filtered position.
-  for (int i = 0; i < 3; ++i) {
-    filter_into(col[1 + i], 5 + i);
-    signal::central_difference_inplace(X.col(5 + i).data(), n, T);
+  auto rates_and_wrench = [&] {
+    for (int i = 0; i < 3; ++i) filter_into(zf, col[7 + i], 1 + i);    // p q r
+    for (int i = 0; i < 4; ++i) filter_into(zf, col[10 + i], 11 + i);  // Fz tau
+  };
+  auto attitude_and_position = [&, T](signal::ZeroPhaseFilter& f) {
+    filter_into(f, col[4], 8);          // phi
+    filter_into(f, col[5], 9);          // theta
+    X.col(10) = log.data.col(col[6]);  // psi
+    if (opt.unwrap_yaw) unwrap(X.col(10).data(), n);
+    f.apply(X.col(10).data(), n);
+    for (int i = 0; i < 3; ++i) {
+      filter_into(f, col[1 + i], 5 + i);
+      signal::central_difference_inplace(X.col(5 + i).data(), n, T);
+    }
+  };
+  if (detail::use_second_thread(opt.threads)) {
+    signal::ZeroPhaseFilter zf2(opt.lowpass, fs);
+    detail::run_both(true, rates_and_wrench, [&] { attitude_and_position(zf2); });
+  } else {
+    rates_and_wrench();
+    attitude_and_position(zf);
   }
   // Step 3: v = R(eta)^T p_dot (eq. 3), then the Phi_b signals.
   const double g = opt.g;

@@ -5,8 +5,11 @@
 // carry 18-30 columns (~0.5-0.8 GB of text). The reader therefore never holds
 // the whole text: it reads fixed-size chunks and parses each complete line
 // straight into a column-major matrix that grows geometrically (x1.5) and is
-// shrunk in place at the end. Skipped columns are not parsed, only counted.
+// shrunk in place at the end. The lines of a chunk are parsed on two threads,
+// each half into its own rows. Skipped columns are not parsed, only counted.
 #include "quadid/io.hpp"
+
+#include "../common/parallel.hpp"
 
 #include <fmt/format.h>
 
@@ -105,8 +108,34 @@ class LineReader {
   }
   size_t line_no() const { return line_no_; }
 
+  // The complete lines now in the buffer (refilling it first when it holds
+  // none), in order; valid until the next call. False at the end of the file.
+  bool next_block(std::vector<std::string_view>& lines) {
+    lines.clear();
+    while (true) {
+      const char* b = buf_.get() + pos_;
+      const char* end = buf_.get() + len_;
+      while (b < end) {
+        const char* nl = static_cast<const char*>(std::memchr(b, '\n', static_cast<size_t>(end - b)));
+        if (!nl) {
+          if (!eof_) break;  // an incomplete line: the next block has it whole
+          nl = end;
+        }
+        std::string_view line(b, static_cast<size_t>(nl - b));
+        if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+        if (++line_no_ == 1 && line.substr(0, 3) == "\xEF\xBB\xBF") line.remove_prefix(3);  // UTF-8 BOM
+        lines.push_back(line);
+        b = nl < end ? nl + 1 : end;
+      }
+      pos_ = static_cast<size_t>(b - buf_.get());
+      if (!lines.empty()) return true;
+      if (eof_) return false;
+      refill();
+    }
+  }
+
  private:
-  static constexpr size_t kChunk = size_t{1} << 18;
+  static constexpr size_t kChunk = size_t{1} << 20;
 
   void refill() {
     // Keep the incomplete tail line; grow the buffer only for a line longer than it.
@@ -152,10 +181,13 @@ class ColumnStore {
     m_.swap(bigger);
     cap_ = cap;
   }
-  // Pointer to element (row, 0) of a new row; column j is at offset j * capacity().
-  double* new_row() {
-    if (rows_ == cap_) reserve(std::max<Eigen::Index>(1024, cap_ + cap_ / 2));
-    return m_.data() + rows_++;
+  // Appends `count` rows and returns a pointer to element (first new row, 0);
+  // column j is at offset j * capacity().
+  double* add_rows(Eigen::Index count) {
+    if (rows_ + count > cap_) reserve(std::max<Eigen::Index>({1024, cap_ + cap_ / 2, rows_ + count}));
+    double* p = m_.data() + rows_;
+    rows_ += count;
+    return p;
   }
   Eigen::MatrixXd take() {
     // Pack column j from offset j*cap to j*rows (never overlapping a later
@@ -204,6 +236,8 @@ FlightLog read_flight_log(const std::filesystem::path& path, const CsvReadOption
   if (!(opt.period_tolerance >= 0.0 && opt.period_tolerance < 0.5))
     throw std::invalid_argument(
         fmt::format("CsvReadOptions: period_tolerance={} must be in [0, 0.5)", opt.period_tolerance));
+  if (opt.threads < 0 || opt.threads > 2)
+    throw std::invalid_argument(fmt::format("CsvReadOptions: threads={} must be 0 (automatic), 1 or 2", opt.threads));
   LineReader in(path);
   FlightLog log;
 
@@ -284,14 +318,8 @@ FlightLog read_flight_log(const std::filesystem::path& path, const CsvReadOption
   }
   const size_t nkeep = log.columns.size();
 
-  ColumnStore store(static_cast<Eigen::Index>(nkeep));
-  RowLines row_lines;
-  while (in.next(line)) {
-    if (trim(line).empty() || line.front() == '#') continue;
-    const size_t line_no = in.line_no();
-    row_lines.add(static_cast<size_t>(store.rows()), line_no);
-    double* row = store.new_row();
-    const Eigen::Index stride = store.capacity();
+  // One data row into row[slot * stride]; throws InputError naming the line.
+  auto parse_row = [&](std::string_view line, size_t line_no, double* row, Eigen::Index stride) {
     const char* q = line.data();
     const char* le = q + line.size();
     for (size_t c = 0; c < nfile; ++c) {
@@ -327,6 +355,44 @@ FlightLog read_flight_log(const std::filesystem::path& path, const CsvReadOption
       if (more && c + 1 == nfile)
         throw InputError(fmt::format("{}:{}: row has more than {} fields", file, line_no, nfile));
       q = field_end + 1;
+    }
+  };
+
+  // The rows, a buffer's worth of lines at a time: the data lines are picked
+  // out (blank and comment lines skipped) and given their rows, then parsed,
+  // the first half on a second thread when allowed. Each half stops at its
+  // first bad line; the first half's error is the earlier one.
+  ColumnStore store(static_cast<Eigen::Index>(nkeep));
+  const bool two = detail::use_second_thread(opt.threads);
+  constexpr size_t kParallelLines = 4096;  // below this a second thread costs more than it saves
+  RowLines row_lines;
+  std::vector<std::string_view> block;
+  std::vector<size_t> data_lines;  // indices into block
+  while (true) {
+    const size_t first_line_no = in.line_no() + 1;
+    if (!in.next_block(block)) break;
+    data_lines.clear();
+    for (size_t i = 0; i < block.size(); ++i) {
+      const std::string_view l = block[i];
+      if (trim(l).empty() || l.front() == '#') continue;
+      row_lines.add(static_cast<size_t>(store.rows()) + data_lines.size(), first_line_no + i);
+      data_lines.push_back(i);
+    }
+    if (data_lines.empty()) continue;
+    const Eigen::Index count = static_cast<Eigen::Index>(data_lines.size());
+    double* base = store.add_rows(count);
+    const Eigen::Index stride = store.capacity();
+    auto parse_range = [&](size_t a, size_t b) {
+      for (size_t r = a; r < b; ++r) {
+        const size_t i = data_lines[r];
+        parse_row(block[i], first_line_no + i, base + static_cast<Eigen::Index>(r), stride);
+      }
+    };
+    if (two && data_lines.size() >= kParallelLines) {
+      const size_t half = data_lines.size() / 2;
+      detail::run_both(true, [&] { parse_range(0, half); }, [&] { parse_range(half, data_lines.size()); });
+    } else {
+      parse_range(0, data_lines.size());
     }
   }
   const auto nrow = store.rows();

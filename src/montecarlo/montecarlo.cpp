@@ -26,7 +26,7 @@ MonteCarloRun fly(const MonteCarloOptions& o, const Trajectory& traj, int i) {
     so.record_truth = false;
     const SimulationResult sim = simulate(traj, so);
     IdentificationOptions io = o.identification;
-    io.evolution_interval = std::max(io.evolution_interval, 1.0);  // not used here: keep it small
+    io.record_evolution = false;  // not used here
     const IdentificationResult id = identify(sim.log, io);
     for (const auto* e : id.all_sets()) {
       run.sets.push_back(e->name);
@@ -137,11 +137,14 @@ MonteCarloResult run_montecarlo(const MonteCarloOptions& options, const std::fun
   const int hw = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   res.threads = std::min(options.threads > 0 ? options.threads : hw, options.runs);
   res.runs.resize(static_cast<size_t>(options.runs));
+  // The pool keeps the cores busy: each identification then runs on one thread.
+  MonteCarloOptions per_run = options;
+  if (res.threads > 1) per_run.identification.processing.threads = 1;
   const auto t0 = std::chrono::steady_clock::now();
   std::atomic<int> next{0}, done{0};
   auto worker = [&] {
     for (int i = next++; i < options.runs; i = next++) {
-      res.runs[static_cast<size_t>(i)] = fly(options, *traj, i);
+      res.runs[static_cast<size_t>(i)] = fly(per_run, *traj, i);
       const int d = ++done;
       if (progress) progress(d, options.runs);
     }

@@ -510,9 +510,12 @@ std::string reproduction_html(const Reproduction& r) {
         "<li><code>trajectory.json</code>: the excitation trajectory (docs/file-formats.md)</li>"
         "<li><code>identification.json</code>: the identification result (estimates.LS/GD/FMLS/FMGD)</li>"
         "<li><code>evolution.csv</code>: the estimates over time (Figs. 4-5)</li>"
-        "<li><code>flight_identification.csv</code>, <code>flight_circle1..3.csv</code>: the flight logs</li>"
-        "<li><code>simulation_&lt;set&gt;.csv</code>: the re-flights of Table 4</li>"
-        "<li><code>tables.md</code>: Tables 2-12 in Markdown</li></ul>\n");
+        "<li><code>flight_identification.csv</code>: the identification experiment's flight log</li>"
+        "<li><code>tables.md</code>: Tables 2-12 in Markdown</li>");
+  if (r.options.full_logs)
+    d.raw("<li><code>flight_circle1..3.csv</code>: the circle experiments' flight logs</li>"
+          "<li><code>simulation_&lt;set&gt;.csv</code>: the re-flights of Table 4</li>");
+  d.raw("</ul>\n");
 
   d.heading("6. Conclusions");
   d.raw(conclusions_html(r));
@@ -563,11 +566,14 @@ void write_reproduction(const Reproduction& r, const std::filesystem::path& dir)
   write_file_atomic(dir / "identification.json", to_json(r.identification).dump(2) + "\n");
   write_file_atomic(dir / "evolution.csv", format_evolution_csv(r.identification.evolution));
   write_flight_log(r.flight.log, dir / "flight_identification.csv");
-  for (const auto& c : r.circles) write_flight_log(c.log, dir / fmt::format("flight_{}.csv", c.name));
-  std::vector<std::string> names{r.table4.reference.name};
-  for (const auto& row : r.table4.rows) names.push_back(row.name);
-  for (size_t i = 0; i < r.table4.logs.size() && i < names.size(); ++i)
-    if (r.table4.logs[i].rows() > 0) write_flight_log(r.table4.logs[i], dir / fmt::format("simulation_{}.csv", names[i]));
+  if (r.options.full_logs) {
+    for (const auto& c : r.circles) write_flight_log(c.log, dir / fmt::format("flight_{}.csv", c.name));
+    std::vector<std::string> names{r.table4.reference.name};
+    for (const auto& row : r.table4.rows) names.push_back(row.name);
+    for (size_t i = 0; i < r.table4.logs.size() && i < names.size(); ++i)
+      if (r.table4.logs[i].rows() > 0)
+        write_flight_log(r.table4.logs[i], dir / fmt::format("simulation_{}.csv", names[i]));
+  }
   write_file_atomic(dir / "tables.md", md);
   write_file_atomic(dir / "summary.json", summary.dump(2) + "\n");
   write_file_atomic(dir / "report.html", reproduction_html(r));  // last: its presence means the folder is complete

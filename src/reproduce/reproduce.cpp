@@ -1,8 +1,11 @@
 #include "quadid/reproduce.hpp"
 
+#include "../common/parallel.hpp"
+
 #include <fmt/format.h>
 
 #include <chrono>
+#include <mutex>
 
 namespace quadid {
 
@@ -38,7 +41,12 @@ TimeWindow fit(const TimeWindow& w, double duration) {
 
 Reproduction reproduce(const ReproduceOptions& opt_in, const ReproduceProgress& progress) {
   const auto t_start = std::chrono::steady_clock::now();
-  auto say = [&](const std::string& s) { if (progress) progress(s); };
+  std::mutex say_mutex;  // flights run on two threads: one message at a time
+  auto say = [&](const std::string& s) {
+    if (!progress) return;
+    const std::lock_guard<std::mutex> lock(say_mutex);
+    progress(s);
+  };
   ReproduceOptions opt = opt_in;
   opt.design.seed = opt.seed;
   opt.identification.window = fit(opt.identification.window, opt.duration);
@@ -78,40 +86,49 @@ Reproduction reproduce(const ReproduceOptions& opt_in, const ReproduceProgress& 
   say(fmt::format("flying the {:g} s identification experiment...", opt.duration));
   r.flight = simulate(r.trajectory, sim);
 
-  // 3. Identification (section II-C, II-D): four sets.
-  say("identifying (LS, GD, FMLS, FMGD)...");
-  r.identification = identify(r.flight.log, opt.identification);
-  const auto sets = r.sets();
+  // 3. Identification (section II-C, II-D): four sets, then 4. validation on
+  // the identification flight: Table 4 (re-fly with each set). Meanwhile (on a
+  // second thread when the machine has one) 5. the circle experiments 1-3 of
+  // section IV-C are flown; each flight depends on its seed alone, so the logs
+  // are the same bits either way.
   const NamedParams nom{"nom", opt.nominal};
+  std::vector<NamedParams> sets;
+  r.circles.resize(3);
+  detail::run_both(
+      detail::use_second_thread(opt.identification.processing.threads),
+      [&] {
+        say("identifying (LS, GD, FMLS, FMGD)...");
+        r.identification = identify(r.flight.log, opt.identification);
+        sets = r.sets();
+        say("validating by simulation (Table 4)...");
+        SimulationComparisonOptions sco;
+        sco.window = opt.simulation_window;
+        sco.keep_logs = true;
+        SimulationOptions base = sim;
+        base.record_truth = false;
+        r.table4 = compare_simulations(r.flight.log, r.trajectory, base, sets, nom, sco);
+      },
+      [&] {
+        for (int k = 1; k <= 3; ++k) {
+          const CircleTrajectory c = CircleTrajectory::experiment(k);
+          say(fmt::format("flying circle experiment {} ({})...", k, c.describe()));
+          SimulationOptions so = sim;
+          so.sensors.seed = opt.seed + static_cast<std::uint64_t>(k);
+          so.record_truth = false;
+          ValidationFlight& f = r.circles[static_cast<size_t>(k - 1)];
+          f.name = fmt::format("circle{}", k);
+          f.describe = c.describe();
+          f.log = simulate(c, so).log;
+        }
+      });
 
-  // 4. Validation on the identification flight: Table 4 (re-fly with each set).
-  say("validating by simulation (Table 4)...");
-  SimulationComparisonOptions sco;
-  sco.window = opt.simulation_window;
-  sco.keep_logs = true;
-  SimulationOptions base = sim;
-  base.record_truth = false;
-  r.table4 = compare_simulations(r.flight.log, r.trajectory, base, sets, nom, sco);
-
-  // 5. Validation on circle experiments 1-3 (section IV-C): Tables 7-12.
+  // 5. Validation on circle experiments 1-3: Tables 7-12.
   PredictionValidationOptions pvo;
   pvo.processing = opt.identification.processing;
   pvo.lambda = opt.identification.lambda;
   pvo.gd_variant = opt.identification.gd_variant;
   pvo.window = opt.error_window;
-  for (int k = 1; k <= 3; ++k) {
-    const CircleTrajectory c = CircleTrajectory::experiment(k);
-    say(fmt::format("flying circle experiment {} ({})...", k, c.describe()));
-    SimulationOptions so = sim;
-    so.sensors.seed = opt.seed + static_cast<std::uint64_t>(k);
-    so.record_truth = false;
-    ValidationFlight f;
-    f.name = fmt::format("circle{}", k);
-    f.describe = c.describe();
-    f.log = simulate(c, so).log;
-    f.errors = validate_prediction(f.log, sets, nom, pvo);
-    r.circles.push_back(std::move(f));
-  }
+  for (ValidationFlight& f : r.circles) f.errors = validate_prediction(f.log, sets, nom, pvo);
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
   say(fmt::format("done in {:.1f} s", r.seconds));
   return r;
