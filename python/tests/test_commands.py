@@ -52,7 +52,7 @@ def test_design_equals_the_command_line():
 
 
 def test_design_without_a_feasible_start_raises_as_the_command_line():
-    args = dict(starts=1, max_evals=15, seed=3, harmonics=2)  # stops before meeting every limit
+    args = dict(starts=1, max_evals=3, seed=3, harmonics=2)  # stops before meeting every limit
     r = run_cli("design", *design_cli_args(args), "--quiet", check=False)
     assert r.returncode == 1 and "no start met every limit" in r.stderr
     with pytest.raises(RuntimeError) as e:
