@@ -46,7 +46,7 @@ def drop_times(j):
 
 
 def test_design_equals_the_command_line():
-    args = dict(starts=1, max_evals=40, seed=1, harmonics=3)  # feasible in ~1 s
+    args = dict(starts=1, max_evals=60, seed=1, harmonics=3)  # feasible in ~1 s
     cli = cli_json("design", *design_cli_args(args), "--quiet")
     assert_same(drop_times(quadid.design(**args)), drop_times(cli), 1e-9)
 
