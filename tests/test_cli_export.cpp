@@ -52,7 +52,7 @@ TEST_F(CliTest, CheckTrajectoryPrintsThePredictedPrecision) {
 
 TEST_F(CliTest, DesignExportsTheFlightItDesigned) {
   // A small, fast design (as python/tests/test_commands.py's) with its export.
-  auto r = run("design --starts 1 --max-evals 40 --seed 1 --harmonics 3 --quiet --no-precision -o " + path("t.json") +
+  auto r = run("design --starts 1 --max-evals 60 --seed 1 --harmonics 3 --quiet --no-precision -o " + path("t.json") +
                " --export " + path("t.csv") + " --export-rate 10");
   ASSERT_EQ(r.rc, 0) << r.err;
   ASSERT_TRUE(fs::exists(path("t.json")));

@@ -3,6 +3,11 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
+#include <complex>
+#include <random>
+#include <vector>
+
 using namespace quadid;
 
 namespace {
@@ -124,5 +129,87 @@ TEST(Reference, DerivativesMatchFiniteDifferences) {
       // Paper's forms: v_dot = R^T (p_ddot - R_dot v) = R^T p_ddot - omega x v.
       EXPECT_LT((r.v_dot - (rotation(r.eta).transpose() * r.p_ddot - r.omega.cross(r.v))).norm(), 1e-12);
     }
+  }
+}
+
+// dual.hpp, the one forward-mode type: gradients (Dual<N>) and time jets
+// (nested duals) against complex-step derivatives, which are exact to
+// rounding without subtractive cancellation (Im f(x + i h) / h with h = 1e-30),
+// so they stay exact at near-degenerate points too. Tolerance: 1e-11 relative
+// to 1 + |derivative|, a few hundred ulps of the larger derivatives there.
+namespace {
+
+template <class T> T dual_test_function(const T& x, const T& y) {
+  using std::atan;
+  using std::cos;
+  using std::sin;
+  return atan((cos(x) * y) / (x * y + 0.3)) + sin(x) * y - x / y;
+}
+
+using Cplx = std::complex<double>;
+constexpr double kStep = 1e-30;
+constexpr double kDualTol = 1e-11;
+// Values: a dual divides by multiplying with the reciprocal, plain doubles
+// divide directly; the two differ by a few ulps, amplified by the condition
+// of the near-degenerate points (atan argument ~1e4): 1e-13.
+constexpr double kValueTol = 1e-13;
+
+// Points: random, and near-degenerate ones (denominator x y + 0.3 about 1e-4,
+// so the atan argument is ~1e4; y small; sin and cos at their extrema).
+std::vector<std::array<double, 2>> dual_test_points() {
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> U(-2.0, 2.0);
+  std::vector<std::array<double, 2>> pts;
+  for (int i = 0; i < 50; ++i) {
+    const double y = U(rng);
+    pts.push_back({U(rng), std::abs(y) < 0.05 ? 0.5 : y});
+  }
+  pts.push_back({-0.3 / 1.7 + 1e-4, 1.7});  // x y + 0.3 = 1.7e-4
+  pts.push_back({0.6, -0.3 / 0.6 - 2e-4});  // x y + 0.3 = -1.2e-4
+  pts.push_back({0.2, 1e-3});               // x / y = 200
+  pts.push_back({M_PI / 2, 0.8});
+  pts.push_back({M_PI, -0.8});
+  return pts;
+}
+
+}  // namespace
+
+TEST(Dual, GradientMatchesComplexStep) {
+  for (const auto& [x, y] : dual_test_points()) {
+    using D = Dual<2>;
+    const D f = dual_test_function(D::seed(x, 0), D::seed(y, 1));
+    const double f0 = dual_test_function(x, y);
+    EXPECT_NEAR(f.v, f0, kValueTol * (1 + std::abs(f0)));
+    const double fx = dual_test_function(Cplx(x, kStep), Cplx(y, 0.0)).imag() / kStep;
+    const double fy = dual_test_function(Cplx(x, 0.0), Cplx(y, kStep)).imag() / kStep;
+    EXPECT_NEAR(f.d[0], fx, kDualTol * (1 + std::abs(fx))) << "x=" << x << " y=" << y;
+    EXPECT_NEAR(f.d[1], fy, kDualTol * (1 + std::abs(fy))) << "x=" << x << " y=" << y;
+  }
+}
+
+TEST(Dual, TimeJetsMatchComplexStep) {
+  // Along the path (x, y)(t) = (x0 + 0.1 sin 1.3 t, y0 + 0.2 cos 0.9 t) through each
+  // point at t = 0.4: df/dt from TimeJet2 against the complex step of f, and
+  // d2f/dt2 against the complex step of TimeJet1's df/dt (itself analytic in t).
+  for (const auto& [px, py] : dual_test_points()) {
+    const double t0 = 0.4;
+    const double x0 = px - 0.1 * std::sin(1.3 * t0), y0 = py - 0.2 * std::cos(0.9 * t0);
+    auto path = [&](auto t) {
+      using std::cos;
+      using std::sin;
+      using T = decltype(t);
+      return std::array<T, 6>{x0 + 0.1 * sin(1.3 * t), 0.13 * cos(1.3 * t), -0.169 * sin(1.3 * t),
+                              y0 + 0.2 * cos(0.9 * t), -0.18 * sin(0.9 * t), -0.162 * cos(0.9 * t)};
+    };
+    const auto p = path(t0);
+    const TimeJet2<> f2 = dual_test_function(time_jet(p[0], p[1], p[2]), time_jet(p[3], p[4], p[5]));
+    const auto pc = path(Cplx(t0, kStep));
+    const double df = dual_test_function(pc[0], pc[3]).imag() / kStep;
+    const double d2f = dual_test_function(time_jet(pc[0], pc[1]), time_jet(pc[3], pc[4])).d[0].imag() / kStep;
+    const double f0 = dual_test_function(p[0], p[3]);
+    EXPECT_NEAR(f2.v.v, f0, kValueTol * (1 + std::abs(f0)));
+    EXPECT_NEAR(f2.v.d[0], f2.d[0].v, kValueTol * (1 + std::abs(df)));  // both nesting levels carry df/dt
+    EXPECT_NEAR(f2.v.d[0], df, kDualTol * (1 + std::abs(df))) << "x=" << px << " y=" << py;
+    EXPECT_NEAR(f2.d[0].d[0], d2f, kDualTol * (1 + std::abs(d2f))) << "x=" << px << " y=" << py;
   }
 }

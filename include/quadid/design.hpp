@@ -150,7 +150,7 @@ struct DesignOptions {
   int threads = 0;                     // 0 = min(starts, hardware threads)
   double grid_dt = 0.05;               // s, criterion samples while optimizing (spectrally accurate, see docs)
   double check_dt = 0.001;             // s, grid on which every limit is imposed and checked
-  double cell_dt = 0.25;               // s, one constraint per limit, sign and cell: the worst check_dt instant in it
+  double cell_dt = 0.5;                // s, one constraint per limit, sign and cell: the worst check_dt instant in it
 
   double cond_dt = 0.002;              // s, T of eq. (20) for the reported criteria
   double margin = 1e-5;                // relative tightening of every limit while optimizing

@@ -3,7 +3,7 @@
 // reference (eqs. 26-27 and the kinematic relations below eq. 20).
 #pragma once
 
-#include "quadid/jet.hpp"
+#include "quadid/dual.hpp"
 #include "quadid/model.hpp"
 
 #include <array>
@@ -93,7 +93,7 @@ std::vector<std::string> builtin_trajectory_names();
 ///   phi   = atan(cos(theta) (fx sin psi - fy cos psi) / fz),  eqs. (27), (30)
 /// with f = p_ddot + g e_z for the reference (eqs. 26-27) and f = f_p for the
 /// controller's commands (eqs. 29-30). Returns {phi, theta}. Needs fz > 0. Any
-/// scalar with sin, cos, atan (double, Jet2, design's dual numbers): the one
+/// scalar with sin, cos, atan (double or a Dual of dual.hpp, nested or not): the one
 /// implementation of these formulas.
 template <class S>
 std::array<S, 2> tilt_from_force(const S& fx, const S& fy, const S& fz, const S& cpsi, const S& spsi) {
@@ -116,51 +116,52 @@ struct ReferenceT {
 using Reference = ReferenceT<double>;
 
 /// Desired roll/pitch of eqs. (26)-(27) and the kinematics below eq. (20),
-/// propagated exactly with second-order jets. `d` holds the flat outputs in
-/// the layout of FlatOutput (row = axis, column = derivative order).
+/// with their time derivatives propagated exactly by time jets (dual.hpp):
+/// second order for the angles (eta_ddot needs the snap), first order for the
+/// body velocity and rates. `d` holds the flat outputs in the layout of
+/// FlatOutput (row = axis, column = derivative order); S is double, or a Dual
+/// for derivatives with respect to the flat outputs themselves.
 /// Requires z_ddot + g > 0 (the paper's z_ddot >= -9.81 constraint).
 template <class S>
 ReferenceT<S> reference_from_flat(const Eigen::Matrix<S, 4, 5>& d, double g = kDefaultGravity) {
-  using J = Jet2<S>;
+  using J1 = TimeJet1<S>;
   ReferenceT<S> ref;
-  // Accelerations as jets (value, jerk, snap) and psi as a jet.
-  const J ax(d(0, 2), d(0, 3), d(0, 4));
-  const J ay(d(1, 2), d(1, 3), d(1, 4));
-  const J az(d(2, 2) + S(g), d(2, 3), d(2, 4));
-  const J psi(d(3, 0), d(3, 1), d(3, 2));
-  const J cpsi = cos(psi), spsi = sin(psi);
+  // Force direction (acceleration + g e_z, with jerk and snap) and yaw as second-order jets.
+  const auto ax = time_jet<S>(d(0, 2), d(0, 3), d(0, 4));
+  const auto ay = time_jet<S>(d(1, 2), d(1, 3), d(1, 4));
+  const auto az = time_jet<S>(d(2, 2) + g, d(2, 3), d(2, 4));
+  const auto psi = time_jet<S>(d(3, 0), d(3, 1), d(3, 2));
+  const auto [spsi, cpsi] = sin_cos(psi);
   const auto [phi, theta] = tilt_from_force(ax, ay, az, cpsi, spsi);  // eqs. (26)-(27)
 
-  const J eta_j[3] = {phi, theta, psi};
+  // eta_j.v is the first-order jet (angle, rate); eta_j.d[0] is (rate, acceleration).
+  const TimeJet2<S>* eta_j[3] = {&phi, &theta, &psi};
   for (int i = 0; i < 3; ++i) {
     ref.p(i) = d(i, 0);
     ref.p_dot(i) = d(i, 1);
     ref.p_ddot(i) = d(i, 2);
-    ref.eta(i) = eta_j[i].v;
-    ref.eta_dot(i) = eta_j[i].d1;
-    ref.eta_ddot(i) = eta_j[i].d2;
+    ref.eta(i) = eta_j[i]->v.v;
+    ref.eta_dot(i) = eta_j[i]->d[0].v;
+    ref.eta_ddot(i) = eta_j[i]->d[0].d[0];
   }
-  // R(eta)^T and W(eta)^-1 as jets, entry by entry (same formulas as model.hpp).
-  const J cf = cos(phi), sf = sin(phi), ct = cos(theta), st = sin(theta);
-  const J Rt[3][3] = {{ct * cpsi, ct * spsi, -st},
-                      {st * cpsi * sf - spsi * cf, st * spsi * sf + cpsi * cf, ct * sf},
-                      {st * cpsi * cf + spsi * sf, st * spsi * cf - cpsi * sf, ct * cf}};
-  const J Wi[3][3] = {{J::constant(S(1)), J::constant(S(0)), -st},
-                      {J::constant(S(0)), cf, ct * sf},
-                      {J::constant(S(0)), -sf, ct * cf}};
-  const J pdot[3] = {J(d(0, 1), d(0, 2), d(0, 3)), J(d(1, 1), d(1, 2), d(1, 3)),
-                     J(d(2, 1), d(2, 2), d(2, 3))};
-  const J etadot[3] = {phi.derivative(), theta.derivative(), psi.derivative()};
+  // R(eta)^T and W(eta)^-1 need only first-order jets (same formulas as model.hpp).
+  const auto [sf, cf] = sin_cos(phi.v);
+  const auto [st, ct] = sin_cos(theta.v);
+  const J1 &cp = cpsi.v, &sp = spsi.v;
+  const J1 Rt[3][3] = {{ct * cp, ct * sp, -st},
+                       {st * cp * sf - sp * cf, st * sp * sf + cp * cf, ct * sf},
+                       {st * cp * cf + sp * sf, st * sp * cf - cp * sf, ct * cf}};
+  const J1 pdot[3] = {time_jet<S>(d(0, 1), d(0, 2)), time_jet<S>(d(1, 1), d(1, 2)), time_jet<S>(d(2, 1), d(2, 2))};
+  const J1 &phid = phi.d[0], &thetad = theta.d[0], &psid = psi.d[0];
+  const J1 w[3] = {phid - st * psid,                 // omega_d = W^-1 eta_dot   (eq. 4)
+                   cf * thetad + (ct * sf) * psid,
+                   (ct * cf) * psid - sf * thetad};
   for (int i = 0; i < 3; ++i) {
-    J vi = J::constant(S(0)), wi = J::constant(S(0));
-    for (int k = 0; k < 3; ++k) {
-      vi = vi + Rt[i][k] * pdot[k];     // v_d = R^T p_dot          (eq. 3)
-      wi = wi + Wi[i][k] * etadot[k];   // omega_d = W^-1 eta_dot   (eq. 4)
-    }
+    const J1 vi = Rt[i][0] * pdot[0] + Rt[i][1] * pdot[1] + Rt[i][2] * pdot[2];  // v_d = R^T p_dot (eq. 3)
     ref.v(i) = vi.v;
-    ref.v_dot(i) = vi.d1;
-    ref.omega(i) = wi.v;
-    ref.omega_dot(i) = wi.d1;
+    ref.v_dot(i) = vi.d[0];
+    ref.omega(i) = w[i].v;
+    ref.omega_dot(i) = w[i].d[0];
   }
   return ref;
 }

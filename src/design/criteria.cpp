@@ -17,7 +17,6 @@
 
 namespace quadid {
 
-using design_detail::Dual;
 using design_detail::kInputs;
 
 std::string_view criterion_name(Criterion c) {

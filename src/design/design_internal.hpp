@@ -1,10 +1,11 @@
-// Private to the design module: a forward-mode dual number for exact
-// gradients through the templated reference map and regressor, and the list
-// of limit "families" (one inequality of eqs. 22-27 each) shared by the
-// checker and the optimizer.
+// Private to the design module: exact gradients through the templated
+// reference map and regressor (with the Dual of dual.hpp), and the list of
+// limit "families" (one inequality of eqs. 22-27 each) shared by the checker
+// and the optimizer.
 #pragma once
 
 #include "quadid/design.hpp"
+#include "quadid/dual.hpp"
 
 #include <Eigen/Core>
 #include <array>
@@ -13,70 +14,6 @@
 #include <vector>
 
 namespace quadid::design_detail {
-
-/// Value plus gradient with respect to N seeded inputs. Plain loops over a
-/// fixed array: the compiler vectorizes them, and unlike Eigen's
-/// AutoDiffScalar it has the atan that eqs. (26)-(27) need.
-template <int N>
-struct Dual {
-  double v = 0.0;
-  std::array<double, N> d{};
-
-  Dual() = default;
-  Dual(double x) : v(x) {}  // NOLINT: constants mix freely with duals
-  static Dual seed(double x, int i) {
-    Dual r(x);
-    r.d[static_cast<size_t>(i)] = 1.0;
-    return r;
-  }
-  // f(a) with f'(a.v) = fp.
-  static Dual chain(const Dual& a, double f, double fp) {
-    Dual r(f);
-    for (int i = 0; i < N; ++i) r.d[i] = fp * a.d[i];
-    return r;
-  }
-};
-
-template <int N> Dual<N> operator+(const Dual<N>& a, const Dual<N>& b) {
-  Dual<N> r(a.v + b.v);
-  for (int i = 0; i < N; ++i) r.d[i] = a.d[i] + b.d[i];
-  return r;
-}
-template <int N> Dual<N> operator-(const Dual<N>& a, const Dual<N>& b) {
-  Dual<N> r(a.v - b.v);
-  for (int i = 0; i < N; ++i) r.d[i] = a.d[i] - b.d[i];
-  return r;
-}
-template <int N> Dual<N> operator-(const Dual<N>& a) {
-  Dual<N> r(-a.v);
-  for (int i = 0; i < N; ++i) r.d[i] = -a.d[i];
-  return r;
-}
-template <int N> Dual<N> operator*(const Dual<N>& a, const Dual<N>& b) {
-  Dual<N> r(a.v * b.v);
-  for (int i = 0; i < N; ++i) r.d[i] = a.d[i] * b.v + a.v * b.d[i];
-  return r;
-}
-template <int N> Dual<N> operator/(const Dual<N>& a, const Dual<N>& b) {
-  const double ib = 1.0 / b.v, q = a.v * ib;
-  Dual<N> r(q);
-  for (int i = 0; i < N; ++i) r.d[i] = (a.d[i] - q * b.d[i]) * ib;
-  return r;
-}
-template <int N> Dual<N> operator+(const Dual<N>& a, double c) { return Dual<N>::chain(a, a.v + c, 1.0); }
-template <int N> Dual<N> operator+(double c, const Dual<N>& a) { return a + c; }
-template <int N> Dual<N> operator-(const Dual<N>& a, double c) { return a + (-c); }
-template <int N> Dual<N> operator-(double c, const Dual<N>& a) { return Dual<N>::chain(a, c - a.v, -1.0); }
-template <int N> Dual<N> operator*(const Dual<N>& a, double c) { return Dual<N>::chain(a, a.v * c, c); }
-template <int N> Dual<N> operator*(double c, const Dual<N>& a) { return a * c; }
-template <int N> Dual<N> operator/(const Dual<N>& a, double c) { return a * (1.0 / c); }
-template <int N> Dual<N>& operator+=(Dual<N>& a, const Dual<N>& b) { return a = a + b; }
-template <int N> Dual<N>& operator-=(Dual<N>& a, const Dual<N>& b) { return a = a - b; }
-template <int N> Dual<N>& operator*=(Dual<N>& a, const Dual<N>& b) { return a = a * b; }
-
-template <int N> Dual<N> sin(const Dual<N>& a) { return Dual<N>::chain(a, std::sin(a.v), std::cos(a.v)); }
-template <int N> Dual<N> cos(const Dual<N>& a) { return Dual<N>::chain(a, std::cos(a.v), -std::sin(a.v)); }
-template <int N> Dual<N> atan(const Dual<N>& a) { return Dual<N>::chain(a, std::atan(a.v), 1.0 / (1.0 + a.v * a.v)); }
 
 /// Roll and pitch of eqs. (26)-(27) from the accelerations and yaw
 /// (tilt_from_force of trajectory.hpp), on their own so that the tilt limits

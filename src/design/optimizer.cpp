@@ -37,9 +37,17 @@ namespace quadid {
 using design_detail::Family;
 
 // SQP iterates meet active constraints only in the limit: a point counts as
-// feasible for a round when every normalized constraint is below this. The
-// margin (1e-5 relative by default) keeps such points inside the true limits.
+// feasible for a round when every normalized constraint is below half its
+// margin (1e-5 relative by default, fading to 0 where a limit is pinned) and
+// below this where the margin is smaller.
 constexpr double kFeasTol = 1e-9;
+// Spacing of the coarse search for each cell's worst instant, s. Every limit
+// is a smooth function whose fastest part is the N-th harmonic (period 2 s for
+// the paper's problem), so on this scale a fine-grid maximum lies next to a
+// coarse local maximum; it is then found exactly on the fine grid.
+constexpr double kCoarseDt = 0.01;
+// Beyond this multiple of the tilt limit a cell is searched on the whole fine grid.
+constexpr double kExhaustiveTilt = 2.0;
 
 void DesignOptions::validate() const {
   auto require = [](bool ok, const std::string& msg) {
@@ -97,6 +105,13 @@ struct Setup {
   std::array<Eigen::MatrixXd, 3> fine_basis;  // orders 0..2 on the fine grid
   std::vector<Eigen::Index> cell_begin;       // cells of the fine grid (last entry = end)
   std::vector<Eigen::VectorXd> bound;         // per family and fine instant: the tightened limit
+  // Coarse search grid: every `stride`-th fine instant of each cell and the
+  // cell's last instant; a cell's maximum is searched there first, then on
+  // the fine grid around each coarse local maximum (see Round::constraints).
+  Eigen::Index stride = 1;
+  std::vector<Eigen::Index> coarse_k;         // fine indices of the coarse instants, cell by cell
+  std::vector<size_t> cell_coarse;            // per cell: its first entry in coarse_k (last entry = end)
+  std::array<Eigen::MatrixXd, 3> coarse_basis;  // rows of fine_basis at coarse_k
   bool has_tilt = false;
 
   explicit Setup(const DesignOptions& o) : opt(o), problem(o, o.grid_dt), fams(design_detail::families(o.limits)) {
@@ -119,6 +134,19 @@ struct Setup {
     for (Eigen::Index k = 0; k < K; k += per_cell) cell_begin.push_back(k);
     if (K - cell_begin.back() < per_cell / 2 && cell_begin.size() > 1) cell_begin.pop_back();  // no tiny last cell
     cell_begin.push_back(K);
+    stride = std::max<Eigen::Index>(1, std::lround(kCoarseDt / o.check_dt));
+    for (int c = 0; c < cells(); ++c) {
+      cell_coarse.push_back(coarse_k.size());
+      const Eigen::Index b0 = cell_begin[static_cast<size_t>(c)], b1 = cell_begin[static_cast<size_t>(c) + 1];
+      for (Eigen::Index k = b0; k < b1; k += stride) coarse_k.push_back(k);
+      if (coarse_k.back() != b1 - 1) coarse_k.push_back(b1 - 1);
+    }
+    cell_coarse.push_back(coarse_k.size());
+    for (size_t ord = 0; ord < 3; ++ord) {
+      coarse_basis[ord].resize(static_cast<Eigen::Index>(coarse_k.size()), n1);
+      for (size_t j = 0; j < coarse_k.size(); ++j)
+        coarse_basis[ord].row(static_cast<Eigen::Index>(j)) = fine_basis[ord].row(coarse_k[j]);
+    }
     for (const auto& f : fams) {
       has_tilt = has_tilt || f.tilt;
       Eigen::VectorXd bd(K);
@@ -149,14 +177,19 @@ struct Setup {
     return m * std::min(1.0, std::pow(dist / tau, 4));
   }
 
-  // Every family's value at every fine instant (columns = families).
-  Eigen::MatrixXd fine_values(const Eigen::VectorXd& x) const {
-    const auto K = static_cast<Eigen::Index>(fine_t.size());
+  // Every family's value at the instants whose basis rows B(order) gives
+  // (columns = families; only column `only` is filled when it is >= 0).
+  // Always a matrix-vector product over the rows, so a value does not depend
+  // on which other instants are evaluated with it.
+  template <class Basis>
+  Eigen::MatrixXd values_on(const Basis& B, const Eigen::VectorXd& x, int only = -1) const {
+    const Eigen::Index K = B(0).rows();
     Eigen::MatrixXd V(K, static_cast<Eigen::Index>(fams.size()));
+    const bool tilt_wanted = only < 0 ? has_tilt : fams[static_cast<size_t>(only)].tilt;
     Eigen::VectorXd phi, theta;
-    if (has_tilt) {
-      const Eigen::VectorXd ax = fine_basis[2] * x.segment(0, n1), ay = fine_basis[2] * x.segment(n1, n1),
-                            az = fine_basis[2] * x.segment(2 * n1, n1), psi = fine_basis[0] * x.segment(3 * n1, n1);
+    if (tilt_wanted) {
+      const Eigen::VectorXd ax = B(2) * x.segment(0, n1), ay = B(2) * x.segment(n1, n1),
+                            az = B(2) * x.segment(2 * n1, n1), psi = B(0) * x.segment(3 * n1, n1);
       phi.resize(K);
       theta.resize(K);
       for (Eigen::Index k = 0; k < K; ++k) {
@@ -170,14 +203,30 @@ struct Setup {
       }
     }
     for (size_t f = 0; f < fams.size(); ++f) {
+      if (only >= 0 && static_cast<int>(f) != only) continue;
       const Family& fam = fams[f];
       const auto c = static_cast<Eigen::Index>(f);
       if (fam.tilt)
         V.col(c) = fam.axis == 0 ? phi : theta;
       else
-        V.col(c).noalias() = fine_basis[static_cast<size_t>(fam.order)] * x.segment(fam.axis * n1, n1);
+        V.col(c).noalias() = B(fam.order) * x.segment(fam.axis * n1, n1);
     }
     return V;
+  }
+
+  // Every family's value at every fine instant.
+  Eigen::MatrixXd fine_values(const Eigen::VectorXd& x) const {
+    return values_on([&](int o) -> const Eigen::MatrixXd& { return fine_basis[static_cast<size_t>(o)]; }, x);
+  }
+  // The values of family f at fine instants lo .. lo + len - 1 (len >= 2: a
+  // product with one row would be evaluated as a dot product, summed in another order).
+  Eigen::VectorXd window_values(int f, Eigen::Index lo, Eigen::Index len, const Eigen::VectorXd& x) const {
+    return values_on([&](int o) { return fine_basis[static_cast<size_t>(o)].middleRows(lo, len); }, x, f)
+        .col(f);
+  }
+  // Every family's value at the coarse search instants.
+  Eigen::MatrixXd coarse_values(const Eigen::VectorXd& x) const {
+    return values_on([&](int o) -> const Eigen::MatrixXd& { return coarse_basis[static_cast<size_t>(o)]; }, x);
   }
 
   // Largest relative excess over the (untightened) limits on the fine grid; 0 when all hold.
@@ -205,9 +254,15 @@ struct Setup {
 // rising towards it, repeats its neighbour's constraint: it is replaced by
 // its value at its centre, which keeps the constraints well separated.
 //
+// The cell's worst instant is found without evaluating every fine instant:
+// on a coarse grid (kCoarseDt) first, then on the fine grid between the
+// coarse neighbours of every coarse local maximum of the cell, which is
+// where the fine-grid maximum of a smooth function lies.
+//
 // Stopping is ours: NLopt 2.7's SLSQP may stop on ftol at an infeasible
 // iterate, so its ftol/xtol are off. Every evaluated point whose constraints
-// all hold (to kFeasTol) is a candidate; the round stops when the best
+// all hold to half the margin (so that the untightened limits hold with room
+// to spare) is a candidate; the round stops when the best
 // feasible criterion has not improved by ftol_rel for `patience` evaluations.
 struct Round {
   const Setup& s;
@@ -220,8 +275,13 @@ struct Round {
   int stall = 0;
   static constexpr int patience = 40;
 
+  // Per constraint: how far above 0 it may be with the true (untightened)
+  // limit still met with room to spare: half the margin at its worst instant.
+  mutable std::vector<double> slack;
+
   explicit Round(const Setup& setup) : s(setup) {
     for (const auto& f : s.fams) m += static_cast<unsigned>((f.kind == Family::Abs ? 2 : 1) * s.cells());
+    slack.assign(m, kFeasTol);
   }
 
   Eigen::VectorXd x_of(const double* y) const {
@@ -240,16 +300,16 @@ struct Round {
 
   void constraints(double* c, const double* y, double* grad) const {
     const Eigen::VectorXd x = x_of(y);
-    const Eigen::MatrixXd V = s.fine_values(x);
-    const auto K = V.rows();
+    const Eigen::MatrixXd Vc = s.coarse_values(x);
+    const auto K = static_cast<Eigen::Index>(s.fine_t.size());
     using RowMat = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
     Eigen::Map<RowMat> J(grad, grad ? static_cast<Eigen::Index>(m) : 0, s.ny);  // NLopt: row-major dc_i/dy_j
     const int n1 = s.n1;
-    Eigen::RowVectorXd gx(s.n);
     Eigen::Index row = 0;
     for (size_t f = 0; f < s.fams.size(); ++f) {
       const Family& fam = s.fams[f];
-      const auto v = V.col(static_cast<Eigen::Index>(f));
+      const int fi = static_cast<int>(f);
+      const auto vc = Vc.col(static_cast<Eigen::Index>(f));
       const Eigen::VectorXd& bd = s.bound[f];
       const int signs = fam.kind == Family::Abs ? 2 : 1;
       for (int sg = 0; sg < signs; ++sg) {
@@ -258,21 +318,54 @@ struct Round {
         const double bsign = fam.kind == Family::Min ? -1.0 : 1.0;
         // Where the limit equals the start value the start conditions hold the
         // value at both ends: no gradient in y there, so those instants are skipped.
-        auto cval = [&](Eigen::Index k) {
+        auto cval = [&](Eigen::Index k, double v) {
           if (fam.pinned && (k == 0 || k == K - 1)) return -kInf;
-          return sigma * v(k) - bsign * bd(k);
+          return sigma * v - bsign * bd(k);
+        };
+        // c at fine instant k, evaluated on its own (through a two-row window).
+        auto cval_at = [&](Eigen::Index k) {
+          const Eigen::Index lo = std::min(k, K - 2);
+          return cval(k, s.window_values(fi, lo, 2, x)(k - lo));
         };
         for (int cell = 0; cell < s.cells(); ++cell, ++row) {
           const Eigen::Index b0 = s.cell_begin[static_cast<size_t>(cell)];
           const Eigen::Index b1 = s.cell_begin[static_cast<size_t>(cell) + 1];
+          const size_t j0 = s.cell_coarse[static_cast<size_t>(cell)], j1 = s.cell_coarse[static_cast<size_t>(cell) + 1];
+          auto ccoarse = [&](size_t j) { return cval(s.coarse_k[j], vc(static_cast<Eigen::Index>(j))); };
+          // Far outside the tilt limit (near z_ddot = -g) eqs. (26)-(27) change
+          // fast: the whole cell is searched on the fine grid there.
+          bool exhaustive = false;
+          if (fam.tilt)
+            for (size_t j = j0; j < j1 && !exhaustive; ++j)
+              exhaustive = std::abs(vc(static_cast<Eigen::Index>(j))) > kExhaustiveTilt * fam.limit;
+          // The worst fine instant of the cell (the first one on ties): searched
+          // on the fine grid between the neighbours of every coarse local maximum.
           Eigen::Index best = b0;
-          for (Eigen::Index k = b0; k < b1; ++k)
-            if (cval(k) > cval(best)) best = k;
-          if (best == b0 && b0 > 0 && cval(b0 - 1) < cval(b0) && b1 - b0 > 2) best = (b0 + b1) / 2;
-          if (!std::isfinite(cval(best))) best = (b0 + b1) / 2;
-          c[row] = cval(best) / fam.scale;
+          double best_c = ccoarse(j0);
+          for (size_t j = j0; j < j1; ++j) {
+            const double cj = ccoarse(j);
+            if (!exhaustive && ((j > j0 && ccoarse(j - 1) > cj) || (j + 1 < j1 && ccoarse(j + 1) > cj))) continue;
+            const Eigen::Index lo = j > j0 ? s.coarse_k[j - 1] + 1 : s.coarse_k[j];
+            const Eigen::Index hi = j + 1 < j1 ? s.coarse_k[j + 1] - 1 : s.coarse_k[j];
+            const Eigen::Index wlo = std::min(lo, K - 2), wlen = std::max<Eigen::Index>(2, hi - wlo + 1);
+            const Eigen::VectorXd w = s.window_values(fi, wlo, wlen, x);
+            for (Eigen::Index k = lo; k <= hi; ++k) {
+              const double ck = cval(k, w(k - wlo));
+              if (ck > best_c || (ck == best_c && k < best)) {
+                best = k;
+                best_c = ck;
+              }
+            }
+          }
+          if ((best == b0 && b0 > 0 && cval_at(b0 - 1) < best_c && b1 - b0 > 2) || !std::isfinite(best_c)) {
+            best = (b0 + b1) / 2;
+            best_c = cval_at(best);
+          }
+          c[row] = best_c / fam.scale;
+          slack[static_cast<size_t>(row)] =
+              std::max(kFeasTol, 0.5 * s.margin_at(fam, s.fine_t[static_cast<size_t>(best)]) / fam.scale);
           if (!grad) continue;
-          gx.setZero();
+          auto Jr = J.row(row);
           if (fam.tilt) {
             const auto& B2 = s.fine_basis[2];
             const auto& B0 = s.fine_basis[0];
@@ -281,12 +374,14 @@ struct Round {
                                                      B2.row(best).dot(x.segment(2 * n1, n1)),
                                                      B0.row(best).dot(x.segment(3 * n1, n1)), s.opt.g);
             const Eigen::Vector4d& dv = fam.axis == 0 ? p.dphi : p.dtheta;
+            Eigen::RowVectorXd gx(s.n);
             for (int i = 0; i < 3; ++i) gx.segment(i * n1, n1) = dv(i) * B2.row(best);
             gx.segment(3 * n1, n1) = dv(3) * B0.row(best);
-          } else {
-            gx.segment(fam.axis * n1, n1) = s.fine_basis[static_cast<size_t>(fam.order)].row(best);
+            Jr.noalias() = (sigma / fam.scale) * (gx * s.Z);
+          } else {  // only the family's axis: one block of Z
+            Jr.noalias() = (sigma / fam.scale) * (s.fine_basis[static_cast<size_t>(fam.order)].row(best) *
+                                                  s.Z.middleRows(fam.axis * n1, n1));
           }
-          J.row(row).noalias() = (sigma / fam.scale) * (gx * s.Z);
         }
       }
     }
@@ -294,8 +389,10 @@ struct Round {
 
   // Called with the constraints of the point whose criterion is f_last
   // (SLSQP evaluates the criterion, then the constraints, at each point).
-  void record(const double* y, double cmax) {
-    if (!(cmax <= kFeasTol) || !std::isfinite(f_last)) return;
+  void record(const double* y, const double* c) {
+    for (unsigned i = 0; i < m; ++i)
+      if (!(c[i] <= slack[i])) return;
+    if (!std::isfinite(f_last)) return;
     if (f_last < best_f) {
       best_f = f_last;
       best_y = Eigen::Map<const Eigen::VectorXd>(y, s.ny);
@@ -312,10 +409,10 @@ struct Round {
 double objective_cb(unsigned, const double* y, double* grad, void* data) {
   return static_cast<Round*>(data)->objective(y, grad);
 }
-void constraints_cb(unsigned m, double* c, unsigned, const double* y, double* grad, void* data) {
+void constraints_cb(unsigned, double* c, unsigned, const double* y, double* grad, void* data) {
   auto* rd = static_cast<Round*>(data);
   rd->constraints(c, y, grad);
-  rd->record(y, m ? *std::max_element(c, c + m) : 0.0);
+  rd->record(y, c);
 }
 
 
