@@ -4,6 +4,7 @@
 #include "common.hpp"
 #include "flight_args.hpp"
 #include "quadid/design.hpp"
+#include "quadid/vehicle.hpp"
 #include "quadid/io.hpp"
 
 #include <fmt/format.h>
@@ -69,6 +70,11 @@ void register_check_trajectory(CLI::App& app) {
     if (const auto saved = saved_trajectory_limits(spec)) {
       base = *saved;
       limits_from = spec;
+    }
+    // With --vehicle, the limits for flying it (its [limits] and rotors) unless the file records a vehicle's.
+    if (!args->precision.vehicle.empty() && base.rotor_mixer.rows() == 0) {
+      base = vehicle_constraints(load_vehicle(args->precision.vehicle), base);
+      limits_from += ", with the limits of vehicle " + args->precision.vehicle;
     }
     opt.limits = args->limits.over(base);
     opt.validate();

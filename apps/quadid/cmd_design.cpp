@@ -6,9 +6,11 @@
 #include "flight_args.hpp"
 #include "quadid/design.hpp"
 #include "quadid/io.hpp"
+#include "quadid/vehicle.hpp"
 
 #include <fmt/format.h>
 
+#include <cmath>
 #include <cstdio>
 #include <memory>
 #include <optional>
@@ -27,6 +29,8 @@ struct DesignArgs {
   PrecisionArgs precision;
   std::string export_file;
   ExportArgs exp;
+  std::optional<double> thrust_margin, thrust_min;
+  CLI::Option *wf_opt = nullptr, *harmonics_opt = nullptr, *reference_opt = nullptr;
 };
 
 }  // namespace
@@ -59,12 +63,21 @@ void register_design(CLI::App& app) {
   sub->add_option("--threads", o.threads, "worker threads; 0 = one per core (result does not depend on it)")
       ->capture_default_str();
   sub->add_option("--criterion", args->criterion, "cond | cond-scaled | dopt")->capture_default_str();
-  sub->add_option("--reference", args->reference,
+  args->reference_opt = sub->add_option("--reference", args->reference,
                   "parameter set scaling cond-scaled and dopt: preset (qball2-nominal, qball2-virtual) or JSON file")
       ->capture_default_str();
-  sub->add_option("--harmonics", o.harmonics, "number of harmonics N of eq. (18)")->capture_default_str();
-  sub->add_option("--wf", args->wf_deg, "fundamental frequency w_f, deg/s (36 deg/s = 10 s period)")
-      ->capture_default_str();
+  args->harmonics_opt =
+      sub->add_option("--harmonics", o.harmonics, "number of harmonics N of eq. (18)")->capture_default_str();
+  args->wf_opt = sub->add_option("--wf", args->wf_deg,
+                                 "fundamental frequency w_f, deg/s (36 deg/s = 10 s period; with --vehicle: from its "
+                                 "bandwidth unless given)")
+                     ->capture_default_str();
+  sub->add_option("--thrust-margin", args->thrust_margin,
+                  "with --vehicle: fraction of each rotor's largest thrust left to the controller (default: the "
+                  "vehicle file's limits.thrust_margin, else 0.2)");
+  sub->add_option("--thrust-min", args->thrust_min,
+                  "with --vehicle: lowest thrust of a rotor, fraction of its largest (default: limits.thrust_min, "
+                  "else 0.05)");
   sub->add_option("--max-evals", o.max_evals, "SLSQP evaluations per round of one start")->capture_default_str();
   sub->add_option("--check-dt", o.check_dt, "grid on which the limits are imposed and checked, s")
       ->capture_default_str();
@@ -82,6 +95,25 @@ void register_design(CLI::App& app) {
     opt.limits = args->limits.constraints();
     opt.criterion = parse_criterion(args->criterion);
     opt.reference = load_params(args->reference);
+    std::string vehicle_note;
+    if (!args->precision.vehicle.empty()) {
+      // The vehicle's limits (its [limits] table and rotors) in place of the defaults, the options over them.
+      const Vehicle v = load_vehicle(args->precision.vehicle);
+      opt.limits = args->limits.over(vehicle_constraints(v, Constraints{}));
+      if (args->thrust_margin) opt.limits.thrust_high = 1.0 - *args->thrust_margin;
+      if (args->thrust_min) opt.limits.thrust_low = *args->thrust_min;
+      if (args->wf_opt->count() == 0) opt.wf = vehicle_excitation_frequency(v) / opt.harmonics;
+      if (args->reference_opt->count() == 0) opt.reference = v.nominal;
+      vehicle_note = fmt::format("design: limits of vehicle {}: every rotor within [{:g}, {:g}] of its largest "
+                                 "thrust, tilt {:g} deg{}; highest harmonic {:.3g} rad/s{}\n",
+                                 v.name, opt.limits.thrust_low, opt.limits.thrust_high, opt.limits.tilt_max / kDeg,
+                                 std::isfinite(opt.limits.rate_max)
+                                     ? fmt::format(", body rates {:g} deg/s", opt.limits.rate_max / kDeg)
+                                     : "",
+                                 opt.harmonics * opt.wf, args->wf_opt->count() == 0 ? " (from its bandwidth)" : "");
+    } else if (args->thrust_margin || args->thrust_min) {
+      throw std::invalid_argument("--thrust-margin and --thrust-min need --vehicle (a rotor model)");
+    }
     opt.validate();
     if (!args->out.empty()) check_output_file(args->out, "-o/--out");
     if (!args->export_file.empty()) {
@@ -91,6 +123,7 @@ void register_design(CLI::App& app) {
     }
     const std::optional<PrecisionOptions> popt =
         args->precision.off ? std::nullopt : std::optional<PrecisionOptions>(args->precision.options());
+    if (!args->quiet && !vehicle_note.empty()) fmt::print(stderr, "{}", vehicle_note);
     if (!args->quiet)
       fmt::print(stderr, "design: {} starts, criterion {}, N = {}, period {:.4g} s, seed {}\n", opt.starts,
                  criterion_name(opt.criterion), opt.harmonics, 2 * M_PI / opt.wf, opt.seed);

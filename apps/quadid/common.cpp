@@ -82,16 +82,18 @@ void LimitArgs::add_to(CLI::App* sub) {
       sub->add_option("--zdot-max", L.zdot_max, "|z_dot| limit, m/s")->capture_default_str(),
       sub->add_option("--psidot-max", psidot_max_deg, "|psi_dot| limit, deg/s")->capture_default_str(),
       sub->add_option("--zddot-min", L.zddot_min, "lower z_ddot limit, m/s^2")->capture_default_str(),
+      sub->add_option("--rate-max", rate_max_deg, "|p|, |q| limit (body rates of the reference), deg/s")
+          ->capture_default_str(),
       sub->add_option("--z0", L.z0, "start/end height, m")->capture_default_str()};
 }
 
 Constraints LimitArgs::over(Constraints c) const {
   const double given[] = {limits.x_max,    limits.y_max,    limits.z_min,    limits.z_max,
                           psi_max_deg * kDeg, tilt_max_deg * kDeg, limits.xdot_max, limits.ydot_max,
-                          limits.zdot_max, psidot_max_deg * kDeg, limits.zddot_min, limits.z0};
+                          limits.zdot_max, psidot_max_deg * kDeg, limits.zddot_min, rate_max_deg * kDeg, limits.z0};
   double* const dest[] = {&c.x_max,    &c.y_max,      &c.z_min,   &c.z_max,
                           &c.psi_max,  &c.tilt_max,   &c.xdot_max, &c.ydot_max,
-                          &c.zdot_max, &c.psidot_max, &c.zddot_min, &c.z0};
+                          &c.zdot_max, &c.psidot_max, &c.zddot_min, &c.rate_max, &c.z0};
   for (size_t i = 0; i < options_.size(); ++i)
     if (options_[i]->count() > 0) *dest[i] = given[i];
   return c;
@@ -108,6 +110,7 @@ Constraints LimitArgs::constraints() const {
   c.psi_max = psi_max_deg * kDeg;
   c.tilt_max = tilt_max_deg * kDeg;
   c.psidot_max = psidot_max_deg * kDeg;
+  c.rate_max = rate_max_deg * kDeg;
   return c;
 }
 

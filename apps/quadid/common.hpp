@@ -42,7 +42,7 @@ struct ProcessingArgs {
 /// Angles are given in degrees on the command line and converted here.
 struct LimitArgs {
   Constraints limits;  // SI; the three angular limits below override theirs
-  double psi_max_deg = 180.0, tilt_max_deg = 5.73, psidot_max_deg = 28.65;
+  double psi_max_deg = 180.0, tilt_max_deg = 5.73, psidot_max_deg = 28.65, rate_max_deg = kInf;
 
   void add_to(CLI::App* sub);
   /// The limits as given (defaults for the options not given).

@@ -41,6 +41,19 @@ struct Constraints {
   double zddot_min = -9.81;           // m/s^2, keeps z_ddot + g > 0 for eqs. (26)-(27)
   double zddot_max = kInf;            // m/s^2 (paper: unbounded)
   double psiddot_max = kInf;          // rad/s^2 (paper: unbounded)
+  /// Body rates |p|, |q| of the reference attitude (eqs. 26-27 and the kinematics
+  /// below eq. 20), rad/s. |r| is bounded through psidot_max.
+  double rate_max = kInf;
+  /// Per-rotor thrust (issue 14, design --vehicle; vehicle_constraints() in vehicle.hpp
+  /// fills these): with a non-empty `rotor_mixer` (N x 4: each rotor's thrust as a
+  /// fraction of its largest, per unit of [Fz tau_phi tau_theta tau_psi]), every rotor's
+  /// fraction for the wrench of eq. (11) along the reference, for a vehicle of
+  /// parameters `vehicle`, lies within [thrust_low, thrust_high]: no rotor saturates
+  /// and the controller keeps room for its corrections.
+  Eigen::Matrix<double, Eigen::Dynamic, 4> rotor_mixer;
+  Params vehicle = Params::qball2_nominal();
+  double thrust_low = 0.05, thrust_high = 0.8;
+  std::string vehicle_name;  // for reports ("" without rotor limits)
   /// Start (and, for a periodic trajectory, end) hover point q0 = (x, y, z, psi);
   /// velocity and acceleration there are zero.
   double x0 = 0.0, y0 = 0.0, z0 = 0.7, psi0 = 0.0;  // m, m, m, rad
@@ -133,6 +146,13 @@ struct CheckReport {
 /// below eq. 20, sampled every cond_dt over one period, unscaled, 2-norm).
 CheckReport check_trajectory(const Trajectory& traj, const CheckOptions& opt = {});
 
+/// The values the vehicle limits of `c` bound at time t: the body rates p, q of the
+/// reference (rad/s), then, with rotor limits, each rotor's thrust as a fraction of its
+/// largest for the wrench of eq. (11) (Phi Theta, eq. 12, of c.vehicle) along the
+/// reference. Needs z_ddot + g > 0 (throws std::invalid_argument otherwise).
+Eigen::VectorXd vehicle_limit_values(const Trajectory& traj, double t, const Constraints& c,
+                                     double g = kDefaultGravity);
+
 /// The criteria of a trajectory on the grid t = 0, dt, ..., < period (eq. 20).
 CriterionValues evaluate_criteria(const Trajectory& traj, double dt, double g = kDefaultGravity,
                                   const Theta& scales = Theta::Ones());
@@ -207,6 +227,10 @@ class ExcitationProblem {
   /// Roll and pitch of eqs. (26)-(27) at every grid time (rows: phi, theta), with
   /// their gradients (2 K x dimension(), row 2k = phi_k, 2k + 1 = theta_k) when non-null.
   Eigen::MatrixXd tilt(const Eigen::VectorXd& coeffs, Eigen::MatrixXd* jac = nullptr) const;
+  /// vehicle_limit_values() of `c` at every grid time (column k), with their gradients
+  /// (row i * K + k: value i at time k, x dimension()) when non-null.
+  Eigen::MatrixXd vehicle_limits(const Eigen::VectorXd& coeffs, const Constraints& c,
+                                 Eigen::MatrixXd* jac = nullptr) const;
   /// The 12 start conditions q(0) = q0, q_dot(0) = 0, q_ddot(0) = 0 as A x = b
   /// (rows 3 axis + order). With one period they also fix the end.
   void start_conditions(Eigen::MatrixXd& A, Eigen::VectorXd& b) const;

@@ -130,6 +130,11 @@ struct SensorOptions {
   double imu_rate = 500.0;   // Hz, <= controller rate
   NoiseSigmas noise = NoiseSigmas::typical();
   VelocitySource velocity_source = VelocitySource::kMocapDifference;
+  /// The yaw rate psi_dot the controller uses: false = the difference of the held motion-capture
+  /// yaw (the paper's QBall 2 set-up, with velocity_source mocap-difference), true = from the
+  /// gyro through eq. (4), as an autopilot does (simulate --vehicle): a 30 Hz yaw difference
+  /// lags and is noisy, which a vehicle with little yaw authority turns into rotor saturation.
+  bool yaw_rate_from_gyro = false;
   std::uint64_t seed = 1;    // same seed, same options -> same noise, bit for bit
 
   void validate(double control_rate) const;

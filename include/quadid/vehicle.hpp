@@ -109,6 +109,16 @@ struct VehicleSensors {
   std::optional<double> rotor;  // white noise on the logged rotor speeds, rad/s or rpm (rotor_noise)
 };
 
+/// Optional [limits] table: what the vehicle can fly, for `design --vehicle`
+/// (vehicle_constraints()). Angles in degrees in the file, radians here.
+struct VehicleFlightLimits {
+  std::optional<double> tilt_max;  // rad, |phi|, |theta| of the reference
+  std::optional<double> rate_max;  // rad/s, |p|, |q| of the reference
+  std::optional<double> speed_max;  // m/s, |x_dot|, |y_dot|, |z_dot|
+  std::optional<double> thrust_margin;  // fraction of each rotor's largest thrust kept free (default 0.2)
+  std::optional<double> thrust_min;     // lowest thrust of a rotor, fraction of its largest (default 0.05)
+};
+
 /// A vehicle file: what a log cannot say about the vehicle.
 struct Vehicle {
   std::string name;
@@ -117,6 +127,7 @@ struct Vehicle {
   RotorModel rotors;
   VehicleController controller;
   VehicleSensors sensors;
+  VehicleFlightLimits limits;
 
   /// Throws std::invalid_argument naming the bad key.
   void validate() const;
@@ -128,6 +139,22 @@ struct Vehicle {
 /// m / 1.79 kg; attitude gains (Kpo, Kio, Kdo: torque per error) per axis with the principal
 /// moment, I_ii / I_ii(QBall 2 nominal, Table 1). A QBall 2 gets the paper's gains unchanged.
 PidGains vehicle_gains(const Vehicle& v);
+
+/// The limits for flying `v` (design --vehicle, docs/fly-it.md): `base` (the room
+/// and the limits given as options) with the vehicle's [limits] where they are
+/// tighter, and the per-rotor thrust limits: every rotor's thrust for the wrench
+/// of eq. (11) of the nominal parameters within [thrust_min, 1 - thrust_margin]
+/// of rotors.thrust_max. Throws std::invalid_argument when the vehicle cannot
+/// hover within them (naming the keys).
+Constraints vehicle_constraints(const Vehicle& v, Constraints base);
+
+/// The frequency of the highest harmonic, N wf, for `v`, rad/s: the paper's
+/// pi rad/s (N = 5, wf = 36 deg/s) scaled by the natural frequency
+/// sqrt(Kpp / m) of the vehicle's position loop (vehicle_gains, slowest axis)
+/// over the QBall 2's, and at most 0.2 / time_constant so that the motor lag
+/// does not shape the excitation. Gains that keep the QBall 2's closed-loop
+/// poles (vehicle_gains without a [controller] table) give pi rad/s.
+double vehicle_excitation_frequency(const Vehicle& v);
 
 /// Parses the TOML text of a vehicle file. `source` names it in messages
 /// ("FILE:LINE:COLUMN: key: problem"). Unknown keys, missing required keys,

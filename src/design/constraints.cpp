@@ -39,6 +39,16 @@ void Constraints::validate() const {
   positive_limit(zdot_max, "--zdot-max", "m/s");
   positive_limit(psidot_max, "--psidot-max", "deg/s", kToDeg);
   positive_limit(psiddot_max, "psiddot_max", "deg/s^2", kToDeg);
+  positive_limit(rate_max, "--rate-max", "deg/s", kToDeg);
+  if (rotor_mixer.rows() > 0) {
+    require(rotor_mixer.allFinite(), "the rotor limits' mixer must be finite");
+    require(std::isfinite(thrust_low) && std::isfinite(thrust_high) && thrust_low >= 0.0 && thrust_low < thrust_high &&
+                thrust_high <= 1.0,
+            fmt::format("rotor thrust limits [{:g}, {:g}] of the largest thrust must satisfy 0 <= low < high <= 1 "
+                        "(--thrust-margin, --thrust-min)",
+                        thrust_low, thrust_high));
+    vehicle.validate("vehicle parameters of the rotor limits");
+  }
   require(tilt_max < M_PI / 2, fmt::format("--tilt-max = {:g} deg must be below 90 deg", tilt_max * kToDeg));
   require(!std::isnan(z_min) && !std::isnan(z_max), "--z-min and --z-max must be numbers");
   require(z_min < z_max, fmt::format("--z-min = {:g} m must be below --z-max = {:g} m", z_min, z_max));
@@ -109,6 +119,26 @@ std::vector<Family> families(const Constraints& c) {
   add("zddot_min", "m/s^2", Family::Min, false, kZ, 2, c.zddot_min, std::max(std::abs(c.zddot_min), 1.0));  // eq. (25)
   add("zddot_max", "m/s^2", Family::Max, false, kZ, 2, c.zddot_max, std::max(std::abs(c.zddot_max), 1.0));
   add("psiddot", "rad/s^2", Family::Abs, false, kPsi, 2, c.psiddot_max, c.psiddot_max);  // eq. (24)
+  // Vehicle limits (issue 14): entries of vehicle_sample().
+  auto add_vehicle = [&](std::string name, const char* unit, Family::Kind kind, int index, double limit, double scale) {
+    if (std::isinf(limit)) return;
+    Family f;
+    f.name = std::move(name);
+    f.unit = unit;
+    f.kind = kind;
+    f.vehicle = true;
+    f.axis = index;
+    f.limit = limit;
+    f.scale = scale;
+    out.push_back(f);
+  };
+  add_vehicle("p", "rad/s", Family::Abs, 0, c.rate_max, c.rate_max);
+  add_vehicle("q", "rad/s", Family::Abs, 1, c.rate_max, c.rate_max);
+  for (Eigen::Index i = 0; i < c.rotor_mixer.rows(); ++i) {
+    const int k = static_cast<int>(i);
+    add_vehicle(fmt::format("rotor{}_min", k + 1), "of max thrust", Family::Min, 2 + k, c.thrust_low, 1.0);
+    add_vehicle(fmt::format("rotor{}_max", k + 1), "of max thrust", Family::Max, 2 + k, c.thrust_high, 1.0);
+  }
   return out;
 }
 
@@ -176,6 +206,10 @@ CheckReport check_trajectory(const Trajectory& traj, const CheckOptions& opt) {
     c.kind = kind_name(fams[f].kind);
     c.limit = fams[f].limit;
   }
+  bool any_vehicle = false;
+  for (const auto& f : fams) any_vehicle = any_vehicle || f.vehicle;
+  const VehicleLimits vlim(opt.limits);
+  Eigen::VectorXd vval;
   for (double t : closed_grid(rep.duration, opt.constraint_dt)) {
     const FlatOutput d = traj.eval(t);
     std::array<double, 2> tilt{0.0, 0.0};
@@ -185,9 +219,15 @@ CheckReport check_trajectory(const Trajectory& traj, const CheckOptions& opt) {
       // Eqs. (26)-(27) have no meaning without upward thrust: report the tilt as violated.
       tilt = {M_PI / 2, M_PI / 2};
     }
+    if (any_vehicle) {
+      if (d(kZ, 2) + opt.g > 0.0) vval = vehicle_sample(d, opt.g, vlim, nullptr);
+      else vval = Eigen::VectorXd::Constant(vlim.size(), kInf);  // no upward thrust: every vehicle limit fails
+    }
     for (size_t f = 0; f < fams.size(); ++f) {
       const Family& fam = fams[f];
-      const double v = fam.tilt ? tilt[static_cast<size_t>(fam.axis)] : d(fam.axis, fam.order);
+      const double v = fam.tilt ? tilt[static_cast<size_t>(fam.axis)]
+                       : fam.vehicle ? vval(fam.axis)
+                                     : d(fam.axis, fam.order);
       const double e = excess(fam, v);
       if (e > worst_excess[f]) {
         worst_excess[f] = e;

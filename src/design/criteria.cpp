@@ -13,7 +13,9 @@
 #include <Eigen/Eigenvalues>
 #include <fmt/format.h>
 
+#include <array>
 #include <stdexcept>
+#include <vector>
 
 namespace quadid {
 
@@ -79,6 +81,51 @@ Eigen::Matrix<double, 4, 7> regressor_sample(const FlatOutput& d, double g,
   return out;
 }
 
+namespace {
+
+// p, q and the rotors' thrust fractions of the reference (see VehicleLimits).
+template <class S>
+void vehicle_values(const Eigen::Matrix<S, 4, 5>& dd, double g, const VehicleLimits& v, S* out) {
+  const ReferenceT<S> r = reference_from_flat<S>(dd, g);  // eqs. (26)-(27) and below eq. (20)
+  out[0] = r.omega(0);
+  out[1] = r.omega(1);
+  if (v.mixer.rows() == 0) return;
+  const Regressor<S> P = regressor<S>(r.v, r.omega, r.eta, r.v_dot, r.omega_dot, g);  // eq. (12)
+  std::array<S, 4> w;  // [Fz tau_phi tau_theta tau_psi] = Phi Theta (eq. 11)
+  for (int i = 0; i < 4; ++i) {
+    w[static_cast<size_t>(i)] = S(0.0);
+    for (int c = 0; c < 7; ++c) w[static_cast<size_t>(i)] = w[static_cast<size_t>(i)] + P(i, c) * v.theta(c);
+  }
+  for (Eigen::Index k = 0; k < v.mixer.rows(); ++k) {
+    S t(0.0);
+    for (int i = 0; i < 4; ++i) t = t + w[static_cast<size_t>(i)] * v.mixer(k, i);
+    out[2 + k] = t;
+  }
+}
+
+}  // namespace
+
+Eigen::VectorXd vehicle_sample(const FlatOutput& d, double g, const VehicleLimits& v, Eigen::MatrixXd* jac) {
+  const int n = v.size();
+  Eigen::VectorXd out(n);
+  if (!jac) {
+    vehicle_values<double>(d, g, v, out.data());
+    return out;
+  }
+  using D = Dual<kInputs>;
+  Eigen::Matrix<D, 4, 5> dd;
+  for (int i = 0; i < 4; ++i)
+    for (int o = 0; o < 5; ++o) dd(i, o) = is_input(i, o) ? D::seed(d(i, o), input_index(i, o)) : D(d(i, o));
+  std::vector<D> val(static_cast<size_t>(n));
+  vehicle_values<D>(dd, g, v, val.data());
+  jac->resize(n, kInputs);
+  for (int k = 0; k < n; ++k) {
+    out(k) = val[static_cast<size_t>(k)].v;
+    for (int j = 0; j < kInputs; ++j) (*jac)(k, j) = val[static_cast<size_t>(k)].d[static_cast<size_t>(j)];
+  }
+  return out;
+}
+
 }  // namespace design_detail
 
 namespace {
@@ -119,6 +166,15 @@ double criterion_of(const Mat7& M, int K, Criterion crit, const Theta& s, Mat7* 
 }
 
 }  // namespace
+
+Eigen::VectorXd vehicle_limit_values(const Trajectory& traj, double t, const Constraints& c, double g) {
+  const FlatOutput d = traj.eval(t);
+  if (!(d(kZ, 2) + g > 0.0))
+    throw std::invalid_argument(fmt::format("at t = {:g} s the reference falls faster than gravity (z_ddot = {:g} "
+                                            "m/s^2): no thrust direction, eqs. (26)-(27)",
+                                            t, d(kZ, 2)));
+  return design_detail::vehicle_sample(d, g, design_detail::VehicleLimits(c), nullptr);
+}
 
 CriterionValues evaluate_criteria(const Trajectory& traj, double dt, double g, const Theta& scales) {
   if (!(dt > 0.0)) throw std::invalid_argument(fmt::format("sampling period T = {} s must be positive", dt));
@@ -208,6 +264,30 @@ Eigen::MatrixXd ExcitationProblem::tilt(const Eigen::VectorXd& x, Eigen::MatrixX
       for (int i = 0; i < 3; ++i) jac->block(2 * k + r, i * n1, 1, n1) = dv(i) * basis_[2].row(k);
       jac->block(2 * k + r, 3 * n1, 1, n1) = dv(3) * basis_[0].row(k);
     }
+  }
+  return out;
+}
+
+Eigen::MatrixXd ExcitationProblem::vehicle_limits(const Eigen::VectorXd& x, const Constraints& c,
+                                                  Eigen::MatrixXd* jac) const {
+  const int n1 = 2 * N_ + 1;
+  const auto K = static_cast<Eigen::Index>(times_.size());
+  const design_detail::VehicleLimits v(c);
+  Eigen::MatrixXd out(v.size(), K);
+  if (jac) jac->setZero(v.size() * K, dimension());
+  Eigen::MatrixXd dv;
+  for (Eigen::Index k = 0; k < K; ++k) {
+    FlatOutput d;
+    for (int i = 0; i < 4; ++i)
+      for (int o = 0; o < 5; ++o) d(i, o) = basis_[static_cast<size_t>(o)].row(k).dot(x.segment(i * n1, n1));
+    out.col(k) = design_detail::vehicle_sample(d, g_, v, jac ? &dv : nullptr);
+    if (!jac) continue;
+    for (int r = 0; r < v.size(); ++r)
+      for (int i = 0; i < 4; ++i)
+        for (int o = 0; o < 5; ++o)
+          if (design_detail::is_input(i, o))
+            jac->block(r * K + k, i * n1, 1, n1) +=
+                dv(r, design_detail::input_index(i, o)) * basis_[static_cast<size_t>(o)].row(k);
   }
   return out;
 }

@@ -26,12 +26,14 @@ std::array<S, 2> tilt_angles(const S& ax, const S& ay, const S& az, const S& psi
 }
 
 /// One inequality over time. Linear families read derivative `order` of flat
-/// output `axis`; tilt families are phi (index 0) or theta (index 1) of eqs. (26)-(27).
+/// output `axis`; tilt families are phi (index 0) or theta (index 1) of eqs. (26)-(27);
+/// vehicle families are entry `axis` of vehicle_sample().
 struct Family {
   std::string name, unit;
   enum Kind { Abs, Min, Max } kind = Abs;
   bool tilt = false;
-  int axis = 0;      // kX..kPsi, or the tilt index
+  bool vehicle = false;
+  int axis = 0;      // kX..kPsi, the tilt index, or the vehicle_sample() index
   int order = 0;     // derivative order (linear families)
   double limit = 0.0;
   double scale = 1.0;   // normalizes the constraint for the optimizer (|limit| or the z range)
@@ -51,6 +53,20 @@ inline double excess(const Family& fam, double f) {
   }
   return 0.0;
 }
+
+/// The limits that need the whole reference (all 15 inputs of the regressor):
+/// the body rates p, q (entries 0, 1) and each rotor's thrust as a fraction of
+/// its largest (entries 2 ..), from the wrench Phi(u) Theta of eq. (12) for the
+/// vehicle's parameters through the rotor mixer.
+struct VehicleLimits {
+  Eigen::Matrix<double, Eigen::Dynamic, 4> mixer;  // N x 4 (Constraints::rotor_mixer)
+  Theta theta = Theta::Zero();
+  explicit VehicleLimits(const Constraints& c) : mixer(c.rotor_mixer), theta(c.vehicle.theta()) {}
+  int size() const { return 2 + static_cast<int>(mixer.rows()); }
+};
+/// The values of VehicleLimits at one sample; with `jac` (size() x kInputs, see
+/// input_index()) their derivatives with respect to the 15 inputs.
+Eigen::VectorXd vehicle_sample(const FlatOutput& d, double g, const VehicleLimits& v, Eigen::MatrixXd* jac);
 
 /// Time grid 0, dt, ..., < period with dt adjusted so that it divides the
 /// period exactly (the periodic rectangle rule of eq. 20 is then spectrally accurate).

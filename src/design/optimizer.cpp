@@ -102,7 +102,7 @@ struct Setup {
   Eigen::VectorXd xh;  // hover: a = b = 0, c = q0; meets the start conditions
   Eigen::MatrixXd Z;   // orthonormal null space of the start conditions
   std::vector<double> fine_t;                 // the check grid, 0..period
-  std::array<Eigen::MatrixXd, 3> fine_basis;  // orders 0..2 on the fine grid
+  std::array<Eigen::MatrixXd, 5> fine_basis;  // orders 0..2 on the fine grid (0..4 with vehicle limits)
   std::vector<Eigen::Index> cell_begin;       // cells of the fine grid (last entry = end)
   std::vector<Eigen::VectorXd> bound;         // per family and fine instant: the tightened limit
   // Coarse search grid: every `stride`-th fine instant of each cell and the
@@ -111,10 +111,15 @@ struct Setup {
   Eigen::Index stride = 1;
   std::vector<Eigen::Index> coarse_k;         // fine indices of the coarse instants, cell by cell
   std::vector<size_t> cell_coarse;            // per cell: its first entry in coarse_k (last entry = end)
-  std::array<Eigen::MatrixXd, 3> coarse_basis;  // rows of fine_basis at coarse_k
-  bool has_tilt = false;
+  std::array<Eigen::MatrixXd, 5> coarse_basis;  // rows of fine_basis at coarse_k
+  bool has_tilt = false, has_vehicle = false;
+  design_detail::VehicleLimits vlim;
+  int orders = 3;  // basis orders kept: 0..2, or 0..4 for the vehicle limits
 
-  explicit Setup(const DesignOptions& o) : opt(o), problem(o, o.grid_dt), fams(design_detail::families(o.limits)) {
+  explicit Setup(const DesignOptions& o)
+      : opt(o), problem(o, o.grid_dt), fams(design_detail::families(o.limits)), vlim(o.limits) {
+    for (const auto& f : fams) has_vehicle = has_vehicle || f.vehicle;
+    orders = has_vehicle ? 5 : 3;
     n1 = 2 * o.harmonics + 1;
     n = 4 * n1;
     period = 2.0 * M_PI / o.wf;
@@ -129,7 +134,7 @@ struct Setup {
     Z = Q.rightCols(ny);
     fine_t = design_detail::closed_grid(period, o.check_dt);
     const auto K = static_cast<Eigen::Index>(fine_t.size());
-    for (int ord = 0; ord < 3; ++ord) fine_basis[static_cast<size_t>(ord)] = basis_at(fine_t, ord);
+    for (int ord = 0; ord < orders; ++ord) fine_basis[static_cast<size_t>(ord)] = basis_at(fine_t, ord);
     const auto per_cell = std::max<Eigen::Index>(1, std::lround(o.cell_dt / o.check_dt));
     for (Eigen::Index k = 0; k < K; k += per_cell) cell_begin.push_back(k);
     if (K - cell_begin.back() < per_cell / 2 && cell_begin.size() > 1) cell_begin.pop_back();  // no tiny last cell
@@ -142,7 +147,7 @@ struct Setup {
       if (coarse_k.back() != b1 - 1) coarse_k.push_back(b1 - 1);
     }
     cell_coarse.push_back(coarse_k.size());
-    for (size_t ord = 0; ord < 3; ++ord) {
+    for (size_t ord = 0; ord < static_cast<size_t>(orders); ++ord) {
       coarse_basis[ord].resize(static_cast<Eigen::Index>(coarse_k.size()), n1);
       for (size_t j = 0; j < coarse_k.size(); ++j)
         coarse_basis[ord].row(static_cast<Eigen::Index>(j)) = fine_basis[ord].row(coarse_k[j]);
@@ -202,12 +207,32 @@ struct Setup {
         }
       }
     }
+    const bool vehicle_wanted = only < 0 ? has_vehicle : fams[static_cast<size_t>(only)].vehicle;
+    Eigen::MatrixXd VV;  // vehicle_sample() at every row (rows x vlim.size())
+    if (vehicle_wanted) {
+      Eigen::MatrixXd F(K, 20);  // flat output derivatives, column 5 axis + order
+      for (int i = 0; i < 4; ++i)
+        for (int ord = 0; ord < 5; ++ord) F.col(5 * i + ord).noalias() = B(ord) * x.segment(i * n1, n1);
+      VV.resize(K, vlim.size());
+      for (Eigen::Index k = 0; k < K; ++k) {
+        FlatOutput d;
+        for (int i = 0; i < 4; ++i)
+          for (int ord = 0; ord < 5; ++ord) d(i, ord) = F(k, 5 * i + ord);
+        if (d(kZ, 2) + opt.g > 0.0)
+          VV.row(k) = design_detail::vehicle_sample(d, opt.g, vlim, nullptr).transpose();
+        else  // no upward thrust: the rotors would have to pull (rotor_min violated), rates count as 10x the limit
+          for (Eigen::Index j = 0; j < VV.cols(); ++j)
+            VV(k, j) = j >= 2 ? -1.0 : std::isfinite(opt.limits.rate_max) ? 10.0 * opt.limits.rate_max : 0.0;
+      }
+    }
     for (size_t f = 0; f < fams.size(); ++f) {
       if (only >= 0 && static_cast<int>(f) != only) continue;
       const Family& fam = fams[f];
       const auto c = static_cast<Eigen::Index>(f);
       if (fam.tilt)
         V.col(c) = fam.axis == 0 ? phi : theta;
+      else if (fam.vehicle)
+        V.col(c) = VV.col(fam.axis);
       else
         V.col(c).noalias() = B(fam.order) * x.segment(fam.axis * n1, n1);
     }
@@ -377,6 +402,22 @@ struct Round {
             Eigen::RowVectorXd gx(s.n);
             for (int i = 0; i < 3; ++i) gx.segment(i * n1, n1) = dv(i) * B2.row(best);
             gx.segment(3 * n1, n1) = dv(3) * B0.row(best);
+            Jr.noalias() = (sigma / fam.scale) * (gx * s.Z);
+          } else if (fam.vehicle) {
+            FlatOutput d;
+            for (int i = 0; i < 4; ++i)
+              for (int ord = 0; ord < 5; ++ord)
+                d(i, ord) = s.fine_basis[static_cast<size_t>(ord)].row(best).dot(x.segment(i * n1, n1));
+            Eigen::MatrixXd dv;
+            Eigen::RowVectorXd gx = Eigen::RowVectorXd::Zero(s.n);
+            if (d(kZ, 2) + s.opt.g > 0.0) {
+              design_detail::vehicle_sample(d, s.opt.g, s.vlim, &dv);
+              for (int i = 0; i < 4; ++i)
+                for (int ord = 0; ord < 5; ++ord)
+                  if (design_detail::is_input(i, ord))
+                    gx.segment(i * n1, n1) += dv(fam.axis, design_detail::input_index(i, ord)) *
+                                              s.fine_basis[static_cast<size_t>(ord)].row(best);
+            }
             Jr.noalias() = (sigma / fam.scale) * (gx * s.Z);
           } else {  // only the family's axis: one block of Z
             Jr.noalias() = (sigma / fam.scale) * (s.fine_basis[static_cast<size_t>(fam.order)].row(best) *

@@ -50,7 +50,7 @@ std::string table(const std::vector<std::string>& head, const std::vector<std::v
 }  // namespace
 
 json to_json(const Constraints& c) {
-  return {{"x_max", number_or_null(c.x_max)},
+  json j = {{"x_max", number_or_null(c.x_max)},
           {"y_max", number_or_null(c.y_max)},
           {"z_min", number_or_null(c.z_min)},
           {"z_max", number_or_null(c.z_max)},
@@ -63,8 +63,21 @@ json to_json(const Constraints& c) {
           {"zddot_min", number_or_null(c.zddot_min)},
           {"zddot_max", number_or_null(c.zddot_max)},
           {"psiddot_max", number_or_null(c.psiddot_max)},
+          {"rate_max", number_or_null(c.rate_max)},
           {"start", {{"x", c.x0}, {"y", c.y0}, {"z", c.z0}, {"psi", c.psi0}}},
           {"units", "SI: m, m/s, m/s^2, rad, rad/s, rad/s^2; null = unbounded"}};
+  if (c.rotor_mixer.rows() > 0) {
+    json mixer = json::array();
+    for (Eigen::Index i = 0; i < c.rotor_mixer.rows(); ++i)
+      mixer.push_back({c.rotor_mixer(i, 0), c.rotor_mixer(i, 1), c.rotor_mixer(i, 2), c.rotor_mixer(i, 3)});
+    j["rotors"] = {{"vehicle", c.vehicle_name},
+                   {"parameters", to_json(c.vehicle)},
+                   {"thrust_low", c.thrust_low},
+                   {"thrust_high", c.thrust_high},
+                   {"mixer", mixer},
+                   {"units", "mixer: rotor thrust / its largest thrust, per N and N m of [Fz tau_phi tau_theta tau_psi]"}};
+  }
+  return j;
 }
 
 Constraints constraints_from_json(const json& j, const std::string& source, Constraints c) {
@@ -81,13 +94,34 @@ Constraints constraints_from_json(const json& j, const std::string& source, Cons
       {"z_max", &c.z_max},       {"psi_max", &c.psi_max},     {"tilt_max", &c.tilt_max},
       {"xdot_max", &c.xdot_max}, {"ydot_max", &c.ydot_max},   {"zdot_max", &c.zdot_max},
       {"psidot_max", &c.psidot_max}, {"zddot_min", &c.zddot_min}, {"zddot_max", &c.zddot_max},
-      {"psiddot_max", &c.psiddot_max}};
+      {"psiddot_max", &c.psiddot_max}, {"rate_max", &c.rate_max}};
   for (const auto& [k, v] : fields) field(j, k, *v, "constraints");
   if (j.contains("start")) {
     const json& s = j["start"];
     if (!s.is_object()) throw InputError(fmt::format("{}: constraints.start must be an object", source));
     const std::pair<const char*, double*> start[] = {{"x", &c.x0}, {"y", &c.y0}, {"z", &c.z0}, {"psi", &c.psi0}};
     for (const auto& [k, v] : start) field(s, k, *v, "constraints.start");
+  }
+  if (j.contains("rotors")) {
+    const json& r = j["rotors"];
+    const std::string where = source + ": constraints.rotors";
+    if (!r.is_object() || !r.contains("mixer") || !r["mixer"].is_array() || r["mixer"].empty() ||
+        !r.contains("parameters"))
+      throw InputError(where + " must be an object with \"mixer\" (rows of 4 numbers) and \"parameters\"");
+    const json& mx = r["mixer"];
+    c.rotor_mixer.resize(static_cast<Eigen::Index>(mx.size()), 4);
+    for (size_t i = 0; i < mx.size(); ++i) {
+      if (!mx[i].is_array() || mx[i].size() != 4)
+        throw InputError(fmt::format("{}.mixer[{}] must be an array of 4 numbers", where, i));
+      for (size_t k = 0; k < 4; ++k) {
+        if (!mx[i][k].is_number()) throw InputError(fmt::format("{}.mixer[{}][{}] must be a number", where, i, k));
+        c.rotor_mixer(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(k)) = mx[i][k].get<double>();
+      }
+    }
+    c.vehicle = params_from_json(r["parameters"], where + ".parameters");
+    field(r, "thrust_low", c.thrust_low, "constraints.rotors");
+    field(r, "thrust_high", c.thrust_high, "constraints.rotors");
+    if (r.contains("vehicle") && r["vehicle"].is_string()) c.vehicle_name = r["vehicle"].get<std::string>();
   }
   try {
     c.validate();

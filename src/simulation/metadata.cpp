@@ -139,6 +139,7 @@ json sensors_json(const SensorOptions& s) {
           {"imu_rate", s.imu_rate},
           {"noise", noise_json(s.noise)},
           {"velocity_source", to_string(s.velocity_source)},
+          {"yaw_rate", s.yaw_rate_from_gyro ? "gyro" : "mocap"},
           {"seed", s.seed}};
 }
 
@@ -258,6 +259,11 @@ SimulationOptions simulation_options_from_json(const json& j, const std::string&
       n.num("yaw_rate", ns.yaw_rate);
     }
     s.str("velocity_source", [&](const std::string& v) { o.sensors.velocity_source = velocity_source_from_string(v); });
+    s.str("yaw_rate", [&](const std::string& v) {
+      if (v != "gyro" && v != "mocap")
+        throw InputError(fmt::format("{}.yaw_rate: '{}' (expected gyro or mocap)", s.where, v));
+      o.sensors.yaw_rate_from_gyro = v == "gyro";
+    });
     if (s.has("seed")) {
       if (!s.j.at("seed").is_number_unsigned())
         throw InputError(fmt::format("{}.seed: must be a non-negative integer", s.where));

@@ -82,6 +82,7 @@ void configure_for_vehicle(SimulationOptions& o, const Vehicle& v) {
   c.Fz_max = static_cast<double>(r.count()) * r.max_thrust();
   c.tau_max = arm * c.Fz_max;
   if (v.controller.rate) c.rate = *v.controller.rate;
+  o.sensors.yaw_rate_from_gyro = true;  // as an autopilot: see SensorOptions
   const VehicleSensors& s = v.sensors;
   if (s.mocap_rate) o.sensors.mocap_rate = *s.mocap_rate;
   if (s.imu_rate) o.sensors.imu_rate = *s.imu_rate;

@@ -130,6 +130,7 @@ void SensorModel::sample(long long k, double t, const State& x, SensorReadings& 
     const Vec3& w = held_.gyro;
     eta_dot_(0) = w(0) + sf * tt * w(1) + cf * tt * w(2);
     eta_dot_(1) = cf * w(1) - sf * w(2);
+    if (opt_.yaw_rate_from_gyro) eta_dot_(2) = (sf * w(1) + cf * w(2)) / std::cos(held_.theta);  // eq. (4), row 3
   }
 
   const long long mocap_n = sample_index(k, opt_.mocap_rate, control_rate_);
@@ -141,16 +142,16 @@ void SensorModel::sample(long long k, double t, const State& x, SensorReadings& 
     if (opt_.velocity_source == VelocitySource::kMocapDifference) {
       if (first) {
         p_dot_.setZero();  // the flight starts at rest
-        eta_dot_(2) = 0.0;
+        if (!opt_.yaw_rate_from_gyro) eta_dot_(2) = 0.0;
       } else {
         const double h = t - prev_t_;
         p_dot_ = (held_.p - prev_p_) / h;
-        eta_dot_(2) = std::remainder(held_.psi - prev_psi_, 2.0 * M_PI) / h;
+        if (!opt_.yaw_rate_from_gyro) eta_dot_(2) = std::remainder(held_.psi - prev_psi_, 2.0 * M_PI) / h;
       }
     } else {
       p_dot_ = rotation(x.eta) * x.v;
       for (int i = 0; i < 3; ++i) p_dot_(i) += noise(vel_rng_, n.velocity);
-      eta_dot_(2) = (euler_rate_matrix(x.eta) * x.omega)(2) + noise(vel_rng_, n.yaw_rate);
+      if (!opt_.yaw_rate_from_gyro) eta_dot_(2) = (euler_rate_matrix(x.eta) * x.omega)(2) + noise(vel_rng_, n.yaw_rate);
     }
     prev_p_ = held_.p;
     prev_psi_ = held_.psi;

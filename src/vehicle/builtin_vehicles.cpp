@@ -53,6 +53,8 @@ constexpr std::string_view kCrazyflie21 = R"toml(# Bitcraze Crazyflie 2.1, brush
 # time_constant = 0.06 s is a first-order reading of that rise (3 tau ~ 180 ms),
 # used by `simulate` only (a log of rotor speeds is already after the lag).
 # Columns: the names of the Crazyflie uSD log (rpm.m1 .. rpm.m4).
+# [limits]: the firmware's position controller limits roll and pitch to 20 deg
+# (position_controller_pid.c, rLimit and pLimit).
 name = "crazyflie21"
 
 [nominal]
@@ -74,6 +76,8 @@ time_constant = 0.06
 positions = [[0.0325, -0.0325, 0.0], [-0.0325, -0.0325, 0.0],
              [-0.0325, 0.0325, 0.0], [0.0325, 0.0325, 0.0]]
 spin = ["ccw", "cw", "ccw", "cw"]
+[limits]
+tilt_max = 20.0
 )toml";
 
 constexpr std::string_view kJmavsimQuad = R"toml(# PX4's jMAVSim simulated quadrotor (PX4 SITL, SYS_AUTOSTART 10017), as set up in
@@ -109,11 +113,46 @@ positions = [[0.11667261889578034, -0.11667261889578034, 0.0], [-0.1166726188957
 spin = ["ccw", "ccw", "cw", "cw"]
 )toml";
 
+constexpr std::string_view kX500 = R"toml(# Holybro X500 as PX4's Gazebo simulation models it (PX4-Autopilot,
+# Tools/simulation/gz/models/x500_base/model.sdf and x500/model.sdf): a 2 kg class
+# quadrotor, the "2 kg vehicle" of the design and identification tests.
+# Body: base_link mass 2.0 kg, inertia diag(0.021667, 0.021667, 0.040) kg m^2, plus
+# four rotor links of 0.016 kg at (+-0.174, +-0.174) m: m = 2.064 kg, and as point
+# masses they add 4 * 0.016 * 0.174^2 = 0.00194 kg m^2 to Ixx and Iyy and twice that
+# to Izz (their height above the base is left out).
+# Rotors (MulticopterMotorModel plugin): motorConstant 8.54858e-06 N/(rad/s)^2 (kf),
+# momentConstant 0.016 m (torque_ratio), maxRotVelocity 1000 rad/s, so thrust_max =
+# kf * 1000^2 = 8.549 N; timeConstantUp 0.0125 s (down: 0.025 s; quadid's motor lag is
+# one first-order constant: the faster one). Rotor 0 (front right) and rotor 1 (back
+# left) counter-clockwise, rotors 2 (front left) and 3 (back right) clockwise: PX4's
+# quadrotor X order. The log is taken to hold the rotor speeds in rad/s.
+# [limits]: PX4's multicopter defaults MPC_TILTMAX_AIR = 45 deg and MC_ROLLRATE_MAX =
+# MC_PITCHRATE_MAX = 220 deg/s.
+name = "x500"
+[nominal]
+m = 2.064
+Ixx = 0.02361
+Iyy = 0.02361
+Izz = 0.04388
+[rotors]
+input = "speed"
+columns = ["w1", "w2", "w3", "w4"]
+kf = 8.54858e-06
+thrust_max = 8.54858
+torque_ratio = 0.016
+time_constant = 0.0125
+positions = [[0.174, -0.174, 0.0], [-0.174, 0.174, 0.0], [0.174, 0.174, 0.0], [-0.174, -0.174, 0.0]]
+spin = ["ccw", "ccw", "cw", "cw"]
+[limits]
+tilt_max = 45.0
+rate_max = 220.0
+)toml";
+
 }  // namespace
 
 const std::vector<BuiltinVehicle>& builtin_vehicles() {
   static const std::vector<BuiltinVehicle> v = {
-      {"qball2", kQball2}, {"crazyflie21", kCrazyflie21}, {"jmavsim-quad", kJmavsimQuad}};
+      {"qball2", kQball2}, {"crazyflie21", kCrazyflie21}, {"jmavsim-quad", kJmavsimQuad}, {"x500", kX500}};
   return v;
 }
 

@@ -222,6 +222,28 @@ VehicleSensors read_sensors(const Reader& r, const toml::table& t) {
   return s;
 }
 
+VehicleFlightLimits read_limits(const Reader& r, const toml::table& t) {
+  r.only(t, "limits.", {"tilt_max", "rate_max", "speed_max", "thrust_margin", "thrust_min"});
+  VehicleFlightLimits l;
+  auto positive = [&](const char* key, double factor) -> std::optional<double> {
+    const auto v = r.number(t, "limits.", key, false, true);
+    if (v && !(*v > 0.0)) r.fail(t.get(key)->source(), fmt::format("limits.{}", key), "must be > 0");
+    return v ? std::optional<double>(*v * factor) : std::nullopt;
+  };
+  l.tilt_max = positive("tilt_max", kDeg);
+  if (l.tilt_max && !(*l.tilt_max < M_PI / 2))
+    r.fail(t.get("tilt_max")->source(), "limits.tilt_max", "must be below 90 (degrees)");
+  l.rate_max = positive("rate_max", kDeg);
+  l.speed_max = positive("speed_max", 1.0);
+  l.thrust_margin = r.number(t, "limits.", "thrust_margin", false, true);
+  l.thrust_min = r.number(t, "limits.", "thrust_min", false, true);
+  if (l.thrust_margin && !(*l.thrust_margin < 1.0))
+    r.fail(t.get("thrust_margin")->source(), "limits.thrust_margin", "must be a fraction in [0, 1)");
+  if (l.thrust_min && !(*l.thrust_min < 1.0))
+    r.fail(t.get("thrust_min")->source(), "limits.thrust_min", "must be a fraction in [0, 1)");
+  return l;
+}
+
 }  // namespace
 
 void Vehicle::validate() const {
@@ -260,7 +282,7 @@ Vehicle parse_vehicle(std::string_view text, const std::string& source) {
     throw InputError(fmt::format("{}:{}:{}: not valid TOML: {}", source, b.line, b.column, e.description()));
   }
   const Reader r(source);
-  r.only(root, "", {"name", "nominal", "rotors", "controller", "sensors"});
+  r.only(root, "", {"name", "nominal", "rotors", "controller", "sensors", "limits"});
   Vehicle v;
   v.source = source;
   v.name = *r.string(root, "", "name", true);
@@ -269,6 +291,7 @@ Vehicle parse_vehicle(std::string_view text, const std::string& source) {
   v.rotors = read_rotors(r, *r.table(root, "rotors", true));
   if (const auto* c = r.table(root, "controller", false)) v.controller = read_controller(r, *c);
   if (const auto* s = r.table(root, "sensors", false)) v.sensors = read_sensors(r, *s);
+  if (const auto* l = r.table(root, "limits", false)) v.limits = read_limits(r, *l);
   return v;
 }
 
