@@ -5,7 +5,9 @@
 // log of the reference: reference_at (eqs. 26-27 and the kinematics below
 // eq. 20) for the states, the regressor of eq. (11) times the true Theta for
 // the wrench, process_log (section II-C) and Regression (eqs. 34, 38) for
-// Gamma_k. The noise is then propagated to first order:
+// Gamma_k; with simulated flights, Gamma_k and P are each flight's (its true
+// states through process_log and Regression) and the Jacobians J_k stay the
+// reference's. The noise is then propagated to first order:
 //   x_k (the 15 processed signals of RegressionSignals) = x_k^0 + J_k z_k,
 //   z = the pre-filtered noise of [p_dot(3) eta(3) omega(3) F(4)],
 //   e_k = M_a a_k + M_b b_k - y_k (Gamma theta is linear in the signals a, b),
