@@ -81,6 +81,14 @@ struct PrecisionOptions {
   /// The processing identify applies (pre-filter, gravity) and the filtered model's lambda.
   ProcessingOptions processing{};
   double lambda = 30.0;  // rad/s
+  /// The real-flight regression's processing (identify --vehicle, extended.hpp): the
+  /// force row's signals (w, c, Fz) pre-filtered at force_cutoff_hz, the moment rows'
+  /// at moment_cutoff_hz (default processing.lowpass.cutoff_hz both), and the rows
+  /// weighted by the inverse of their residual RMS (weight_rows), those weights measured
+  /// on the simulated flights' logs (needs closed_loop_flights >= 2). Its extra terms
+  /// (offsets, flapping, rotor inertia) are not modelled.
+  std::optional<double> force_cutoff_hz{}, moment_cutoff_hz{};
+  bool weight_rows = false;
   signal::GdVariant gd_variant = signal::GdVariant::Consistent;
   double g = kDefaultGravity;  // m/s^2
   /// The flights flown (see above): simulated with `simulation` (its sensors, plant and
@@ -91,7 +99,8 @@ struct PrecisionOptions {
 
   /// The same flight as a simulation and identification with these options
   /// (quadid simulate / montecarlo / identify): rate, duration, plant, sensors,
-  /// rotors and rotor noise from `sim`; window, pre-filter and lambda from `id`.
+  /// rotors and rotor noise from `sim`; window, pre-filter, lambda, the two cutoffs and
+  /// the row weighting (id.terms.weight_rows) from `id`.
   static PrecisionOptions from(const SimulationOptions& sim, const IdentificationOptions& id);
   /// Throws std::invalid_argument naming the bad option.
   void validate() const;

@@ -19,12 +19,15 @@
 // with a block per held sensor sample.
 #include "quadid/precision.hpp"
 
+#include "quadid/extended.hpp"
 #include "quadid/regressor.hpp"
 #include "quadid/signal.hpp"
 
 #include <fmt/format.h>
 
+#include <array>
 #include <cmath>
+#include <memory>
 #include <stdexcept>
 
 namespace quadid {
@@ -62,23 +65,45 @@ void difference_adjoint(double* u, Eigen::Index n, double T) {
 // information matrix sum Gamma_k^T Gamma_k, and the residual Gamma_k theta - y_k.
 struct RegressorSeries {
   std::vector<Regressor4x7> G;
-  Mat7 A = Mat7::Zero();
+  Vec4 w2 = Vec4::Ones();  // squared row weights (weighted least squares: sum_r w_r^2 e_r^2)
+  Mat7 A = Mat7::Zero();   // sum Gamma_k^T W^2 Gamma_k
   Eigen::MatrixXd e;  // n x 4
   Eigen::Index begin = 0, end = 0;
 };
 
-RegressorSeries regressor_series(const Regression& reg, Eigen::Index n, const Theta& theta) {
+RegressorSeries regressor_series(const Regression& reg, Eigen::Index n, const Theta& theta, const Vec4& w2) {
   RegressorSeries s;
+  s.w2 = w2;
   s.G.assign(static_cast<size_t>(n), Regressor4x7::Zero());
   s.e = Eigen::MatrixXd::Zero(n, 4);
   s.begin = reg.begin();
   s.end = reg.end();
   reg.for_each([&](Eigen::Index k, const Regressor4x7& Gk, const Vec4& y) {
     s.G[static_cast<size_t>(k)] = Gk;
-    s.A.noalias() += Gk.transpose() * Gk;
+    s.A.noalias() += Gk.transpose() * w2.asDiagonal() * Gk;
     s.e.row(k) = (Gk * theta - y).transpose();
   });
   return s;
+}
+
+// The signals of section II-C as the real-flight regression takes them (extended.cpp,
+// raw_signals): w, c and Fz (columns 0, 4, 11: the force row) pre-filtered at the force
+// cutoff, the others at the moment cutoff; the edges left out are the wider filter's.
+constexpr std::array<int, 3> kForceSignals = {0, 4, 11};
+bool is_force_signal(int s) { return s == 0 || s == 4 || s == 11; }
+
+std::shared_ptr<const RegressionSignals> row_signals(const FlightLog& log, const ProcessingOptions& proc,
+                                                     double f_force, double f_moment) {
+  ProcessingOptions pf = proc, pm = proc;
+  pf.lowpass.cutoff_hz = f_force;
+  pm.lowpass.cutoff_hz = f_moment;
+  auto sf = process_log(log, pf);
+  if (f_force == f_moment) return sf;
+  auto sm = process_log(log, pm);
+  auto mixed = std::make_shared<RegressionSignals>(*sm);
+  for (int c : kForceSignals) mixed->x.col(c) = sf->x.col(c);
+  mixed->edge = std::max(sf->edge, sm->edge);
+  return mixed;
 }
 
 // P = A^-1 computed with the columns scaled to unit norm (the parameters differ
@@ -110,6 +135,9 @@ PrecisionOptions PrecisionOptions::from(const SimulationOptions& sim, const Iden
   o.processing = id.processing;
   o.lambda = id.lambda;
   o.gd_variant = id.gd_variant;
+  o.force_cutoff_hz = id.force_cutoff_hz;
+  o.moment_cutoff_hz = id.moment_cutoff_hz;
+  o.weight_rows = id.terms.weight_rows;
   o.g = sim.g;
   o.simulation = sim;
   return o;
@@ -137,6 +165,13 @@ void PrecisionOptions::validate() const {
   if (closed_loop_flights == 1 || closed_loop_flights < 0 || closed_loop_flights > 100)
     throw std::invalid_argument(fmt::format(
         "--closed-loop-flights = {} must be 0 (left out) or 2..100 (their spread is measured)", closed_loop_flights));
+  for (auto [name, f] : {std::pair{"--cutoff-force", force_cutoff_hz}, std::pair{"--cutoff-moment", moment_cutoff_hz}})
+    if (f && !(*f > 0.0 && *f < 0.5 * rate))
+      throw std::invalid_argument(fmt::format("{} = {} Hz must be > 0 and below half the log rate ({} Hz)", name, *f, rate));
+  if (weight_rows && closed_loop_flights == 0)
+    throw std::invalid_argument(
+        "the row weights of the real-flight regression (weighting) are measured on simulated flights: "
+        "--closed-loop-flights must be 2..100, not 0");
   if (simulation) simulation->validate();
 }
 
@@ -167,7 +202,9 @@ PrecisionResult predict_precision(const Trajectory& traj, const PrecisionOptions
     log.data.row(k) << t, r.p(0), r.p(1), r.p(2), r.eta(0), r.eta(1), r.eta(2), r.omega(0), r.omega(1), r.omega(2),
         F(0), F(1), F(2), F(3);
   }
-  const auto signals = process_log(log, opt.processing);
+  const double f_force = opt.force_cutoff_hz.value_or(opt.processing.lowpass.cutoff_hz);
+  const double f_moment = opt.moment_cutoff_hz.value_or(opt.processing.lowpass.cutoff_hz);
+  const auto signals = row_signals(log, opt.processing, f_force, f_moment);
 
   // Gamma theta = M_a a + M_b b: the regressor is linear in its 4 + 7 signals.
   Eigen::Matrix4d Ma;
@@ -235,6 +272,7 @@ PrecisionResult predict_precision(const Trajectory& traj, const PrecisionOptions
   // Simulated flights of the plan (closed_loop_flights > 0): the regressor series of
   // each (its true states processed as a log), and its residual for the closed-loop term.
   std::vector<std::shared_ptr<const RegressionSignals>> flown;
+  std::vector<std::array<Vec4, 2>> flown_w2;  // squared row weights of LS and FMLS on each flight's log
   if (opt.closed_loop_flights > 0) {
     SimulationOptions so = opt.simulation.value_or(SimulationOptions{});
     if (!opt.simulation) {
@@ -246,7 +284,8 @@ PrecisionResult predict_precision(const Trajectory& traj, const PrecisionOptions
     }
     so.duration = opt.duration;
     so.record_truth = true;
-    so.rotor_noise = 0.0;  // only the log sees it
+    // The rotor noise only reaches the log (the flight is the same): it is there for the row weights.
+    so.rotor_noise = opt.weight_rows ? opt.rotor_noise : 0.0;
     for (int f = 0; f < opt.closed_loop_flights; ++f) {
       so.sensors.seed = static_cast<std::uint64_t>(f + 1);
       const SimulationResult flight = [&] {
@@ -260,11 +299,33 @@ PrecisionResult predict_precision(const Trajectory& traj, const PrecisionOptions
         }
       }();
       if (flight.truth.rows() != n) throw std::logic_error("precision: a simulated flight of another length");
-      flown.push_back(process_log(flight.truth, opt.processing));
+      flown.push_back(row_signals(flight.truth, opt.processing, f_force, f_moment));
+      std::array<Vec4, 2> w2{Vec4::Ones(), Vec4::Ones()};
+      if (opt.weight_rows) {
+        // The weights identify gives this flight's log: the real-flight regression with
+        // its row weighting alone (extended.cpp: three passes, 1 / residual RMS per row).
+        ExtendedOptions xo;
+        xo.processing = opt.processing;
+        xo.force_cutoff_hz = f_force;
+        xo.moment_cutoff_hz = f_moment;
+        xo.window = opt.window;
+        xo.lambda = opt.lambda;
+        xo.gd_variant = opt.gd_variant;
+        xo.terms.weight_rows = true;
+        xo.reference = opt.params;
+        const ExtendedResult x =
+            identify_extended(so.rotors ? with_rotor_wrench(flight.log, *so.rotors) : flight.log, xo);
+        for (int m = 0; m < 2; ++m) w2[static_cast<size_t>(m)] = x.estimates[static_cast<size_t>(m)].row_weight.cwiseAbs2();
+      }
+      flown_w2.push_back(w2);
     }
   }
 
-  signal::ZeroPhaseFilter zf(opt.processing.lowpass, opt.rate);
+  signal::LowpassOptions lp_force = opt.processing.lowpass, lp_moment = opt.processing.lowpass;
+  lp_force.cutoff_hz = f_force;
+  lp_moment.cutoff_hz = f_moment;
+  signal::ZeroPhaseFilter zf_force(lp_force, opt.rate), zf_moment(lp_moment, opt.rate);
+  const bool two_cutoffs = f_force != f_moment;
   PrecisionResult res;
   res.trajectory = traj.describe();
   res.truth = theta;
@@ -279,7 +340,7 @@ PrecisionResult predict_precision(const Trajectory& traj, const PrecisionOptions
     // Weight series on the processed signals: columns [a(4) b(7) y(4)] x 7 parameters.
     Eigen::MatrixXd U = Eigen::MatrixXd::Zero(n, 15 * 7);
     for (Eigen::Index k = S.begin; k < S.end; ++k) {
-      const Eigen::Matrix<double, 7, 4> Q = P * S.G[static_cast<size_t>(k)].transpose();
+      const Eigen::Matrix<double, 7, 4> Q = P * S.G[static_cast<size_t>(k)].transpose() * S.w2.asDiagonal();
       Eigen::Matrix<double, 7, 15> V;
       V << Q * Ma, Q * Mb, -Q;
       for (int s = 0; s < 15; ++s) U.block<1, 7>(k, 7 * s) = V.col(s).transpose();
@@ -300,19 +361,38 @@ PrecisionResult predict_precision(const Trajectory& traj, const PrecisionOptions
     }
     // Through J_k onto the 13 pre-filtered inputs, then the pre-filter's adjoint
     // (filtfilt is symmetric: H^T = H away from the edges, which the window leaves out).
-    Eigen::MatrixXd Z = Eigen::MatrixXd::Zero(n, kIn * 7);
+    // With two cutoffs the force row's signals and the others come from inputs filtered
+    // by each filter: Z = H_F^T (V_F J)^T + H_M^T (V_M J)^T.
+    Eigen::MatrixXd Z = Eigen::MatrixXd::Zero(n, kIn * 7), Zm;
+    if (two_cutoffs) Zm = Eigen::MatrixXd::Zero(n, kIn * 7);
     for (Eigen::Index k = 0; k < n; ++k) {
-      Eigen::Matrix<double, 7, 15> V;
+      Eigen::Matrix<double, 7, 15> V, Vm = Eigen::Matrix<double, 7, 15>::Zero();
       for (int s = 0; s < 15; ++s) V.col(s) = U.block<1, 7>(k, 7 * s).transpose();
       if (V.isZero(0.0)) continue;
+      if (two_cutoffs)
+        for (int s = 0; s < 15; ++s)
+          if (!is_force_signal(s)) {
+            Vm.col(s) = V.col(s);
+            V.col(s).setZero();
+          }
       const Eigen::Matrix<double, 7, kIn> W = V * J[static_cast<size_t>(k)];
       for (int i = 0; i < kIn; ++i) Z.block<1, 7>(k, 7 * i) = W.col(i).transpose();
+      if (two_cutoffs) {
+        const Eigen::Matrix<double, 7, kIn> Wm = Vm * J[static_cast<size_t>(k)];
+        for (int i = 0; i < kIn; ++i) Zm.block<1, 7>(k, 7 * i) = Wm.col(i).transpose();
+      }
     }
     for (int col = 0; col < kIn * 7; ++col) {
       double* z = Z.col(col).data();
       if (col < 3 * 7) difference_adjoint(z, n, T);  // p_dot = D H x, eq. (33)
-      zf.apply(z, n);
+      zf_force.apply(z, n);
+      if (two_cutoffs) {
+        double* zm = Zm.col(col).data();
+        if (col < 3 * 7) difference_adjoint(zm, n, T);
+        zf_moment.apply(zm, n);
+      }
     }
+    if (two_cutoffs) Z += Zm;
 
     std::array<Mat7, 5> by{};
     for (auto& m : by) m.setZero();
@@ -363,7 +443,7 @@ PrecisionResult predict_precision(const Trajectory& traj, const PrecisionOptions
     Mat7 cov = Mat7::Zero();
     if (flown.empty()) {
       // The information along the reference itself.
-      const RegressorSeries S = regressor_series(reg, n, theta);
+      const RegressorSeries S = regressor_series(reg, n, theta, Vec4::Ones());
       const Mat7 P = information_inverse(S.A, &out.condition, what);
       const auto by = linear_part(model, S, P);
       for (int src = 0; src < 5; ++src) {
@@ -378,8 +458,9 @@ PrecisionResult predict_precision(const Trajectory& traj, const PrecisionOptions
       // information, so the covariances are averaged over the flights.
       std::vector<RegressorSeries> S;
       Mat7 A_mean = Mat7::Zero();
-      for (const auto& sig : flown) {
-        S.push_back(regressor_series(Regression(sig, model, opt.window, opt.lambda, opt.gd_variant), n, theta));
+      for (size_t f = 0; f < flown.size(); ++f) {
+        S.push_back(regressor_series(Regression(flown[f], model, opt.window, opt.lambda, opt.gd_variant), n, theta,
+                                     flown_w2[f][static_cast<size_t>(m)]));
         A_mean += S.back().A / static_cast<double>(flown.size());
       }
       information_inverse(A_mean, &out.condition, what + " (as flown)");
@@ -395,7 +476,8 @@ PrecisionResult predict_precision(const Trajectory& traj, const PrecisionOptions
         P[f] = information_inverse(S[f].A, nullptr, what + " (as flown)");
         psi[f] = Eigen::MatrixXd::Zero(n, 7);
         for (Eigen::Index k = S[f].begin; k < S[f].end; ++k)
-          psi[f].row(k) = (P[f] * S[f].G[static_cast<size_t>(k)].transpose() * S[f].e.row(k).transpose()).transpose();
+          psi[f].row(k) = (P[f] * S[f].G[static_cast<size_t>(k)].transpose() * S[f].w2.asDiagonal() *
+                           S[f].e.row(k).transpose()).transpose();
         psi_mean += psi[f] / static_cast<double>(S.size());
       }
       Mat7 C_cl = Mat7::Zero();
