@@ -117,7 +117,9 @@ struct PredictedSet {
   /// Variance of each parameter from each noise source, in the order of
   /// PrecisionResult::sources (rows: parameters).
   Eigen::Matrix<double, 7, Eigen::Dynamic> variance_by_source;
-  double condition = 0.0;  // cond of the column-scaled regressor stack (as LeastSquaresSolution::condition), mean information of the flights
+  /// cond of the column-scaled regressor stack (as LeastSquaresSolution::condition), of
+  /// the flights' mean information matrix when flights are simulated.
+  double condition = 0.0;
   /// The linear part alone (sensor noise to first order) and the closed-loop part.
   Theta linear_std_error = Theta::Zero();
   Theta closed_loop_std_error = Theta::Zero();
@@ -125,6 +127,7 @@ struct PredictedSet {
 
 struct PrecisionResult {
   std::string trajectory;            // Trajectory::describe()
+  std::string regression;            // what is predicted, e.g. "paper (pre-filter 4 Hz)"
   Eigen::Index samples = 0;          // regression rows (log samples in the window)
   TimeWindow window;                 // used, after the edges are left out
   std::vector<std::string> sources;  // "position", "yaw", "attitude", "gyro", "rotor" or "wrench", then "closed loop"

@@ -167,11 +167,13 @@ void PrecisionOptions::validate() const {
         "--closed-loop-flights = {} must be 0 (left out) or 2..100 (their spread is measured)", closed_loop_flights));
   for (auto [name, f] : {std::pair{"--cutoff-force", force_cutoff_hz}, std::pair{"--cutoff-moment", moment_cutoff_hz}})
     if (f && !(*f > 0.0 && *f < 0.5 * rate))
-      throw std::invalid_argument(fmt::format("{} = {} Hz must be > 0 and below half the log rate ({} Hz)", name, *f, rate));
+      throw std::invalid_argument(
+          fmt::format("{} = {} Hz must be > 0 and below half the log rate ({} Hz)", name, *f, rate));
   if (weight_rows && closed_loop_flights == 0)
     throw std::invalid_argument(
         "the row weights of the real-flight regression (weighting) are measured on simulated flights: "
-        "--closed-loop-flights must be 2..100, not 0");
+        "--closed-loop-flights must be 2..100, not 0 (or predict the paper's unweighted regression: "
+        "--regression paper)");
   if (simulation) simulation->validate();
 }
 
@@ -315,7 +317,8 @@ PrecisionResult predict_precision(const Trajectory& traj, const PrecisionOptions
         xo.reference = opt.params;
         const ExtendedResult x =
             identify_extended(so.rotors ? with_rotor_wrench(flight.log, *so.rotors) : flight.log, xo);
-        for (int m = 0; m < 2; ++m) w2[static_cast<size_t>(m)] = x.estimates[static_cast<size_t>(m)].row_weight.cwiseAbs2();
+        for (int m = 0; m < 2; ++m)
+          w2[static_cast<size_t>(m)] = x.estimates[static_cast<size_t>(m)].row_weight.cwiseAbs2();
       }
       flown_w2.push_back(w2);
     }
@@ -328,6 +331,10 @@ PrecisionResult predict_precision(const Trajectory& traj, const PrecisionOptions
   const bool two_cutoffs = f_force != f_moment;
   PrecisionResult res;
   res.trajectory = traj.describe();
+  res.regression = opt.weight_rows ? "real-flight, rows weighted by 1/residual RMS" : "paper";
+  res.regression += two_cutoffs
+                        ? fmt::format(" (force row pre-filtered at {:g} Hz, moment rows at {:g} Hz)", f_force, f_moment)
+                        : fmt::format(" (pre-filter {:g} Hz)", f_force);
   res.truth = theta;
   res.sources = {"position", "yaw", "attitude", "gyro", rotor_mode ? "rotor" : "wrench", "closed loop"};
   const Theta scale = precision_scale(theta);
@@ -514,7 +521,8 @@ PrecisionResult predict_precision(const Trajectory& traj, const PrecisionOptions
 }
 
 std::string format_precision(const PrecisionResult& r) {
-  std::string s = fmt::format("predicted precision ({} regression rows, window {}):\n", r.samples, r.window.to_string());
+  std::string s = fmt::format("predicted precision ({} regression rows, window {}; regression {}):\n", r.samples,
+                              r.window.to_string(), r.regression);
   s += fmt::format("  {:<5} {:>12} {:>13} {:>8} {:>13} {:>8}  {}\n", "param", "value", "LS std err", "LS %",
                    "FMLS std err", "FMLS %", "main noise source (LS)");
   const Theta scale = precision_scale(r.truth);
@@ -541,6 +549,7 @@ std::string format_precision(const PrecisionResult& r) {
 nlohmann::json to_json(const PrecisionResult& r) {
   nlohmann::json j;
   j["trajectory"] = r.trajectory;
+  j["regression"] = r.regression;
   j["samples"] = r.samples;
   j["window"] = {r.window.t0, r.window.t1};
   j["sources"] = r.sources;
