@@ -25,6 +25,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <memory>
@@ -61,8 +62,9 @@ void difference_adjoint(double* u, Eigen::Index n, double T) {
   for (Eigen::Index j = 0; j < n; ++j) u[j] = -u[j];
 }
 
-// The regressor series Gamma_k of one regression (0 outside its window), its
-// information matrix sum Gamma_k^T Gamma_k, and the residual Gamma_k theta - y_k.
+// The regressor series Gamma_k of one regression (0 outside its window), its row
+// weights W, its information matrix sum Gamma_k^T W^2 Gamma_k, and the residual
+// Gamma_k theta - y_k.
 struct RegressorSeries {
   std::vector<Regressor4x7> G;
   Vec4 w2 = Vec4::Ones();  // squared row weights (weighted least squares: sum_r w_r^2 e_r^2)
@@ -90,7 +92,7 @@ RegressorSeries regressor_series(const Regression& reg, Eigen::Index n, const Th
 // raw_signals): w, c and Fz (columns 0, 4, 11: the force row) pre-filtered at the force
 // cutoff, the others at the moment cutoff; the edges left out are the wider filter's.
 constexpr std::array<int, 3> kForceSignals = {0, 4, 11};
-bool is_force_signal(int s) { return s == 0 || s == 4 || s == 11; }
+bool is_force_signal(int s) { return std::find(kForceSignals.begin(), kForceSignals.end(), s) != kForceSignals.end(); }
 
 std::shared_ptr<const RegressionSignals> row_signals(const FlightLog& log, const ProcessingOptions& proc,
                                                      double f_force, double f_moment) {
@@ -341,8 +343,8 @@ PrecisionResult predict_precision(const Trajectory& traj, const PrecisionOptions
   const double alpha = std::exp(-opt.lambda * T), one_minus = -std::expm1(-opt.lambda * T);
   const double c = (opt.gd_variant == signal::GdVariant::Printed) ? opt.lambda : one_minus / T;
 
-  // The linear part for one regressor series S with P = (sum S.G^T S.G)^-1: the
-  // covariance of each noise source (columns of the result, sources 0..4).
+  // The linear part for one regressor series S with P = (sum S.G^T W^2 S.G)^-1 (the
+  // weights P Gamma_k^T W^2): the covariance of each noise source 0..4.
   auto linear_part = [&](RegressionModel model, const RegressorSeries& S, const Mat7& P) {
     // Weight series on the processed signals: columns [a(4) b(7) y(4)] x 7 parameters.
     Eigen::MatrixXd U = Eigen::MatrixXd::Zero(n, 15 * 7);
