@@ -10,11 +10,13 @@
 // controller (and by the tracking error of the motor lag), which for these vehicles
 // adds much of the information on the moments (Izz most of all), and the prediction
 // was up to 3.4 times the spread (docs/fly-it.md).
+#include "cli_fixture.hpp"
 #include "quadid/precision.hpp"
 #include "quadid/simulation.hpp"
 #include "quadid/vehicle.hpp"
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include <cmath>
 #include <string>
@@ -127,4 +129,25 @@ TEST(PrecisionVehicle, CrazyflieWeightedRegressionAgreesWithTheSpreadOfFlights) 
 
 TEST(PrecisionVehicle, Heavy2kgWeightedRegressionAgreesWithTheSpreadOfFlights) {
   check_against_flights(parse_vehicle(kHeavy, "heavy-x"), 5.0, 16, true);
+}
+
+// check-trajectory predicts the regression identify will fit: the real-flight one with
+// --vehicle (as identify --vehicle), the paper's without, or the one asked for.
+class PrecisionCli : public quadid::testing::CliTest {};
+
+TEST_F(PrecisionCli, CheckTrajectoryPredictsTheRegressionIdentifyFits) {
+  auto regression = [&](const std::string& args) {
+    const quadid::testing::CliRun r = run("check-trajectory table2 --json --flight-duration 14 --window 4:14 " + args);
+    EXPECT_EQ(r.rc, 0) << r.err;
+    return nlohmann::json::parse(r.out).at("predicted_precision").at("regression").get<std::string>();
+  };
+  EXPECT_EQ(regression("--closed-loop-flights 0"), "paper (pre-filter 4 Hz)");
+  EXPECT_EQ(regression("--vehicle crazyflie21 --closed-loop-flights 2"),
+            "real-flight, rows weighted by 1/residual RMS (force row pre-filtered at 4 Hz, moment rows at 8 Hz)");
+  EXPECT_EQ(regression("--vehicle crazyflie21 --closed-loop-flights 2 --regression paper"), "paper (pre-filter 4 Hz)");
+  // The weights need flights: the message names the way out.
+  const quadid::testing::CliRun r = run("check-trajectory table2 --vehicle crazyflie21 --closed-loop-flights 0");
+  EXPECT_EQ(r.rc, 1);
+  EXPECT_NE(r.err.find("--regression paper"), std::string::npos) << r.err;
+  EXPECT_NE(run("check-trajectory table2 --regression weighted").rc, 0);
 }
