@@ -67,6 +67,23 @@ TEST(Precision, BadOptionsAreNamed) {
   o = PrecisionOptions{};
   o.rotor_noise = 1.0;  // no rotor model
   EXPECT_THROW(predict_precision(FourierTrajectory::table2(), o), std::invalid_argument);
+  o = PrecisionOptions{};
+  o.weight_rows = true;  // its weights are measured on simulated flights
+  o.closed_loop_flights = 0;
+  EXPECT_THROW(
+      try { predict_precision(FourierTrajectory::table2(), o); } catch (const std::invalid_argument& e) {
+        EXPECT_NE(std::string(e.what()).find("--closed-loop-flights"), std::string::npos) << e.what();
+        throw;
+      },
+      std::invalid_argument);
+  o = PrecisionOptions{};
+  o.moment_cutoff_hz = 300.0;  // above half the 500 Hz log rate
+  EXPECT_THROW(
+      try { predict_precision(FourierTrajectory::table2(), o); } catch (const std::invalid_argument& e) {
+        EXPECT_NE(std::string(e.what()).find("--cutoff-moment"), std::string::npos) << e.what();
+        throw;
+      },
+      std::invalid_argument);
 }
 
 // The prediction against the spread of LS and FMLS over simulated flights.

@@ -22,6 +22,12 @@ void PrecisionArgs::add_to(CLI::App* sub) {
   sub->add_option("--closed-loop-flights", closed_loop_flights,
                   "simulated flights of the plan measuring the closed-loop term of the precision (0 = leave it out)")
       ->capture_default_str();
+  sub->add_option("--regression", regression,
+                  "regression predicted: auto (real with --vehicle, as identify --vehicle; else paper), paper (the "
+                  "paper's LS and FMLS, identify --terms paper --cutoffs fixed), or real (rows weighted by their "
+                  "residual RMS, moment rows pre-filtered at twice the cutoff; the extra terms not modelled)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"auto", "paper", "real"}));
   sub->add_flag("--no-precision", off, "do not predict the standard errors");
 }
 
@@ -39,6 +45,11 @@ PrecisionOptions PrecisionArgs::options() const {
   }
   IdentificationOptions id;
   id.window = TimeWindow::parse(window);
+  if (regression == "real" || (regression == "auto" && !vehicle.empty())) {
+    // identify --vehicle's defaults (apply_real_flight): weighted rows, moment rows at twice --cutoff.
+    id.terms.weight_rows = true;
+    id.moment_cutoff_hz = 2.0 * id.processing.lowpass.cutoff_hz;
+  }
   PrecisionOptions o = PrecisionOptions::from(sim, id);
   o.closed_loop_flights = closed_loop_flights;
   return o;

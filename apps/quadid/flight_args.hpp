@@ -14,13 +14,14 @@
 namespace quadid::cli {
 
 /// --vehicle, --flight-duration, --window, --sigma-position/-yaw/-attitude/-gyro/-rotor,
-/// --closed-loop-flights, --no-precision.
+/// --closed-loop-flights, --regression, --no-precision.
 struct PrecisionArgs {
   std::string vehicle;  // empty: the paper's flight (virtual QBall 2, 500 Hz, default noise)
   double flight_duration = 50.0;
   std::string window = "10:50";
   std::optional<double> sigma_position, sigma_yaw, sigma_attitude, sigma_gyro, sigma_rotor;
   int closed_loop_flights = 4;
+  std::string regression = "auto";  // auto | paper | real (identify's row weighting and moment cutoff)
   bool off = false;
 
   void add_to(CLI::App* sub);

@@ -7,10 +7,11 @@
 // (pre-filter, central differences of eq. 33, v = R^T p_dot, products of the
 // rates, f_D / g_D of eqs. 35-36). See docs/fly-it.md ("Predicted precision").
 //
-// Model: every logged signal = its value along the reference + white noise,
+// Model: every logged signal = its value along the flight + white noise,
 // sampled and held at its sensor's rate (motion capture: x y z psi; IMU: phi
-// theta p q r; the wrench: from the logged rotor speeds, or with its own
-// noise). The estimate error is, to first order in the noise,
+// theta p q r; the wrench: from the logged rotor speeds, white noise on each
+// logged sample as the simulator adds it, or with its own noise). The estimate
+// error is, to first order in the noise,
 //   delta_theta = P sum_k Gamma_k^T delta_e_k,   P = (sum_k Gamma_k^T Gamma_k)^-1 (eq. 40),
 // delta_e_k linear in the noise; its covariance is computed exactly by running
 // the adjoint of the processing backwards over the weights P Gamma_k^T, so the
@@ -18,17 +19,32 @@
 // accounted for sample by sample rather than by one correlation length.
 // The errors-in-variables bias (second order in the noise) is left out.
 //
-// Closed loop: the sensor noise also drives the controller, so the vehicle's
-// true rates jitter (at the motion-capture rate chiefly). The processing
-// multiplies filtered rates (p q, q r, ...) where the dynamics multiply true
-// ones, and the product of two jitters has low-frequency content the
-// pre-filter keeps: a residual of second order in the noise that no
-// linearization sees, and that dominates the inertia products in the paper's
-// setting. With `closed_loop_flights` >= 2 it is measured on simulated flights
-// of the plan (the simulator's controller, same sensors): the residual of the
-// true states of each flight less their mean over the flights (which removes
-// the part every flight shares), whose covariance is the HAC sandwich of the
-// existing uncertainty code (InfluenceAccumulator), added to the linear part.
+// Which flight: the vehicle does not fly the reference exactly. The sensor noise
+// drives the controller, so the true states jitter about the plan (at the
+// motion-capture rate chiefly), and the motor lag adds a tracking error; the
+// regression sees that motion too, and it adds information. For the paper's
+// QBall 2 it is small against the planned excitation; for a 30 g Crazyflie or a
+// 2 kg vehicle flying the same plan it is much of the information on the
+// moments (Izz most of all): the information along the reference alone
+// predicted up to 3.4 times the spread of simulated flights. So with
+// `closed_loop_flights` >= 2 the plan is flown by the simulator (the vehicle's
+// controller, same sensors, seeds 1..closed_loop_flights), and Gamma_k and P
+// are those of each flight's true states processed as a log (each flight's
+// estimate uses its own information); the covariances are averaged over the
+// flights. The Jacobians of the processing and the rotor speeds of dF/dw stay
+// those of the reference (first order). With closed_loop_flights = 0 the
+// reference alone gives Gamma_k and P.
+//
+// Closed loop: the processing multiplies filtered rates (p q, q r, ...) where
+// the dynamics multiply true ones, and the product of two jitters has
+// low-frequency content the pre-filter keeps: a residual of second order in the
+// noise that no linearization sees, and that dominates the moments of inertia
+// in the paper's setting. It is measured on the same flights: the influence
+// P Gamma_k^T e_k of the residual e_k of each flight's true states, less its
+// mean over the flights at the same sample (which removes the part every flight
+// shares: the processing's deterministic error and the mean of the second-order
+// terms, a bias), whose covariance is the HAC estimate of the uncertainty code
+// (long_run_covariance), added to the linear part.
 #pragma once
 
 #include "quadid/identification.hpp"
@@ -65,16 +81,26 @@ struct PrecisionOptions {
   /// The processing identify applies (pre-filter, gravity) and the filtered model's lambda.
   ProcessingOptions processing{};
   double lambda = 30.0;  // rad/s
+  /// The real-flight regression's processing (identify --vehicle, extended.hpp): the
+  /// force row's signals (w, c, Fz) pre-filtered at force_cutoff_hz, the moment rows'
+  /// at moment_cutoff_hz (default processing.lowpass.cutoff_hz both), and the rows
+  /// weighted by the inverse of their residual RMS (weight_rows), those weights measured
+  /// on the simulated flights' logs (needs closed_loop_flights >= 2). Its extra terms
+  /// (offsets, flapping, rotor inertia) are not modelled.
+  std::optional<double> force_cutoff_hz{}, moment_cutoff_hz{};
+  bool weight_rows = false;
   signal::GdVariant gd_variant = signal::GdVariant::Consistent;
   double g = kDefaultGravity;  // m/s^2
-  /// The closed-loop term (see above): flights simulated with `simulation` (its
-  /// sensors, plant and controller; seeds 1..closed_loop_flights), 0 = left out, else >= 2.
+  /// The flights flown (see above): simulated with `simulation` (its sensors, plant and
+  /// controller; seeds 1..closed_loop_flights); they give Gamma_k, P and the closed-loop
+  /// term. 0 = the reference alone and no closed-loop term, else >= 2.
   int closed_loop_flights = 4;
   std::optional<SimulationOptions> simulation{};  // default: SimulationOptions{} with this struct's rate, sensors, plant, duration
 
   /// The same flight as a simulation and identification with these options
   /// (quadid simulate / montecarlo / identify): rate, duration, plant, sensors,
-  /// rotors and rotor noise from `sim`; window, pre-filter and lambda from `id`.
+  /// rotors and rotor noise from `sim`; window, pre-filter, lambda, the two cutoffs and
+  /// the row weighting (id.terms.weight_rows) from `id`.
   static PrecisionOptions from(const SimulationOptions& sim, const IdentificationOptions& id);
   /// Throws std::invalid_argument naming the bad option.
   void validate() const;
@@ -91,7 +117,9 @@ struct PredictedSet {
   /// Variance of each parameter from each noise source, in the order of
   /// PrecisionResult::sources (rows: parameters).
   Eigen::Matrix<double, 7, Eigen::Dynamic> variance_by_source;
-  double condition = 0.0;  // cond of the column-scaled regressor stack (as LeastSquaresSolution::condition)
+  /// cond of the column-scaled regressor stack (as LeastSquaresSolution::condition), of
+  /// the flights' mean information matrix when flights are simulated.
+  double condition = 0.0;
   /// The linear part alone (sensor noise to first order) and the closed-loop part.
   Theta linear_std_error = Theta::Zero();
   Theta closed_loop_std_error = Theta::Zero();
@@ -99,6 +127,7 @@ struct PredictedSet {
 
 struct PrecisionResult {
   std::string trajectory;            // Trajectory::describe()
+  std::string regression;            // what is predicted, e.g. "paper (pre-filter 4 Hz)"
   Eigen::Index samples = 0;          // regression rows (log samples in the window)
   TimeWindow window;                 // used, after the edges are left out
   std::vector<std::string> sources;  // "position", "yaw", "attitude", "gyro", "rotor" or "wrench", then "closed loop"

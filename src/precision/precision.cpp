@@ -5,7 +5,9 @@
 // log of the reference: reference_at (eqs. 26-27 and the kinematics below
 // eq. 20) for the states, the regressor of eq. (11) times the true Theta for
 // the wrench, process_log (section II-C) and Regression (eqs. 34, 38) for
-// Gamma_k. The noise is then propagated to first order:
+// Gamma_k; with simulated flights, Gamma_k and P are each flight's (its true
+// states through process_log and Regression) and the Jacobians J_k stay the
+// reference's. The noise is then propagated to first order:
 //   x_k (the 15 processed signals of RegressionSignals) = x_k^0 + J_k z_k,
 //   z = the pre-filtered noise of [p_dot(3) eta(3) omega(3) F(4)],
 //   e_k = M_a a_k + M_b b_k - y_k (Gamma theta is linear in the signals a, b),
@@ -17,12 +19,16 @@
 // with a block per held sensor sample.
 #include "quadid/precision.hpp"
 
+#include "quadid/extended.hpp"
 #include "quadid/regressor.hpp"
 #include "quadid/signal.hpp"
 
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
+#include <memory>
 #include <stdexcept>
 
 namespace quadid {
@@ -56,15 +62,65 @@ void difference_adjoint(double* u, Eigen::Index n, double T) {
   for (Eigen::Index j = 0; j < n; ++j) u[j] = -u[j];
 }
 
-// Residual Gamma_k theta - y_k of one regression model on the true states of a
-// simulated flight, at every sample (0 outside the window).
-Eigen::MatrixXd true_state_residual(const FlightLog& truth, const PrecisionOptions& opt, RegressionModel model,
-                                    const Theta& theta) {
-  const auto sig = process_log(truth, opt.processing);
-  const Regression reg(sig, model, opt.window, opt.lambda, opt.gd_variant);
-  Eigen::MatrixXd e = Eigen::MatrixXd::Zero(sig->size(), 4);
-  reg.for_each([&](Eigen::Index k, const Regressor4x7& G, const Vec4& y) { e.row(k) = (G * theta - y).transpose(); });
-  return e;
+// The regressor series Gamma_k of one regression (0 outside its window), its row
+// weights W, its information matrix sum Gamma_k^T W^2 Gamma_k, and the residual
+// Gamma_k theta - y_k.
+struct RegressorSeries {
+  std::vector<Regressor4x7> G;
+  Vec4 w2 = Vec4::Ones();  // squared row weights (weighted least squares: sum_r w_r^2 e_r^2)
+  Mat7 A = Mat7::Zero();   // sum Gamma_k^T W^2 Gamma_k
+  Eigen::MatrixXd e;  // n x 4
+  Eigen::Index begin = 0, end = 0;
+};
+
+RegressorSeries regressor_series(const Regression& reg, Eigen::Index n, const Theta& theta, const Vec4& w2) {
+  RegressorSeries s;
+  s.w2 = w2;
+  s.G.assign(static_cast<size_t>(n), Regressor4x7::Zero());
+  s.e = Eigen::MatrixXd::Zero(n, 4);
+  s.begin = reg.begin();
+  s.end = reg.end();
+  reg.for_each([&](Eigen::Index k, const Regressor4x7& Gk, const Vec4& y) {
+    s.G[static_cast<size_t>(k)] = Gk;
+    s.A.noalias() += Gk.transpose() * w2.asDiagonal() * Gk;
+    s.e.row(k) = (Gk * theta - y).transpose();
+  });
+  return s;
+}
+
+// The signals of section II-C as the real-flight regression takes them (extended.cpp,
+// raw_signals): w, c and Fz (columns 0, 4, 11: the force row) pre-filtered at the force
+// cutoff, the others at the moment cutoff; the edges left out are the wider filter's.
+constexpr std::array<int, 3> kForceSignals = {0, 4, 11};
+bool is_force_signal(int s) { return std::find(kForceSignals.begin(), kForceSignals.end(), s) != kForceSignals.end(); }
+
+std::shared_ptr<const RegressionSignals> row_signals(const FlightLog& log, const ProcessingOptions& proc,
+                                                     double f_force, double f_moment) {
+  ProcessingOptions pf = proc, pm = proc;
+  pf.lowpass.cutoff_hz = f_force;
+  pm.lowpass.cutoff_hz = f_moment;
+  auto sf = process_log(log, pf);
+  if (f_force == f_moment) return sf;
+  auto sm = process_log(log, pm);
+  auto mixed = std::make_shared<RegressionSignals>(*sm);
+  for (int c : kForceSignals) mixed->x.col(c) = sf->x.col(c);
+  mixed->edge = std::max(sf->edge, sm->edge);
+  return mixed;
+}
+
+// P = A^-1 computed with the columns scaled to unit norm (the parameters differ
+// by ~100x); `condition` = cond of the scaled stack. Throws InputError when singular.
+Mat7 information_inverse(const Mat7& A, double* condition, const std::string& what) {
+  const Theta d = A.diagonal().cwiseSqrt().cwiseInverse();
+  const Mat7 As = d.asDiagonal() * A * d.asDiagonal();
+  Eigen::SelfAdjointEigenSolver<Mat7> es(As);
+  const auto ev = es.eigenvalues();
+  if (!(ev(0) > 1e-12 * ev(6)) || !d.allFinite())
+    throw InputError(fmt::format("predicted precision: the {} does not determine every parameter (information "
+                                 "matrix singular)", what));
+  if (condition) *condition = std::sqrt(ev(6) / ev(0));
+  return d.asDiagonal() * es.eigenvectors() * ev.cwiseInverse().asDiagonal() * es.eigenvectors().transpose() *
+         d.asDiagonal();
 }
 
 }  // namespace
@@ -81,6 +137,9 @@ PrecisionOptions PrecisionOptions::from(const SimulationOptions& sim, const Iden
   o.processing = id.processing;
   o.lambda = id.lambda;
   o.gd_variant = id.gd_variant;
+  o.force_cutoff_hz = id.force_cutoff_hz;
+  o.moment_cutoff_hz = id.moment_cutoff_hz;
+  o.weight_rows = id.terms.weight_rows;
   o.g = sim.g;
   o.simulation = sim;
   return o;
@@ -108,6 +167,15 @@ void PrecisionOptions::validate() const {
   if (closed_loop_flights == 1 || closed_loop_flights < 0 || closed_loop_flights > 100)
     throw std::invalid_argument(fmt::format(
         "--closed-loop-flights = {} must be 0 (left out) or 2..100 (their spread is measured)", closed_loop_flights));
+  for (auto [name, f] : {std::pair{"--cutoff-force", force_cutoff_hz}, std::pair{"--cutoff-moment", moment_cutoff_hz}})
+    if (f && !(*f > 0.0 && *f < 0.5 * rate))
+      throw std::invalid_argument(
+          fmt::format("{} = {} Hz must be > 0 and below half the log rate ({} Hz)", name, *f, rate));
+  if (weight_rows && closed_loop_flights == 0)
+    throw std::invalid_argument(
+        "the row weights of the real-flight regression (weighting) are measured on simulated flights: "
+        "--closed-loop-flights must be 2..100, not 0 (or predict the paper's unweighted regression: "
+        "--regression paper)");
   if (simulation) simulation->validate();
 }
 
@@ -138,7 +206,9 @@ PrecisionResult predict_precision(const Trajectory& traj, const PrecisionOptions
     log.data.row(k) << t, r.p(0), r.p(1), r.p(2), r.eta(0), r.eta(1), r.eta(2), r.omega(0), r.omega(1), r.omega(2),
         F(0), F(1), F(2), F(3);
   }
-  const auto signals = process_log(log, opt.processing);
+  const double f_force = opt.force_cutoff_hz.value_or(opt.processing.lowpass.cutoff_hz);
+  const double f_moment = opt.moment_cutoff_hz.value_or(opt.processing.lowpass.cutoff_hz);
+  const auto signals = row_signals(log, opt.processing, f_force, f_moment);
 
   // Gamma theta = M_a a + M_b b: the regressor is linear in its 4 + 7 signals.
   Eigen::Matrix4d Ma;
@@ -185,19 +255,28 @@ PrecisionResult predict_precision(const Trajectory& traj, const PrecisionOptions
     Jk.block<4, 4>(11, kF).setIdentity();     // Fz tau
   }
 
-  // Rotor-speed noise -> wrench: dF/dw_i = B_i 2 k w_i at the nominal rotor speeds.
+  // Rotor-speed noise -> wrench: dF/dw_i = B_i 2 k w_i at the nominal rotor speeds
+  // (columns 4 i .. 4 i + 3 of row k: rotor i's column of dF/dw at sample k).
   const bool rotor_mode = opt.rotors && opt.rotor_noise > 0.0;
-  Eigen::Matrix<double, 4, Eigen::Dynamic> B;
-  Eigen::Matrix<double, Eigen::Dynamic, 4> mixer;
+  Eigen::MatrixXd dF_dw;
   if (rotor_mode) {
-    B = opt.rotors->allocation();
-    mixer = opt.rotors->mixer();
+    const RotorModel& rm = *opt.rotors;
+    const Eigen::Matrix<double, 4, Eigen::Dynamic> B = rm.allocation();
+    const Eigen::Matrix<double, Eigen::Dynamic, 4> mixer = rm.mixer();
+    dF_dw.resize(n, 4 * rm.count());
+    for (Eigen::Index k = 0; k < n; ++k) {
+      const Eigen::VectorXd thrusts = mixer * wrench.row(k).transpose();
+      for (int i = 0; i < rm.count(); ++i) {
+        const double w = rm.speed_for_thrust(thrusts(i));
+        dF_dw.block<1, 4>(k, 4 * i) = (B.col(i) * (2.0 * rm.thrust_coefficient() * w)).transpose();  // T = k w^2
+      }
+    }
   }
 
-  // Closed-loop term: residuals of the true states of noisy flights of the plan, less
-  // their mean over the flights (which removes what every flight shares: the
-  // processing's deterministic error and the mean of the second-order terms, a bias).
-  std::array<std::vector<Eigen::MatrixXd>, 2> jitter;
+  // Simulated flights of the plan (closed_loop_flights > 0): the regressor series of
+  // each (its true states processed as a log), and its residual for the closed-loop term.
+  std::vector<std::shared_ptr<const RegressionSignals>> flown;
+  std::vector<std::array<Vec4, 2>> flown_w2;  // squared row weights of LS and FMLS on each flight's log
   if (opt.closed_loop_flights > 0) {
     SimulationOptions so = opt.simulation.value_or(SimulationOptions{});
     if (!opt.simulation) {
@@ -209,7 +288,8 @@ PrecisionResult predict_precision(const Trajectory& traj, const PrecisionOptions
     }
     so.duration = opt.duration;
     so.record_truth = true;
-    so.rotor_noise = 0.0;  // only the log sees it
+    // The rotor noise only reaches the log (the flight is the same): it is there for the row weights.
+    so.rotor_noise = opt.weight_rows ? opt.rotor_noise : 0.0;
     for (int f = 0; f < opt.closed_loop_flights; ++f) {
       so.sensors.seed = static_cast<std::uint64_t>(f + 1);
       const SimulationResult flight = [&] {
@@ -222,59 +302,59 @@ PrecisionResult predict_precision(const Trajectory& traj, const PrecisionOptions
               traj.describe(), e.time(), e.reason()));
         }
       }();
-      for (int m = 0; m < 2; ++m)
-        jitter[static_cast<size_t>(m)].push_back(true_state_residual(
-            flight.truth, opt, m == 0 ? RegressionModel::Standard : RegressionModel::Filtered, theta));
-    }
-    for (auto& e : jitter) {
-      Eigen::MatrixXd mean = Eigen::MatrixXd::Zero(e[0].rows(), e[0].cols());
-      for (const auto& x : e) {
-        if (x.rows() != mean.rows()) throw std::logic_error("precision: simulated flights of different lengths");
-        mean += x;
+      if (flight.truth.rows() != n) throw std::logic_error("precision: a simulated flight of another length");
+      flown.push_back(row_signals(flight.truth, opt.processing, f_force, f_moment));
+      std::array<Vec4, 2> w2{Vec4::Ones(), Vec4::Ones()};
+      if (opt.weight_rows) {
+        // The weights identify gives this flight's log: the real-flight regression with
+        // its row weighting alone (extended.cpp: three passes, 1 / residual RMS per row).
+        ExtendedOptions xo;
+        xo.processing = opt.processing;
+        xo.force_cutoff_hz = f_force;
+        xo.moment_cutoff_hz = f_moment;
+        xo.window = opt.window;
+        xo.lambda = opt.lambda;
+        xo.gd_variant = opt.gd_variant;
+        xo.terms.weight_rows = true;
+        xo.reference = opt.params;
+        const ExtendedResult x =
+            identify_extended(so.rotors ? with_rotor_wrench(flight.log, *so.rotors) : flight.log, xo);
+        for (int m = 0; m < 2; ++m)
+          w2[static_cast<size_t>(m)] = x.estimates[static_cast<size_t>(m)].row_weight.cwiseAbs2();
       }
-      mean /= static_cast<double>(e.size());
-      for (auto& x : e) x -= mean;
+      flown_w2.push_back(w2);
     }
   }
 
-  signal::ZeroPhaseFilter zf(opt.processing.lowpass, opt.rate);
+  signal::LowpassOptions lp_force = opt.processing.lowpass, lp_moment = opt.processing.lowpass;
+  lp_force.cutoff_hz = f_force;
+  lp_moment.cutoff_hz = f_moment;
+  signal::ZeroPhaseFilter zf_force(lp_force, opt.rate), zf_moment(lp_moment, opt.rate);
+  const bool two_cutoffs = f_force != f_moment;
   PrecisionResult res;
   res.trajectory = traj.describe();
+  res.regression = opt.weight_rows ? "real-flight, rows weighted by 1/residual RMS" : "paper";
+  res.regression += two_cutoffs
+                        ? fmt::format(" (force row pre-filtered at {:g} Hz, moment rows at {:g} Hz)", f_force, f_moment)
+                        : fmt::format(" (pre-filter {:g} Hz)", f_force);
   res.truth = theta;
   res.sources = {"position", "yaw", "attitude", "gyro", rotor_mode ? "rotor" : "wrench", "closed loop"};
   const Theta scale = precision_scale(theta);
+  const double alpha = std::exp(-opt.lambda * T), one_minus = -std::expm1(-opt.lambda * T);
+  const double c = (opt.gd_variant == signal::GdVariant::Printed) ? opt.lambda : one_minus / T;
 
-  for (int m = 0; m < 2; ++m) {
-    const RegressionModel model = m == 0 ? RegressionModel::Standard : RegressionModel::Filtered;
-    const Regression reg(signals, model, opt.window, opt.lambda, opt.gd_variant);
-    std::vector<Regressor4x7> G(static_cast<size_t>(n), Regressor4x7::Zero());
-    Mat7 A = Mat7::Zero();
-    reg.for_each([&](Eigen::Index k, const Regressor4x7& Gk, const Vec4&) {
-      G[static_cast<size_t>(k)] = Gk;
-      A.noalias() += Gk.transpose() * Gk;
-    });
-    // P = A^-1 with the columns scaled to unit norm (the parameters differ by ~100x).
-    const Theta d = A.diagonal().cwiseSqrt().cwiseInverse();
-    const Mat7 As = d.asDiagonal() * A * d.asDiagonal();
-    Eigen::SelfAdjointEigenSolver<Mat7> es(As);
-    const auto ev = es.eigenvalues();
-    if (!(ev(0) > 1e-12 * ev(6)))
-      throw InputError(fmt::format("predicted precision: the {} regression along {} does not determine every "
-                                   "parameter (information matrix singular)", to_string(model), res.trajectory));
-    const Mat7 P = d.asDiagonal() * es.eigenvectors() * ev.cwiseInverse().asDiagonal() *
-                   es.eigenvectors().transpose() * d.asDiagonal();
-
+  // The linear part for one regressor series S with P = (sum S.G^T W^2 S.G)^-1 (the
+  // weights P Gamma_k^T W^2): the covariance of each noise source 0..4.
+  auto linear_part = [&](RegressionModel model, const RegressorSeries& S, const Mat7& P) {
     // Weight series on the processed signals: columns [a(4) b(7) y(4)] x 7 parameters.
     Eigen::MatrixXd U = Eigen::MatrixXd::Zero(n, 15 * 7);
-    for (Eigen::Index k = reg.begin(); k < reg.end(); ++k) {
-      const Eigen::Matrix<double, 7, 4> Q = P * G[static_cast<size_t>(k)].transpose();
+    for (Eigen::Index k = S.begin; k < S.end; ++k) {
+      const Eigen::Matrix<double, 7, 4> Q = P * S.G[static_cast<size_t>(k)].transpose() * S.w2.asDiagonal();
       Eigen::Matrix<double, 7, 15> V;
       V << Q * Ma, Q * Mb, -Q;
       for (int s = 0; s < 15; ++s) U.block<1, 7>(k, 7 * s) = V.col(s).transpose();
     }
     // Adjoint of the regression's operators on a, b and y.
-    const double alpha = std::exp(-opt.lambda * T), one_minus = -std::expm1(-opt.lambda * T);
-    const double c = (opt.gd_variant == signal::GdVariant::Printed) ? opt.lambda : one_minus / T;
     for (int col = 0; col < 15 * 7; ++col) {
       double* u = U.col(col).data();
       const bool is_a = col < 4 * 7;
@@ -290,25 +370,41 @@ PrecisionResult predict_precision(const Trajectory& traj, const PrecisionOptions
     }
     // Through J_k onto the 13 pre-filtered inputs, then the pre-filter's adjoint
     // (filtfilt is symmetric: H^T = H away from the edges, which the window leaves out).
-    Eigen::MatrixXd Z = Eigen::MatrixXd::Zero(n, kIn * 7);
+    // With two cutoffs the force row's signals and the others come from inputs filtered
+    // by each filter: Z = H_F^T (V_F J)^T + H_M^T (V_M J)^T.
+    Eigen::MatrixXd Z = Eigen::MatrixXd::Zero(n, kIn * 7), Zm;
+    if (two_cutoffs) Zm = Eigen::MatrixXd::Zero(n, kIn * 7);
     for (Eigen::Index k = 0; k < n; ++k) {
-      Eigen::Matrix<double, 7, 15> V;
+      Eigen::Matrix<double, 7, 15> V, Vm = Eigen::Matrix<double, 7, 15>::Zero();
       for (int s = 0; s < 15; ++s) V.col(s) = U.block<1, 7>(k, 7 * s).transpose();
       if (V.isZero(0.0)) continue;
+      if (two_cutoffs)
+        for (int s = 0; s < 15; ++s)
+          if (!is_force_signal(s)) {
+            Vm.col(s) = V.col(s);
+            V.col(s).setZero();
+          }
       const Eigen::Matrix<double, 7, kIn> W = V * J[static_cast<size_t>(k)];
       for (int i = 0; i < kIn; ++i) Z.block<1, 7>(k, 7 * i) = W.col(i).transpose();
+      if (two_cutoffs) {
+        const Eigen::Matrix<double, 7, kIn> Wm = Vm * J[static_cast<size_t>(k)];
+        for (int i = 0; i < kIn; ++i) Zm.block<1, 7>(k, 7 * i) = Wm.col(i).transpose();
+      }
     }
     for (int col = 0; col < kIn * 7; ++col) {
       double* z = Z.col(col).data();
       if (col < 3 * 7) difference_adjoint(z, n, T);  // p_dot = D H x, eq. (33)
-      zf.apply(z, n);
+      zf_force.apply(z, n);
+      if (two_cutoffs) {
+        double* zm = Zm.col(col).data();
+        if (col < 3 * 7) difference_adjoint(zm, n, T);
+        zf_moment.apply(zm, n);
+      }
     }
+    if (two_cutoffs) Z += Zm;
 
-    PredictedSet& out = res.sets[static_cast<size_t>(m)];
-    out.name = m == 0 ? "LS" : "FMLS";
-    out.condition = std::sqrt(ev(6) / ev(0));
-    out.variance_by_source = Eigen::Matrix<double, 7, Eigen::Dynamic>::Zero(7, 6);
-    Mat7 cov = Mat7::Zero();
+    std::array<Mat7, 5> by{};
+    for (auto& m : by) m.setZero();
     // sigma^2 sum_blocks (sum_{k in block} g_k)(...)^T for one input held at `rate`.
     auto add = [&](int src, const Eigen::MatrixXd& g, double sigma, double rate) {
       if (!(sigma > 0.0)) return;
@@ -325,9 +421,7 @@ PrecisionResult predict_precision(const Trajectory& traj, const PrecisionOptions
         s += g.row(k).transpose();
       }
       C.noalias() += s * s.transpose();
-      C *= sigma * sigma;
-      cov += C;
-      out.variance_by_source.col(src) += C.diagonal();
+      by[static_cast<size_t>(src)] += sigma * sigma * C;
     };
     auto input = [&](int i) -> Eigen::MatrixXd { return Z.middleCols(7 * i, 7); };
     const NoiseSigmas& ns = opt.sensors.noise;
@@ -336,43 +430,87 @@ PrecisionResult predict_precision(const Trajectory& traj, const PrecisionOptions
     for (int i = 0; i < 2; ++i) add(2, input(kEta + i), ns.attitude, opt.sensors.imu_rate);
     for (int i = 0; i < 3; ++i) add(3, input(kOmega + i), ns.gyro, opt.sensors.imu_rate);
     if (rotor_mode) {
-      const RotorModel& rm = *opt.rotors;
-      const int nr = rm.count();
-      for (int i = 0; i < nr; ++i) {
+      for (Eigen::Index i = 0; i < dF_dw.cols() / 4; ++i) {
         Eigen::MatrixXd g = Eigen::MatrixXd::Zero(n, 7);
-        for (Eigen::Index k = 0; k < n; ++k) {
-          const Eigen::VectorXd thrusts = mixer * wrench.row(k).transpose();
-          const double w = rm.speed_for_thrust(thrusts(i));
-          const Eigen::Vector4d dF = B.col(i) * (2.0 * rm.thrust_coefficient() * w);  // T = k w^2
-          for (int j = 0; j < 4; ++j) g.row(k) += dF(j) * Z.block<1, 7>(k, 7 * (kF + j));
-        }
-        add(4, g, opt.rotor_noise, opt.rate);
+        for (Eigen::Index k = 0; k < n; ++k)
+          for (int j = 0; j < 4; ++j) g.row(k) += dF_dw(k, 4 * i + j) * Z.block<1, 7>(k, 7 * (kF + j));
+        add(4, g, opt.rotor_noise, opt.rate);  // white on each logged sample (simulation/simulate.cpp)
       }
     } else {
       for (int j = 0; j < 4; ++j) add(4, input(kF + j), opt.wrench_noise(j), opt.rate);
     }
-    out.linear_std_error = cov.diagonal().cwiseSqrt();
-    // Closed loop: HAC covariance of the influence P Gamma_k^T e_k of the jitter residual
-    // (the uncertainty code's estimator, docs/uncertainty.md), averaged over the flights.
-    if (!jitter[static_cast<size_t>(m)].empty()) {
-      LeastSquaresSolution sol;
-      sol.theta = theta;
-      sol.normal_pinv = P;
-      Mat7 C = Mat7::Zero();
-      for (const auto& e : jitter[static_cast<size_t>(m)]) {
-        InfluenceAccumulator acc(sol);
-        for (Eigen::Index k = reg.begin(); k < reg.end(); ++k) {
-          const Regressor4x7& Gk = G[static_cast<size_t>(k)];
-          acc.add(Gk, Gk * theta + e.row(k).transpose());
+    return by;
+  };
+
+  for (int m = 0; m < 2; ++m) {
+    const RegressionModel model = m == 0 ? RegressionModel::Standard : RegressionModel::Filtered;
+    const Regression reg(signals, model, opt.window, opt.lambda, opt.gd_variant);
+    const std::string what = fmt::format("{} regression along {}", to_string(model), res.trajectory);
+    PredictedSet& out = res.sets[static_cast<size_t>(m)];
+    out.name = m == 0 ? "LS" : "FMLS";
+    out.variance_by_source = Eigen::Matrix<double, 7, Eigen::Dynamic>::Zero(7, 6);
+    Mat7 cov = Mat7::Zero();
+    if (flown.empty()) {
+      // The information along the reference itself.
+      const RegressorSeries S = regressor_series(reg, n, theta, Vec4::Ones());
+      const Mat7 P = information_inverse(S.A, &out.condition, what);
+      const auto by = linear_part(model, S, P);
+      for (int src = 0; src < 5; ++src) {
+        cov += by[static_cast<size_t>(src)];
+        out.variance_by_source.col(src) = by[static_cast<size_t>(src)].diagonal();
+      }
+    } else {
+      // Each flight's own regressor series: the vehicle flies the plan plus the jitter
+      // its sensors' noise drives through the controller, and that jitter excites the
+      // regression too (for a small vehicle, or an axis the plan barely moves, it adds
+      // much of the information). The estimate of a flight uses that flight's
+      // information, so the covariances are averaged over the flights.
+      std::vector<RegressorSeries> S;
+      Mat7 A_mean = Mat7::Zero();
+      for (size_t f = 0; f < flown.size(); ++f) {
+        S.push_back(regressor_series(Regression(flown[f], model, opt.window, opt.lambda, opt.gd_variant), n, theta,
+                                     flown_w2[f][static_cast<size_t>(m)]));
+        A_mean += S.back().A / static_cast<double>(flown.size());
+      }
+      information_inverse(A_mean, &out.condition, what + " (as flown)");
+      // Closed loop: the influence P_f Gamma_f,k^T e_f,k of each flight's residual on its
+      // true states, less its mean over the flights at the same sample (which removes
+      // what every flight shares: the processing's deterministic error and the mean of
+      // the second-order terms, a bias); its HAC covariance (the uncertainty code's
+      // estimator, docs/uncertainty.md) is the second-order spread of the jitter.
+      std::vector<Mat7> P(S.size());
+      std::vector<Eigen::MatrixXd> psi(S.size());
+      Eigen::MatrixXd psi_mean = Eigen::MatrixXd::Zero(n, 7);
+      for (size_t f = 0; f < S.size(); ++f) {
+        P[f] = information_inverse(S[f].A, nullptr, what + " (as flown)");
+        psi[f] = Eigen::MatrixXd::Zero(n, 7);
+        for (Eigen::Index k = S[f].begin; k < S[f].end; ++k)
+          psi[f].row(k) = (P[f] * S[f].G[static_cast<size_t>(k)].transpose() * S[f].w2.asDiagonal() *
+                           S[f].e.row(k).transpose()).transpose();
+        psi_mean += psi[f] / static_cast<double>(S.size());
+      }
+      Mat7 C_cl = Mat7::Zero();
+      for (size_t f = 0; f < S.size(); ++f) {
+        const auto by = linear_part(model, S[f], P[f]);
+        for (int src = 0; src < 5; ++src) {
+          const Mat7 C = by[static_cast<size_t>(src)] / static_cast<double>(S.size());
+          cov += C;
+          out.variance_by_source.col(src) += C.diagonal();
         }
-        C += acc.finish().covariance;
+        std::vector<double> d;
+        d.reserve(static_cast<size_t>(7 * (S[f].end - S[f].begin)));
+        for (Eigen::Index k = S[f].begin; k < S[f].end; ++k)
+          for (int j = 0; j < 7; ++j) d.push_back(psi[f](k, j) - psi_mean(k, j));
+        C_cl += long_run_covariance(d, 7, UncertaintyOptions{}).covariance;
       }
       // sum_f (d_f d_f^T) / (F - 1) estimates one flight's covariance (d_f = e_f - mean).
-      C /= static_cast<double>(std::max<size_t>(1, jitter[static_cast<size_t>(m)].size() - 1));
-      out.closed_loop_std_error = C.diagonal().cwiseSqrt();
-      out.variance_by_source.col(5) = C.diagonal();
-      cov += C;
+      C_cl /= static_cast<double>(std::max<size_t>(1, S.size() - 1));
+      out.variance_by_source.col(5) = C_cl.diagonal();
+      out.closed_loop_std_error = C_cl.diagonal().cwiseSqrt();
+      out.linear_std_error = cov.diagonal().cwiseSqrt();
+      cov += C_cl;
     }
+    if (flown.empty()) out.linear_std_error = cov.diagonal().cwiseSqrt();
     out.covariance = cov;
     out.std_error = cov.diagonal().cwiseSqrt();
     out.relative = out.std_error.cwiseQuotient(scale);
@@ -385,7 +523,8 @@ PrecisionResult predict_precision(const Trajectory& traj, const PrecisionOptions
 }
 
 std::string format_precision(const PrecisionResult& r) {
-  std::string s = fmt::format("predicted precision ({} regression rows, window {}):\n", r.samples, r.window.to_string());
+  std::string s = fmt::format("predicted precision ({} regression rows, window {}; regression {}):\n", r.samples,
+                              r.window.to_string(), r.regression);
   s += fmt::format("  {:<5} {:>12} {:>13} {:>8} {:>13} {:>8}  {}\n", "param", "value", "LS std err", "LS %",
                    "FMLS std err", "FMLS %", "main noise source (LS)");
   const Theta scale = precision_scale(r.truth);
@@ -412,6 +551,7 @@ std::string format_precision(const PrecisionResult& r) {
 nlohmann::json to_json(const PrecisionResult& r) {
   nlohmann::json j;
   j["trajectory"] = r.trajectory;
+  j["regression"] = r.regression;
   j["samples"] = r.samples;
   j["window"] = {r.window.t0, r.window.t1};
   j["sources"] = r.sources;
