@@ -4,6 +4,7 @@
 // 2 kg x500 that meet every limit on a 1 ms grid and fly without a saturated
 // rotor in the simulator.
 #include "quadid/design.hpp"
+#include "quadid/regressor.hpp"
 #include "quadid/simulation.hpp"
 #include "quadid/vehicle.hpp"
 
@@ -186,3 +187,62 @@ TEST_P(DesignForVehicle, MeetsEveryLimitAndFliesWithoutSaturation) {
 }
 
 INSTANTIATE_TEST_SUITE_P(BuiltIn, DesignForVehicle, ::testing::Values("crazyflie21", "x500"));
+
+// The precision criterion (issue 14, item 2): its value against the formula
+// computed here from the public reference map and regressor (the rows weighted by
+// 1 / sigma, the information scaled from one period's K samples to the flight's),
+// and its gradient against central differences at random and near-degenerate points.
+TEST(DesignPrecision, ValueIsTheWorstRelativeStdErrorOfWeightedLeastSquares) {
+  const FourierTrajectory tr = FourierTrajectory::table2();
+  RowNoise noise;
+  noise.sigma << 0.05, 0.002, 0.003, 0.004;
+  noise.samples = 20000;
+  const Params P = Params::qball2_virtual();
+  const double dt = 0.01;
+  const CriterionValues v = evaluate_criteria(tr, dt, kDefaultGravity, Theta::Ones(), &noise, &P);
+  Eigen::Matrix<double, 7, 7> M = Eigen::Matrix<double, 7, 7>::Zero();
+  const int K = static_cast<int>(std::lround(tr.period() / dt));
+  for (int k = 0; k < K; ++k) {
+    const Reference r = reference_from_flat<double>(tr.eval(k * tr.period() / K));
+    const Eigen::Matrix<double, 4, 7> Phi =
+        noise.sigma.cwiseInverse().asDiagonal() * regressor<double>(r.v, r.omega, r.eta, r.v_dot, r.omega_dot);
+    M += Phi.transpose() * Phi;
+  }
+  const Eigen::Matrix<double, 7, 7> C = M.inverse() * (static_cast<double>(K) / noise.samples);
+  const Theta s = relative_error_scale(P.theta());
+  for (int i = 0; i < 7; ++i)
+    EXPECT_NEAR(v.relative_std(i), std::sqrt(C(i, i)) / s(i), 1e-9 * v.relative_std(i)) << i;
+  EXPECT_DOUBLE_EQ(v.worst_relative_std, v.relative_std.maxCoeff());
+  // The smooth maximum lies between the largest and 7^(1/16) times it.
+  EXPECT_GE(v.precision, v.worst_relative_std * (1 - 1e-12));
+  EXPECT_LE(v.precision, v.worst_relative_std * std::pow(7.0, 1.0 / kPrecisionNorm) * (1 + 1e-12));
+}
+
+TEST(DesignPrecision, GradientMatchesFiniteDifferences) {
+  DesignOptions o;
+  o.criterion = Criterion::Precision;
+  o.harmonics = 3;
+  o.reference = Params::qball2_virtual();
+  o.row_noise.sigma << 0.05, 0.002, 0.003, 0.004;
+  const ExcitationProblem P(o, 0.25);
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> U(-0.15, 0.15);
+  for (double size : {1.0, 0.05}) {  // 0.05: little motion, W nearly singular, the worst parameter dominates
+    Eigen::VectorXd x(P.dimension());
+    for (Eigen::Index j = 0; j < x.size(); ++j) x(j) = size * U(rng);
+    x(20) += 1.0;
+    Eigen::VectorXd g;
+    const double J = P.criterion(x, &g);
+    ASSERT_TRUE(std::isfinite(J));
+    // Relative step 1e-6 of the coefficient scale; central differences have O(h^2)
+    // error ~1e-12 relative here, rounding ~1e-10 / 1e-6: tolerance 1e-5 of |J| per unit step.
+    const double h = 1e-6;
+    for (Eigen::Index j = 0; j < x.size(); ++j) {
+      Eigen::VectorXd xp = x, xm = x;
+      xp(j) += h;
+      xm(j) -= h;
+      const double fd = (P.criterion(xp) - P.criterion(xm)) / (2 * h);
+      EXPECT_NEAR(g(j), fd, 1e-5 * std::max(std::abs(J), std::abs(fd))) << "coefficient " << j << " size " << size;
+    }
+  }
+}

@@ -6,10 +6,12 @@
 #include "flight_args.hpp"
 #include "quadid/design.hpp"
 #include "quadid/io.hpp"
+#include "quadid/precision.hpp"
 #include "quadid/vehicle.hpp"
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <memory>
@@ -45,7 +47,10 @@ void register_design(CLI::App& app) {
       "paper's values) and the start/end hover at (0, 0, 0.7 m, 0). Limits are imposed on a 1 ms grid;\n"
       "the result is checked on it and cond(W) is reported with T = 2 ms (eq. 20).\n"
       "Criteria: cond (the paper's cond(W)), cond-scaled (cond(W S), parameters scaled by --reference),\n"
-      "dopt (-(1/7) log det of the per-sample information matrix; see docs/design.md).\n"
+      "dopt (-(1/7) log det of the per-sample information matrix), precision (the worst relative standard\n"
+      "error of LS, rows weighted by their noise on the vehicle flown; see docs/design.md).\n"
+      "--vehicle V: V's limits (its [limits] table, every rotor's thrust within a margin) and a\n"
+      "fundamental frequency from its bandwidth (docs/design.md, \"Designing for your vehicle\").\n"
       "The output is the trajectory JSON of docs/file-formats.md plus the criterion, the limits, the check\n"
       "report, the seed and the starts. Same --seed -> same bytes. Progress goes to stderr.\n"
       "Fails (exit 1, nothing written) if no start meets every limit.\n\n"
@@ -62,7 +67,10 @@ void register_design(CLI::App& app) {
   sub->add_option("--starts", o.starts, "number of random starts")->capture_default_str();
   sub->add_option("--threads", o.threads, "worker threads; 0 = one per core (result does not depend on it)")
       ->capture_default_str();
-  sub->add_option("--criterion", args->criterion, "cond | cond-scaled | dopt")->capture_default_str();
+  sub->add_option("--criterion", args->criterion,
+                  "cond | cond-scaled | dopt | precision (the worst relative standard error of LS for the vehicle "
+                  "and sensors of --vehicle, --sigma-*)")
+      ->capture_default_str();
   args->reference_opt = sub->add_option("--reference", args->reference,
                   "parameter set scaling cond-scaled and dopt: preset (qball2-nominal, qball2-virtual) or JSON file")
       ->capture_default_str();
@@ -113,6 +121,19 @@ void register_design(CLI::App& app) {
                                  opt.harmonics * opt.wf, args->wf_opt->count() == 0 ? " (from its bandwidth)" : "");
     } else if (args->thrust_margin || args->thrust_min) {
       throw std::invalid_argument("--thrust-margin and --thrust-min need --vehicle (a rotor model)");
+    }
+    if (opt.criterion == Criterion::Precision) {
+      // Rows weighted by their noise on this vehicle with these sensors (a simulated hover, processed as identify does).
+      const PrecisionOptions po = args->precision.options();
+      if (args->reference_opt->count() == 0) opt.reference = po.params;
+      opt.row_noise.sigma = regression_row_noise(po, opt.limits.z0 > 0.0 ? opt.limits.z0 : 1.0);
+      const TimeWindow w = po.window;
+      opt.row_noise.samples = std::max(1.0, (std::min(w.t1, po.duration) - w.t0) * po.rate);
+      if (!args->quiet)
+        fmt::print(stderr, "design: row noise of the regression (hover, {:g} s simulated): Fz {:.3g} N, tau {:.3g} {:.3g} "
+                   "{:.3g} N m; {:g} samples\n",
+                   kRowNoiseSeconds, opt.row_noise.sigma(0), opt.row_noise.sigma(1), opt.row_noise.sigma(2),
+                   opt.row_noise.sigma(3), opt.row_noise.samples);
     }
     opt.validate();
     if (!args->out.empty()) check_output_file(args->out, "-o/--out");

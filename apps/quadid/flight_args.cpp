@@ -9,8 +9,9 @@ namespace quadid::cli {
 
 void PrecisionArgs::add_to(CLI::App* sub) {
   sub->add_option("--vehicle", vehicle,
-                  "vehicle flown, for the predicted precision: built-in (qball2, crazyflie21, jmavsim-quad) or vehicle "
-                  "file; its [nominal], rates, [sensors] noise and rotors (default: the paper's virtual QBall 2)");
+                  "vehicle flown: built-in (qball2, crazyflie21, jmavsim-quad, x500) or vehicle "
+                  "file; its [nominal], rates, [sensors] noise and rotors for the predicted precision, and for design and "
+                  "check-trajectory its [limits] and per-rotor thrust limits (default: the paper's virtual QBall 2)");
   sub->add_option("--flight-duration", flight_duration, "length of the identification flight's log, s")
       ->capture_default_str();
   sub->add_option("--window", window, "estimation window T0:T1, s (as identify --window)")->capture_default_str();

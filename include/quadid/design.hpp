@@ -16,6 +16,7 @@
 #include <cstdint>
 #include <functional>
 #include <limits>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -68,8 +69,9 @@ enum class Criterion {
   Cond,        // cond(W), the paper's J: sqrt(lambda_max / lambda_min) of M
   CondScaled,  // cond(W S), S = diag of parameter scales from a reference set
   DOpt,        // -(1/7) log det(S M S / K): D-optimality per sample, per parameter
+  Precision,   // the worst relative standard error of LS (smooth maximum), rows weighted by their noise
 };
-std::string_view criterion_name(Criterion c);             // "cond", "cond-scaled", "dopt"
+std::string_view criterion_name(Criterion c);             // "cond", "cond-scaled", "dopt", "precision"
 /// Parses a name of criterion_name(); throws std::invalid_argument listing the valid ones.
 Criterion parse_criterion(std::string_view name);
 
@@ -78,11 +80,33 @@ Criterion parse_criterion(std::string_view name);
 /// sqrt(I_ii I_jj)) so that a reference without products still scales them.
 Theta parameter_scales(const Params& reference, double product_floor = 0.1);
 
-/// The three criteria of one trajectory on one time grid.
+/// The noise model of Criterion::Precision: the standard regression's rows (eq. 34)
+/// with independent noise of standard deviation `sigma` (N, N m, N m, N m; e.g.
+/// regression_row_noise() of precision.hpp) at each of `samples` log samples in the
+/// estimation window. Then cov(LS) = (sum_k Phi_k^T Sigma^-1 Phi_k)^-1, the sum over the
+/// flight approximated by samples / K times the sum over K samples of one period.
+/// White rows are an approximation (the pre-filter correlates neighbouring samples):
+/// it ranks trajectories, the predicted precision (precision.hpp) gives the numbers.
+struct RowNoise {
+  Eigen::Vector4d sigma = Eigen::Vector4d::Ones();
+  double samples = 20000.0;  // 40 s at 500 Hz, identify's default window of a 50 s log
+  void validate() const;     // throws std::invalid_argument
+};
+
+/// Smoothness of the precision criterion's maximum: (sum_i r_i^p)^(1/p) over the 7
+/// squared relative standard errors r_i, at most 7^(1/p) = 1.13 times the largest.
+inline constexpr double kPrecisionNorm = 16.0;
+
+/// The criteria of one trajectory on one time grid.
 struct CriterionValues {
   double cond = 0.0;         // cond(W)
   double cond_scaled = 0.0;  // cond(W S)
   double dopt = 0.0;         // -(1/7) log det(S M S / K)
+  /// Precision criterion (with a RowNoise): the smooth maximum it minimizes, the worst
+  /// relative standard error, and each parameter's (relative_error_scale of the reference). NaN without.
+  double precision = std::numeric_limits<double>::quiet_NaN();
+  double worst_relative_std = std::numeric_limits<double>::quiet_NaN();
+  Theta relative_std = Theta::Constant(std::numeric_limits<double>::quiet_NaN());
   Eigen::Matrix<double, 7, 1> eigenvalues = Eigen::Matrix<double, 7, 1>::Zero();  // of M, ascending
   int samples = 0;           // K
   double value(Criterion c) const;
@@ -98,6 +122,7 @@ struct CheckOptions {
   double g = kDefaultGravity;    // m/s^2
   Params reference = Params::qball2_nominal();  // for the scaled criteria
   double product_floor = 0.1;    // see parameter_scales()
+  std::optional<RowNoise> row_noise;  // with it, the report has the precision criterion too
   /// Ranges validate() accepts: grids of 0.1 ms to 1 s, at most a day checked.
   static constexpr double kMinStep = 1e-4, kMaxStep = 1.0, kMaxDuration = 86400.0;  // s
   /// The grids also need >= kMinSamplesPerPeriod points over the trajectory's period
@@ -154,8 +179,10 @@ Eigen::VectorXd vehicle_limit_values(const Trajectory& traj, double t, const Con
                                      double g = kDefaultGravity);
 
 /// The criteria of a trajectory on the grid t = 0, dt, ..., < period (eq. 20).
+/// With `noise`, also the precision criterion for parameters `reference`.
 CriterionValues evaluate_criteria(const Trajectory& traj, double dt, double g = kDefaultGravity,
-                                  const Theta& scales = Theta::Ones());
+                                  const Theta& scales = Theta::Ones(), const RowNoise* noise = nullptr,
+                                  const Params* reference = nullptr);
 
 /// Options of design_trajectory(). Defaults are the paper's problem (section III-B).
 struct DesignOptions {
@@ -163,8 +190,9 @@ struct DesignOptions {
   int harmonics = 5;                   // N of eq. (18)
   double wf = 36.0 * kDeg;             // fundamental frequency, rad/s (period 2 pi / wf)
   Criterion criterion = Criterion::Cond;
-  Params reference = Params::qball2_nominal();  // scales of cond-scaled and dopt
+  Params reference = Params::qball2_nominal();  // scales of cond-scaled and dopt; parameters of precision
   double product_floor = 0.1;          // see parameter_scales()
+  RowNoise row_noise;                  // the precision criterion's noise model
   int starts = 8;                      // random multi-start
   std::uint64_t seed = 1;              // same seed -> same result, whatever the thread count
   int threads = 0;                     // 0 = min(starts, hardware threads)
@@ -240,7 +268,9 @@ class ExcitationProblem {
   int N_;
   double wf_, g_;
   Criterion crit_;
-  Theta scales_;
+  Theta scales_;           // parameter_scales(), or relative_error_scale() for Precision
+  Eigen::Vector4d row_w_;  // row weights 1 / sigma (Precision), else ones
+  double samples_ = 0.0;   // RowNoise::samples (Precision)
   std::array<double, 4> q0_;
   std::vector<double> times_;
   std::array<Eigen::MatrixXd, 5> basis_;  // basis_[order]: K x (2N + 1)

@@ -48,6 +48,13 @@ struct Params {
   static std::vector<std::string> preset_names();
 };
 
+/// The scale relative errors of Theta are quoted against (bias, spread, standard
+/// errors, "poorly determined"): |m| for the mass, |I_ii| for a moment, and the mean
+/// principal moment (|Ixx| + |Iyy| + |Izz|) / 3 for a product of inertia, which may be
+/// zero. The one definition montecarlo, the predicted precision, the recommendation
+/// and the design's precision criterion share.
+Theta relative_error_scale(const Theta& theta);
+
 /// Euler angles eta = [phi, theta, psi] (roll, pitch, yaw), ZYX.
 template <class S>
 Eigen::Matrix<S, 3, 3> rotation(const Eigen::Matrix<S, 3, 1>& eta) {

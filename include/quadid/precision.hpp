@@ -110,8 +110,7 @@ struct PrecisionOptions {
 struct PredictedSet {
   std::string name;        // "LS" (standard regression, eq. 34) or "FMLS" (filtered, eq. 38)
   Theta std_error = Theta::Zero();   // kg, kg m^2
-  /// std_error / scale, scale = |m| for the mass, |I_ii| for a moment, the mean
-  /// principal moment for a product of inertia (as montecarlo reports bias and spread).
+  /// std_error / relative_error_scale(truth) (model.hpp), as montecarlo reports bias and spread.
   Theta relative = Theta::Zero();
   Eigen::Matrix<double, 7, 7> covariance = Eigen::Matrix<double, 7, 7>::Zero();
   /// Variance of each parameter from each noise source, in the order of
@@ -135,8 +134,14 @@ struct PrecisionResult {
   Theta truth = Theta::Zero();
 };
 
-/// The relative-error scale of each parameter (see PredictedSet::relative).
-Theta precision_scale(const Theta& theta);
+/// Seconds of hover regression_row_noise() simulates.
+inline constexpr double kRowNoiseSeconds = 20.0;
+/// The noise level of each row of the standard regression (eq. 34; N, N m, N m, N m)
+/// for the flight of `opt` (vehicle, sensors, processing): the RMS residual Gamma Theta - Y
+/// with the true Theta over kRowNoiseSeconds of simulated hover at height hover_z with
+/// the closed loop and every sensor noisy, processed as identify processes a log. The
+/// row weights of design's precision criterion (DesignOptions::row_noise).
+Vec4 regression_row_noise(const PrecisionOptions& opt, double hover_z = 1.0);
 
 /// Predicts the standard errors of LS and FMLS for `traj` flown with `opt`.
 /// Throws std::invalid_argument on bad options, InputError when the window

@@ -83,6 +83,7 @@ void CheckOptions::validate() const {
   require(std::isfinite(product_floor) && product_floor > 0.0,
           fmt::format("product_floor = {:g} must be positive", product_floor));
   reference.validate("reference parameters (--reference)");
+  if (row_noise) row_noise->validate();
 }
 
 namespace design_detail {
@@ -261,7 +262,8 @@ CheckReport check_trajectory(const Trajectory& traj, const CheckOptions& opt) {
       rep.endpoints.push_back(e);
     }
   }
-  rep.criteria = evaluate_criteria(traj, opt.cond_dt, opt.g, parameter_scales(opt.reference, opt.product_floor));
+  rep.criteria = evaluate_criteria(traj, opt.cond_dt, opt.g, parameter_scales(opt.reference, opt.product_floor),
+                                   opt.row_noise ? &*opt.row_noise : nullptr, &opt.reference);
   return rep;
 }
 

@@ -26,15 +26,23 @@ std::string_view criterion_name(Criterion c) {
     case Criterion::Cond: return "cond";
     case Criterion::CondScaled: return "cond-scaled";
     case Criterion::DOpt: return "dopt";
+    case Criterion::Precision: return "precision";
   }
   return "?";
 }
 
 Criterion parse_criterion(std::string_view name) {
-  for (Criterion c : {Criterion::Cond, Criterion::CondScaled, Criterion::DOpt})
+  for (Criterion c : {Criterion::Cond, Criterion::CondScaled, Criterion::DOpt, Criterion::Precision})
     if (name == criterion_name(c)) return c;
   throw std::invalid_argument(
-      fmt::format("unknown criterion '{}' (expected cond, cond-scaled or dopt)", name));
+      fmt::format("unknown criterion '{}' (expected cond, cond-scaled, dopt or precision)", name));
+}
+
+void RowNoise::validate() const {
+  if (!(sigma.allFinite() && sigma.minCoeff() > 0.0))
+    throw std::invalid_argument(fmt::format("row noise [{}] (N, N m) must be positive", fmt::join(sigma, ", ")));
+  if (!(std::isfinite(samples) && samples >= 1.0))
+    throw std::invalid_argument(fmt::format("row noise samples = {:g} must be at least 1", samples));
 }
 
 Theta parameter_scales(const Params& ref, double product_floor) {
@@ -53,6 +61,7 @@ double CriterionValues::value(Criterion c) const {
     case Criterion::Cond: return cond;
     case Criterion::CondScaled: return cond_scaled;
     case Criterion::DOpt: return dopt;
+    case Criterion::Precision: return precision;
   }
   return cond;
 }
@@ -138,7 +147,37 @@ using Mat7 = Eigen::Matrix<double, 7, 7>;
 //          dJ/dPhi_k = Phi_k S J (u_max u_max^T / l_max - u_min u_min^T / l_min) S.
 //   dopt:  J = -(1/7) log det(S M S / K);  d log det M = tr(M^-1 dM), so
 //          dJ/dPhi_k = -(2/7) Phi_k M^-1 (the scaling only adds a constant).
-double criterion_of(const Mat7& M, int K, Criterion crit, const Theta& s, Mat7* H) {
+//   precision: r_i = [M^-1]_ii (K / samples) / s_i^2 (squared relative standard errors,
+//          M weighted by the rows' noise), J = (sum_i r_i^p)^(1/(2p)); with
+//          dr_i = -(K / samples) / s_i^2 (M^-1 e_i)^T dM (M^-1 e_i),
+//          dJ/dPhi_k = -2 Phi_k M^-1 diag(w) M^-1, w_i = dJ/dr_i (K / samples) / s_i^2.
+//          Computed with r / max r so that r^p neither underflows nor overflows.
+double precision_of(const Mat7& M, int K, const Theta& s, double samples, Mat7* H, Theta* rel_std) {
+  const Eigen::LDLT<Mat7> ldlt(M);
+  if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 0.0)) {
+    if (H) H->setZero();
+    if (rel_std) rel_std->setConstant(kInf);
+    return kInf;
+  }
+  const Mat7 Minv = ldlt.solve(Mat7::Identity());
+  const double c = static_cast<double>(K) / samples;
+  const Theta r = (Minv.diagonal() * c).cwiseQuotient(s.cwiseAbs2());
+  if (rel_std) *rel_std = r.cwiseSqrt();
+  const double rmax = r.maxCoeff();
+  const double p = kPrecisionNorm;
+  const Theta q = r / rmax;
+  const double Sp = q.array().pow(p).sum();
+  const double J = std::sqrt(rmax) * std::pow(Sp, 1.0 / (2.0 * p));
+  if (H) {
+    Theta w;
+    for (int i = 0; i < 7; ++i) w(i) = J * std::pow(q(i), p - 1.0) / (2.0 * rmax * Sp) * c / (s(i) * s(i));
+    *H = -2.0 * Minv * w.asDiagonal() * Minv;
+  }
+  return J;
+}
+
+double criterion_of(const Mat7& M, int K, Criterion crit, const Theta& s, Mat7* H, double samples = 0.0) {
+  if (crit == Criterion::Precision) return precision_of(M, K, s, samples, H, nullptr);
   const Eigen::DiagonalMatrix<double, 7> S(crit == Criterion::Cond ? Theta::Ones() : s);
   const Mat7 Ms = S * M * S;
   if (crit == Criterion::DOpt) {
@@ -176,13 +215,20 @@ Eigen::VectorXd vehicle_limit_values(const Trajectory& traj, double t, const Con
   return design_detail::vehicle_sample(d, g, design_detail::VehicleLimits(c), nullptr);
 }
 
-CriterionValues evaluate_criteria(const Trajectory& traj, double dt, double g, const Theta& scales) {
+CriterionValues evaluate_criteria(const Trajectory& traj, double dt, double g, const Theta& scales,
+                                  const RowNoise* noise, const Params* reference) {
   if (!(dt > 0.0)) throw std::invalid_argument(fmt::format("sampling period T = {} s must be positive", dt));
-  Mat7 M = Mat7::Zero();
+  if (noise && !reference) throw std::invalid_argument("evaluate_criteria: the precision criterion needs parameters");
+  if (noise) noise->validate();
+  Mat7 M = Mat7::Zero(), Mw = Mat7::Zero();
   const auto times = design_detail::periodic_grid(traj.period(), dt);
   for (double t : times) {
     const auto Phi = design_detail::regressor_sample(traj.eval(t), g, nullptr);
     M.noalias() += Phi.transpose() * Phi;  // W^T W of eq. (20), row block by row block
+    if (noise) {
+      const Eigen::Matrix<double, 4, 7> Pw = noise->sigma.cwiseInverse().asDiagonal() * Phi;
+      Mw.noalias() += Pw.transpose() * Pw;
+    }
   }
   CriterionValues v;
   v.samples = static_cast<int>(times.size());
@@ -190,12 +236,21 @@ CriterionValues evaluate_criteria(const Trajectory& traj, double dt, double g, c
   v.cond = criterion_of(M, v.samples, Criterion::Cond, scales, nullptr);
   v.cond_scaled = criterion_of(M, v.samples, Criterion::CondScaled, scales, nullptr);
   v.dopt = criterion_of(M, v.samples, Criterion::DOpt, scales, nullptr);
+  if (noise) {
+    v.precision = precision_of(Mw, v.samples, relative_error_scale(reference->theta()), noise->samples, nullptr,
+                               &v.relative_std);
+    v.worst_relative_std = v.relative_std.maxCoeff();
+  }
   return v;
 }
 
 ExcitationProblem::ExcitationProblem(const DesignOptions& opt, double grid_dt)
     : N_(opt.harmonics), wf_(opt.wf), g_(opt.g), crit_(opt.criterion),
-      scales_(parameter_scales(opt.reference, opt.product_floor)),
+      scales_(opt.criterion == Criterion::Precision ? relative_error_scale(opt.reference.theta())
+                                                    : parameter_scales(opt.reference, opt.product_floor)),
+      row_w_(opt.criterion == Criterion::Precision ? opt.row_noise.sigma.cwiseInverse().eval()
+                                                   : Eigen::Vector4d::Ones()),
+      samples_(opt.row_noise.samples),
       q0_{opt.limits.x0, opt.limits.y0, opt.limits.z0, opt.limits.psi0} {
   if (N_ < 1) throw std::invalid_argument(fmt::format("harmonics = {} must be at least 1", N_));
   if (!(wf_ > 0.0)) throw std::invalid_argument(fmt::format("wf = {} rad/s must be positive", wf_));
@@ -224,11 +279,17 @@ double ExcitationProblem::criterion(const Eigen::VectorXd& x, Eigen::VectorXd* g
     FlatOutput d;
     for (int i = 0; i < 4; ++i)
       for (int o = 0; o < 5; ++o) d(i, o) = F(k, 5 * i + o);
-    Phi[static_cast<size_t>(k)] = design_detail::regressor_sample(d, g_, grad ? &dPhi[static_cast<size_t>(k)] : nullptr);
-    M.noalias() += Phi[static_cast<size_t>(k)].transpose() * Phi[static_cast<size_t>(k)];
+    auto& P = Phi[static_cast<size_t>(k)];
+    P = design_detail::regressor_sample(d, g_, grad ? &dPhi[static_cast<size_t>(k)] : nullptr);
+    if (crit_ == Criterion::Precision) {  // rows weighted by 1 / sigma: the weighted Phi and its Jacobian
+      P = row_w_.asDiagonal() * P;
+      if (grad)
+        for (int rr = 0; rr < 4; ++rr) dPhi[static_cast<size_t>(k)].middleRows(7 * rr, 7) *= row_w_(rr);
+    }
+    M.noalias() += P.transpose() * P;
   }
   Mat7 H;
-  const double J = criterion_of(M, static_cast<int>(K), crit_, scales_, grad ? &H : nullptr);
+  const double J = criterion_of(M, static_cast<int>(K), crit_, scales_, grad ? &H : nullptr, samples_);
   if (!grad) return J;
 
   // dJ/du_k = dPhi_k^T vec(Phi_k H), then through the linear basis to the coefficients.

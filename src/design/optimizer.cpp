@@ -88,6 +88,7 @@ void DesignOptions::validate() const {
   require(std::isfinite(product_floor) && product_floor > 0.0,
           fmt::format("product_floor = {:g} must be positive", product_floor));
   reference.validate("reference parameters (--reference)");
+  if (criterion == Criterion::Precision) row_noise.validate();
 }
 
 namespace {
@@ -525,7 +526,9 @@ StartSummary run_start(const Setup& s, int index, Eigen::VectorXd y, Eigen::Vect
   }
   x_out = x;
   const auto traj = FourierTrajectory::from_coefficients(s.opt.wf, s.opt.harmonics, x);
-  const auto cv = evaluate_criteria(traj, s.opt.cond_dt, s.opt.g, parameter_scales(s.opt.reference, s.opt.product_floor));
+  const bool prec = s.opt.criterion == Criterion::Precision;
+  const auto cv = evaluate_criteria(traj, s.opt.cond_dt, s.opt.g, parameter_scales(s.opt.reference, s.opt.product_floor),
+                                    prec ? &s.opt.row_noise : nullptr, &s.opt.reference);
   sum.criterion = cv.value(s.opt.criterion);
   sum.cond = cv.cond;
   sum.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -591,6 +594,7 @@ DesignResult design_trajectory(const DesignOptions& opt, const DesignProgress& p
   co.g = opt.g;
   co.reference = opt.reference;
   co.product_floor = opt.product_floor;
+  if (opt.criterion == Criterion::Precision) co.row_noise = opt.row_noise;
   res.check = check_trajectory(res.trajectory, co);
   res.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return res;

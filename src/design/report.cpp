@@ -153,6 +153,8 @@ json to_json(const CheckReport& r) {
            {{"cond", number_or_null(cv.cond)},
             {"cond_scaled", number_or_null(cv.cond_scaled)},
             {"dopt", number_or_null(cv.dopt)},
+            {"precision", number_or_null(cv.precision)},
+            {"worst_relative_std", number_or_null(cv.worst_relative_std)},
             {"samples", cv.samples},
             {"eigenvalues", std::vector<double>(cv.eigenvalues.data(), cv.eigenvalues.data() + 7)}}},
           {"constraints_hold", r.constraints_hold},
@@ -222,6 +224,10 @@ std::string format_check_report(const CheckReport& r) {
   out += fmt::format("\ncond(W)           = {:.4f}   (W: {} x 7, unscaled, 2-norm)\n", cv.cond, 4 * cv.samples);
   out += fmt::format("cond(W S)         = {:.4f}   (parameters scaled by the reference set)\n", cv.cond_scaled);
   out += fmt::format("D-opt criterion   = {:.4f}   (-(1/7) log det(S W^T W S / K))\n", cv.dopt);
+  if (std::isfinite(cv.worst_relative_std))
+    out += fmt::format("precision         = {:.4g} %  (worst relative std error of LS, rows weighted by their noise, "
+                       "white-row approximation; smooth maximum {:.4g} %)\n",
+                       100.0 * cv.worst_relative_std, 100.0 * cv.precision);
   out += fmt::format("eig(W^T W)        = [{:.4g}]\n", fmt::join(cv.eigenvalues, ", "));
   out += fmt::format("\nconstraints: {}   start/end: {}\n", r.constraints_hold ? "all hold" : "VIOLATED",
                      r.endpoints_hold ? "hold" : "VIOLATED");

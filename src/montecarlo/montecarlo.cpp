@@ -50,15 +50,6 @@ MonteCarloRun fly(const MonteCarloOptions& o, const Trajectory& traj, int i) {
   return run;
 }
 
-// Scale of each parameter for relative numbers: |truth| for m and the moments,
-// the mean principal moment for the products.
-Theta relative_scale(const Theta& truth) {
-  Theta s = truth.cwiseAbs();
-  const double mean_moment = (std::abs(truth(1)) + std::abs(truth(4)) + std::abs(truth(6))) / 3.0;
-  for (int j : {2, 3, 5}) s(j) = mean_moment;
-  return s;
-}
-
 }  // namespace
 
 void MonteCarloOptions::validate() const {
@@ -218,7 +209,7 @@ std::string format_montecarlo(const MonteCarloResult& r) {
                  o.runs, r.failed, o.trajectory, o.simulation.duration, o.seed, r.threads, r.seconds,
                  o.identification.window.to_string(), o.identification.processing.lowpass.cutoff_hz,
                  o.identification.lambda);
-  const Theta scale = relative_scale(r.truth);
+  const Theta scale = relative_error_scale(r.truth);
   fmt::format_to(it, "Relative to the truth (m, Ixx, Iyy, Izz) or to the mean moment (products), in %.\n");
   auto table = [&](const char* title, auto value) {
     fmt::format_to(it, "\n{}\n{:<6}", title, "Set");

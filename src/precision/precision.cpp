@@ -108,6 +108,20 @@ std::shared_ptr<const RegressionSignals> row_signals(const FlightLog& log, const
   return mixed;
 }
 
+// The simulation of the planned flight: PrecisionOptions::simulation, or one built from its fields.
+SimulationOptions flight_options(const PrecisionOptions& opt) {
+  SimulationOptions so = opt.simulation.value_or(SimulationOptions{});
+  if (!opt.simulation) {
+    so.plant = opt.params;
+    so.set_rate(opt.rate);
+    so.sensors = opt.sensors;
+    so.g = opt.g;
+    so.controller.g = opt.g;
+  }
+  so.duration = opt.duration;
+  return so;
+}
+
 // P = A^-1 computed with the columns scaled to unit norm (the parameters differ
 // by ~100x); `condition` = cond of the scaled stack. Throws InputError when singular.
 Mat7 information_inverse(const Mat7& A, double* condition, const std::string& what) {
@@ -179,11 +193,29 @@ void PrecisionOptions::validate() const {
   if (simulation) simulation->validate();
 }
 
-Theta precision_scale(const Theta& th) {
-  const double mean_moment = (std::abs(th(1)) + std::abs(th(4)) + std::abs(th(6))) / 3.0;
-  Theta s;
-  s << std::abs(th(0)), std::abs(th(1)), mean_moment, mean_moment, std::abs(th(4)), mean_moment, std::abs(th(6));
-  return s;
+Vec4 regression_row_noise(const PrecisionOptions& opt, double hover_z) {
+  opt.validate();
+  if (!std::isfinite(hover_z) || hover_z <= 0.0)
+    throw std::invalid_argument(fmt::format("hover height {:g} m must be positive", hover_z));
+  std::array<FourierTrajectory::AxisCoeffs, 4> axes;
+  for (auto& a : axes) a = {Eigen::VectorXd::Zero(1), Eigen::VectorXd::Zero(1), 0.0};
+  axes[kZ].c = hover_z;
+  const FourierTrajectory hover(1.0, std::move(axes));
+  SimulationOptions so = flight_options(opt);
+  so.duration = kRowNoiseSeconds;
+  so.record_truth = false;
+  if (opt.rotors) so.rotor_noise = opt.rotor_noise;
+  so.sensors.seed = 1;
+  FlightLog log = simulate(hover, so).log;
+  if (opt.rotors) log = with_rotor_wrench(log, *opt.rotors);  // as identify --vehicle: the wrench of the noisy columns
+  const double f_force = opt.force_cutoff_hz.value_or(opt.processing.lowpass.cutoff_hz);
+  const double f_moment = opt.moment_cutoff_hz.value_or(opt.processing.lowpass.cutoff_hz);
+  const Regression reg(row_signals(log, opt.processing, f_force, f_moment), RegressionModel::Standard,
+                       TimeWindow{0.0, kRowNoiseSeconds});
+  const Theta theta = opt.params.theta();
+  Vec4 ss = Vec4::Zero();
+  reg.for_each([&](Eigen::Index, const Regressor4x7& G, const Vec4& Y) { ss += (G * theta - Y).cwiseAbs2(); });
+  return (ss / static_cast<double>(reg.size())).cwiseSqrt();
 }
 
 PrecisionResult predict_precision(const Trajectory& traj, const PrecisionOptions& opt) {
@@ -278,15 +310,7 @@ PrecisionResult predict_precision(const Trajectory& traj, const PrecisionOptions
   std::vector<std::shared_ptr<const RegressionSignals>> flown;
   std::vector<std::array<Vec4, 2>> flown_w2;  // squared row weights of LS and FMLS on each flight's log
   if (opt.closed_loop_flights > 0) {
-    SimulationOptions so = opt.simulation.value_or(SimulationOptions{});
-    if (!opt.simulation) {
-      so.plant = opt.params;
-      so.set_rate(opt.rate);
-      so.sensors = opt.sensors;
-      so.g = opt.g;
-      so.controller.g = opt.g;
-    }
-    so.duration = opt.duration;
+    SimulationOptions so = flight_options(opt);
     so.record_truth = true;
     // The rotor noise only reaches the log (the flight is the same): it is there for the row weights.
     so.rotor_noise = opt.weight_rows ? opt.rotor_noise : 0.0;
@@ -339,7 +363,7 @@ PrecisionResult predict_precision(const Trajectory& traj, const PrecisionOptions
                         : fmt::format(" (pre-filter {:g} Hz)", f_force);
   res.truth = theta;
   res.sources = {"position", "yaw", "attitude", "gyro", rotor_mode ? "rotor" : "wrench", "closed loop"};
-  const Theta scale = precision_scale(theta);
+  const Theta scale = relative_error_scale(theta);
   const double alpha = std::exp(-opt.lambda * T), one_minus = -std::expm1(-opt.lambda * T);
   const double c = (opt.gd_variant == signal::GdVariant::Printed) ? opt.lambda : one_minus / T;
 
@@ -527,7 +551,7 @@ std::string format_precision(const PrecisionResult& r) {
                               r.window.to_string(), r.regression);
   s += fmt::format("  {:<5} {:>12} {:>13} {:>8} {:>13} {:>8}  {}\n", "param", "value", "LS std err", "LS %",
                    "FMLS std err", "FMLS %", "main noise source (LS)");
-  const Theta scale = precision_scale(r.truth);
+  const Theta scale = relative_error_scale(r.truth);
   for (int j = 0; j < 7; ++j) {
     Eigen::Index src = 0;
     r.sets[0].variance_by_source.row(j).maxCoeff(&src);
