@@ -4,6 +4,7 @@
 #include "quadid/io.hpp"
 #include "quadid/montecarlo.hpp"
 #include "quadid/report.hpp"
+#include "quadid/vehicle.hpp"
 
 #include <fmt/format.h>
 
@@ -11,6 +12,8 @@
 #include <filesystem>
 #include <memory>
 #include <mutex>
+#include <optional>
+#include <stdexcept>
 #include <string>
 
 namespace quadid::cli {
@@ -26,6 +29,9 @@ struct MonteCarloArgs {
   std::string plant = "qball2-virtual";
   std::string nominal = "qball2-nominal";
   std::string window = "10:50";
+  std::string vehicle;
+  std::optional<double> rotor_noise;
+  CLI::Option *plant_opt = nullptr, *nominal_opt = nullptr;
   ProcessingArgs proc;
   std::string out;
   bool json = false;
@@ -41,14 +47,25 @@ void run(const MonteCarloArgs& a) {
   o.simulation.duration = a.duration;
   o.simulation.plant = load_params(a.plant);
   o.simulation.sensors.noise = NoiseSigmas::preset(a.noise);
-  // Vehicle hook (issue 10): a --vehicle option sets o.simulation (plant,
-  // controller, sensors) and o.identification.reference here.
   IdentificationOptions& id = o.identification;
+  id.reference = NamedParams{"nom", load_params(a.nominal)};
+  if (!a.vehicle.empty()) {
+    // The vehicle flies with its rotors (plant, gains, sensors of its file); every run's
+    // wrench is computed from the logged, noisy rotor columns as identify --vehicle does.
+    const Vehicle v = load_vehicle(a.vehicle);
+    configure_for_vehicle(o.simulation, v);
+    if (a.noise == "none") o.simulation.sensors.noise = NoiseSigmas::none();
+    if (a.plant_opt->count() > 0) o.simulation.plant = load_params(a.plant);
+    if (a.nominal_opt->count() == 0) id.reference = NamedParams{"nom", v.nominal};
+    id.gd.gain = GdGain::Normalized;  // identify's auto gain with a vehicle
+  } else if (a.rotor_noise) {
+    throw std::invalid_argument("--rotor-noise needs --vehicle (a rotor model)");
+  }
+  if (a.rotor_noise) o.simulation.rotor_noise = *a.rotor_noise;
   id.window = TimeWindow::parse(a.window);
   id.processing = a.proc.processing();
   id.lambda = a.proc.lambda;
   id.gd_variant = a.proc.gd_variant();
-  id.reference = NamedParams{"nom", load_params(a.nominal)};
   id.allow_rank_deficient = true;  // a run that lacks excitation is counted, not fatal
   o.validate();
 
@@ -106,8 +123,21 @@ void register_montecarlo(CLI::App& app) {
       ->capture_default_str();
   sub->add_option("--duration", a->duration, "flight length (s)")->capture_default_str();
   sub->add_option("--noise", a->noise, "sensor noise preset: none or default")->capture_default_str();
-  sub->add_option("--plant", a->plant, "the true vehicle (preset or params JSON)")->capture_default_str();
-  sub->add_option("--nominal", a->nominal, "reference set of identify (preset or params JSON)")->capture_default_str();
+  a->plant_opt =
+      sub->add_option("--plant", a->plant, "the true vehicle (preset or params JSON; default with --vehicle: its "
+                                           "[nominal])")
+          ->capture_default_str();
+  a->nominal_opt = sub->add_option("--nominal", a->nominal,
+                                   "reference set of identify (preset or params JSON; default with --vehicle: its "
+                                   "[nominal])")
+                       ->capture_default_str();
+  sub->add_option("--vehicle", a->vehicle,
+                  "fly a vehicle with its rotors (built-in: qball2, crazyflie21, jmavsim-quad, x500, or a vehicle "
+                  "file): plant, gains and sensors from it, the wrench of each run from its noisy rotor columns, "
+                  "gradient descent with the normalized gain (docs/vehicles.md)");
+  sub->add_option("--rotor-noise", a->rotor_noise,
+                  "with --vehicle: std of the white noise on the logged rotor speeds, rad/s or rpm (default: the "
+                  "vehicle's [sensors] rotor_noise, else 0)");
   sub->add_option("--window", a->window, "estimation window T0:T1 (s)")->capture_default_str();
   a->proc.add_to(sub);
   sub->add_option("-o,--out", a->out, "folder for montecarlo.json, runs.csv, summary.txt, histogram_*.svg, index.html");

@@ -1,5 +1,6 @@
 // Monte Carlo identification flights on a thread pool (docs/montecarlo.md).
 #include "quadid/montecarlo.hpp"
+#include "quadid/vehicle.hpp"
 
 #include <fmt/format.h>
 
@@ -27,7 +28,8 @@ MonteCarloRun fly(const MonteCarloOptions& o, const Trajectory& traj, int i) {
     const SimulationResult sim = simulate(traj, so);
     IdentificationOptions io = o.identification;
     io.record_evolution = false;  // not used here
-    const IdentificationResult id = identify(sim.log, io);
+    // With rotors, the wrench identify sees is the one of the logged (noisy) rotor columns.
+    const IdentificationResult id = identify(so.rotors ? with_rotor_wrench(sim.log, *so.rotors) : sim.log, io);
     for (const auto* e : id.all_sets()) {
       run.sets.push_back(e->name);
       run.estimates.push_back(e->valid ? e->theta : Theta::Constant(kNaN));
