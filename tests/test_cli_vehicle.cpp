@@ -2,6 +2,7 @@
 // vehicle (a file written here) with rotor-level actuation, and `quadid identify
 // --vehicle` on the log with its wrench columns dropped (rotor columns only)
 // recovers the vehicle the simulator flew.
+#include "heavy_vehicle.hpp"
 #include "cli_fixture.hpp"
 #include "quadid/io.hpp"
 #include "quadid/vehicle.hpp"
@@ -18,27 +19,7 @@ using quadid::testing::CliRun;
 
 // A 2 kg X quadrotor with its centre of mass off the rotors' centre, products of
 // inertia, rotor speeds in rad/s, a 30 ms motor lag and its own sensor table.
-const char* kHeavy = R"(name = "heavy-x"
-[nominal]
-m = 2.0
-Ixx = 0.021
-Iyy = 0.024
-Izz = 0.040
-Ixy = 0.0004
-Ixz = -0.0003
-Iyz = 0.0002
-[rotors]
-input = "speed"
-columns = ["w1", "w2", "w3", "w4"]
-kf = 1.2e-5
-thrust_max = 13.0
-torque_ratio = 0.016
-time_constant = 0.03
-positions = [[0.17, -0.18, 0.01], [-0.19, 0.17, 0.01], [0.17, 0.17, 0.01], [-0.19, -0.18, 0.01]]
-spin = ["ccw", "ccw", "cw", "cw"]
-[sensors]
-gyro_noise = 0.002
-)";
+const char* const kHeavy = quadid::testing::kHeavyVehicle;
 
 // The log without Fz tau_phi tau_theta tau_psi.
 quadid::FlightLog drop_wrench(const quadid::FlightLog& log) {

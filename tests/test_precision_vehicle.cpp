@@ -10,6 +10,7 @@
 // controller (and by the tracking error of the motor lag), which for these vehicles
 // adds much of the information on the moments (Izz most of all), and the prediction
 // was up to 3.4 times the spread (docs/fly-it.md).
+#include "heavy_vehicle.hpp"
 #include "cli_fixture.hpp"
 #include "quadid/precision.hpp"
 #include "quadid/simulation.hpp"
@@ -27,27 +28,7 @@ namespace {
 
 // A 2 kg X quadrotor (the one of test_cli_vehicle.cpp): products of inertia, centre of
 // mass off the rotors' centre, rotor speeds in rad/s, a 30 ms motor lag.
-const char* kHeavy = R"(name = "heavy-x"
-[nominal]
-m = 2.0
-Ixx = 0.021
-Iyy = 0.024
-Izz = 0.040
-Ixy = 0.0004
-Ixz = -0.0003
-Iyz = 0.0002
-[rotors]
-input = "speed"
-columns = ["w1", "w2", "w3", "w4"]
-kf = 1.2e-5
-thrust_max = 13.0
-torque_ratio = 0.016
-time_constant = 0.03
-positions = [[0.17, -0.18, 0.01], [-0.19, 0.17, 0.01], [0.17, 0.17, 0.01], [-0.19, -0.18, 0.01]]
-spin = ["ccw", "ccw", "cw", "cw"]
-[sensors]
-gyro_noise = 0.002
-)";
+const char* const kHeavy = quadid::testing::kHeavyVehicle;
 
 // Flies table2 `runs` times (20 s, default sensor noise, rotor noise `sigma_rotor`),
 // identifies each flight from its rotor columns (the paper's regressions, or with

@@ -121,17 +121,11 @@ std::vector<Family> families(const Constraints& c) {
   add("zddot_max", "m/s^2", Family::Max, false, kZ, 2, c.zddot_max, std::max(std::abs(c.zddot_max), 1.0));
   add("psiddot", "rad/s^2", Family::Abs, false, kPsi, 2, c.psiddot_max, c.psiddot_max);  // eq. (24)
   // Vehicle limits (issue 14): entries of vehicle_sample().
-  auto add_vehicle = [&](std::string name, const char* unit, Family::Kind kind, int index, double limit, double scale) {
-    if (std::isinf(limit)) return;
-    Family f;
-    f.name = std::move(name);
-    f.unit = unit;
-    f.kind = kind;
-    f.vehicle = true;
-    f.axis = index;
-    f.limit = limit;
-    f.scale = scale;
-    out.push_back(f);
+  auto add_vehicle = [&](const std::string& name, const char* unit, Family::Kind kind, int index, double limit,
+                         double scale) {
+    const size_t before = out.size();
+    add(name.c_str(), unit, kind, false, index, 0, limit, scale);
+    if (out.size() > before) out.back().vehicle = true;
   };
   add_vehicle("p", "rad/s", Family::Abs, 0, c.rate_max, c.rate_max);
   add_vehicle("q", "rad/s", Family::Abs, 1, c.rate_max, c.rate_max);
