@@ -215,4 +215,11 @@ Eigen::MatrixXd filter_fD(const Eigen::MatrixXd& x, double lambda, double T);
 Eigen::MatrixXd filter_gD(const Eigen::MatrixXd& x, double lambda, double T,
                           GdVariant variant = GdVariant::Consistent);
 
+/// Welch estimate of the one-sided power spectral density of x sampled at fs
+/// (Hann window of nseg samples, 50 % overlap, each segment's mean removed; the
+/// density of scipy.signal.welch(detrend="constant", scaling="density")), at the
+/// frequencies k fs / nseg, k = 0 .. nseg / 2, in units of x^2 / Hz. Throws
+/// std::invalid_argument when x holds fewer than nseg samples or nseg < 4.
+std::vector<double> welch_psd(const Eigen::VectorXd& x, double fs, Eigen::Index nseg);
+
 }  // namespace quadid::signal

@@ -21,34 +21,6 @@ double rms(const Eigen::VectorXd& v) { return v.size() ? std::sqrt(v.squaredNorm
 // r within a factor tol of target (both positive).
 bool near_factor(double r, double target, double tol) { return r > target / tol && r < target * tol; }
 
-// Welch estimate of the one-sided power spectral density (Hann window, 50 % overlap).
-// Returns the densities at k fs / nseg, k = 0..nseg/2.
-std::vector<double> welch_psd(const Eigen::VectorXd& x, double fs, Eigen::Index nseg) {
-  const Eigen::Index n = x.size();
-  std::vector<double> psd(static_cast<size_t>(nseg / 2 + 1), 0.0);
-  std::vector<double> w(static_cast<size_t>(nseg));
-  double wss = 0.0;
-  for (Eigen::Index i = 0; i < nseg; ++i) {
-    w[static_cast<size_t>(i)] = 0.5 - 0.5 * std::cos(2.0 * std::numbers::pi * double(i) / double(nseg));
-    wss += w[static_cast<size_t>(i)] * w[static_cast<size_t>(i)];
-  }
-  Eigen::FFT<double> fft;
-  std::vector<double> seg(static_cast<size_t>(nseg));
-  std::vector<std::complex<double>> spec;
-  int count = 0;
-  for (Eigen::Index start = 0; start + nseg <= n; start += nseg / 2) {
-    double mean = 0.0;
-    for (Eigen::Index i = 0; i < nseg; ++i) mean += x(start + i);
-    mean /= double(nseg);
-    for (Eigen::Index i = 0; i < nseg; ++i) seg[static_cast<size_t>(i)] = (x(start + i) - mean) * w[static_cast<size_t>(i)];
-    fft.fwd(spec, seg);
-    for (size_t k = 0; k < psd.size(); ++k) psd[k] += std::norm(spec[k]);
-    ++count;
-  }
-  for (size_t k = 0; k < psd.size(); ++k) psd[k] *= ((k == 0 || k + 1 == psd.size()) ? 1.0 : 2.0) / (fs * wss * count);
-  return psd;
-}
-
 void unwrap(Eigen::VectorXd& a) {
   const double two_pi = 2.0 * std::numbers::pi;
   double offset = 0.0;
@@ -281,7 +253,7 @@ std::vector<InputFinding> check_input(const FlightLog& log, const InputCheckOpti
     } else {
       std::vector<std::string> bad;
       for (const char* s : sigs) {
-        const std::vector<double> psd = welch_psd(log.column(s), fs, nseg);
+        const std::vector<double> psd = signal::welch_psd(log.column(s), fs, nseg);
         // Top fifth below Nyquist against the median density between the band
         // and there (the noise floor): a flat (white) spectrum gives ~1 whether
         // or not it was aliased; folded vibration or noise that rises towards

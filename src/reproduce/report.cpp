@@ -2,6 +2,9 @@
 // figures (Figs. 3-9) as inline SVG, and the JSON/CSV data behind them.
 #include "quadid/report.hpp"
 #include "quadid/reproduce.hpp"
+#include "quadid/checks.hpp"
+#include "quadid/identification.hpp"
+#include "quadid/signal.hpp"
 
 #include <fmt/format.h>
 
@@ -243,6 +246,52 @@ Table check_table(const CheckReport& c) {
   return t;
 }
 
+// Residuals Gamma theta - Y of LS on the standard regression (eq. 34) over the
+// estimation window, and their power spectra (Welch): what the intervals rest on
+// (a white residual would have a flat spectrum; the pre-filter's band shows).
+std::vector<Plot> residual_plots(const Reproduction& r) {
+  const IdentificationResult& id = r.identification;
+  const Regression reg(process_log(r.flight.log, id.options.processing), RegressionModel::Standard, id.window);
+  const Theta th = id.estimate("LS").theta;
+  std::vector<double> t;
+  std::array<std::vector<double>, 4> e;
+  reg.for_each([&](Eigen::Index k, const Regressor4x7& G, const Vec4& Y) {
+    const Vec4 res = G * th - Y;
+    t.push_back(reg.time(k));
+    for (size_t i = 0; i < 4; ++i) e[i].push_back(res(static_cast<Eigen::Index>(i)));
+  });
+  const char* names[] = {"Fz row (N)", "τφ row (N m)", "τθ row (N m)", "τψ row (N m)"};
+  Plot pf, pt, ps;
+  pf.title = "LS residual, force row";
+  pt.title = "LS residual, moment rows";
+  ps.title = "Power spectral density of the residuals (Welch)";
+  pf.xlabel = pt.xlabel = "time (s)";
+  pf.ylabel = "N";
+  pt.ylabel = "N m";
+  ps.xlabel = "frequency (Hz)";
+  ps.ylabel = "log10 PSD (unit²/Hz)";
+  pf.width = pt.width = ps.width = 500;
+  pf.series.push_back({names[0], t, e[0], report::color_for("", 0), false, 1.0});
+  for (size_t i = 1; i < 4; ++i) pt.series.push_back({names[i], t, e[i], report::color_for("", i), false, 1.0});
+  const double fs = 1.0 / reg.T();
+  Eigen::Index nseg = 256;
+  while (nseg * 8 <= static_cast<Eigen::Index>(t.size()) && nseg < 4096) nseg *= 2;
+  if (static_cast<Eigen::Index>(t.size()) >= nseg) {
+    for (size_t i = 0; i < 4; ++i) {
+      const Eigen::VectorXd x = Eigen::Map<const Eigen::VectorXd>(e[i].data(), static_cast<Eigen::Index>(e[i].size()));
+      const std::vector<double> psd = signal::welch_psd(x, fs, nseg);
+      std::vector<double> f, lp;
+      for (size_t k = 1; k < psd.size(); ++k) {
+        if (!(psd[k] > 0.0)) continue;
+        f.push_back(static_cast<double>(k) * fs / static_cast<double>(nseg));
+        lp.push_back(std::log10(psd[k]));
+      }
+      ps.series.push_back({names[i], f, lp, report::color_for("", i), false, 1.2});
+    }
+  }
+  return {pf, pt, ps};
+}
+
 Plot evolution_plot(const Reproduction& r, int param) {
   const auto& ev = r.identification.evolution;
   Plot p;
@@ -434,6 +483,25 @@ std::string reproduction_html(const Reproduction& r) {
   d.figure_row({evolution_plot(r, 2), evolution_plot(r, 3), evolution_plot(r, 5)},
                "Time evolution of the estimated products of inertia (paper Fig. 5).");
   for (const auto& w : r.identification.warnings) d.paragraph("Warning: " + w);
+
+  d.heading("Uncertainty, physical consistency and the checks on the input", 3);
+  {
+    const IdentificationResult& id = r.identification;
+    d.paragraph("Standard errors and 95 % intervals of the least-squares sets (the residuals' correlation taken "
+                "into account, docs/uncertainty.md), whether each set is physically consistent (m > 0, I positive "
+                "definite, triangle inequalities), the set quadid recommends and why, and what the checks on the "
+                "input found.");
+    d.raw("<pre>" + report::html_escape(format_uncertainty_table(id)) + "</pre>\n");
+    d.raw("<pre>" + report::html_escape(format_consistency(id)) + "</pre>\n");
+    // format_consistency() ends with the recommendation and its reason.
+    d.paragraph(id.input_findings.empty() ? "Checks on the input: nothing found."
+                                          : "Checks on the input:");
+    if (!id.input_findings.empty()) d.raw("<pre>" + report::html_escape(format_findings(id.input_findings)) + "</pre>\n");
+    const auto rp = residual_plots(r);
+    d.figure_row({rp[0], rp[1]}, "Residuals Γθ − Υ of LS over the estimation window (standard regression, eq. 34).");
+    d.figure(rp[2], "Their power spectral density (Welch, Hann, 50 % overlap): a white residual would be flat; "
+                    "the slope shows the pre-filter's band and the correlation the intervals account for.");
+  }
 
   d.heading("3. Validation using the identification experiment (section IV-B, Table 4, Figs. 6-9)");
   d.table(table4(r.table4, "Table 4. Validation using the identification experiment"));
