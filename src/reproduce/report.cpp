@@ -491,12 +491,15 @@ std::string reproduction_html(const Reproduction& r) {
                 "into account, docs/uncertainty.md), whether each set is physically consistent (m > 0, I positive "
                 "definite, triangle inequalities), the set quadid recommends and why, and what the checks on the "
                 "input found.");
-    d.raw("<pre>" + report::html_escape(format_uncertainty_table(id)) + "</pre>\n");
-    d.raw("<pre>" + report::html_escape(format_consistency(id)) + "</pre>\n");
-    // format_consistency() ends with the recommendation and its reason.
+    // pre-wrap: the columns stay aligned, the long notes wrap instead of overflowing.
+    const auto pre = [&](const std::string& text) {
+      d.raw("<pre style=\"white-space: pre-wrap\">" + report::html_escape(text) + "</pre>\n");
+    };
+    pre(format_uncertainty_table(id));
+    pre(format_consistency(id));  // ends with the recommendation and its reason
     d.paragraph(id.input_findings.empty() ? "Checks on the input: nothing found."
                                           : "Checks on the input:");
-    if (!id.input_findings.empty()) d.raw("<pre>" + report::html_escape(format_findings(id.input_findings)) + "</pre>\n");
+    if (!id.input_findings.empty()) pre(format_findings(id.input_findings));
     const auto rp = residual_plots(r);
     d.figure_row({rp[0], rp[1]}, "Residuals Γθ − Υ of LS over the estimation window (standard regression, eq. 34).");
     d.figure(rp[2], "Their power spectral density (Welch, Hann, 50 % overlap): a white residual would be flat; "
