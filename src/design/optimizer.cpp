@@ -19,18 +19,17 @@
 //   depend on the number of threads.
 #include "design_internal.hpp"
 #include "../common/nlopt_status.hpp"
+#include "../common/parallel.hpp"
 
 #include <Eigen/QR>
 #include <fmt/format.h>
 #include <nlopt.hpp>
 
 #include <algorithm>
-#include <atomic>
 #include <chrono>
 #include <mutex>
 #include <random>
 #include <stdexcept>
-#include <thread>
 
 namespace quadid {
 
@@ -104,6 +103,8 @@ struct Setup {
   Eigen::MatrixXd Z;   // orthonormal null space of the start conditions
   std::vector<double> fine_t;                 // the check grid, 0..period
   std::array<Eigen::MatrixXd, 5> fine_basis;  // orders 0..2 on the fine grid (0..4 with vehicle limits)
+  using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+  std::array<RowMajor, 5> fine_rows;          // the same, row-major: one instant's row is contiguous
   std::vector<Eigen::Index> cell_begin;       // cells of the fine grid (last entry = end)
   std::vector<Eigen::VectorXd> bound;         // per family and fine instant: the tightened limit
   // Coarse search grid: every `stride`-th fine instant of each cell and the
@@ -135,7 +136,10 @@ struct Setup {
     Z = Q.rightCols(ny);
     fine_t = design_detail::closed_grid(period, o.check_dt);
     const auto K = static_cast<Eigen::Index>(fine_t.size());
-    for (int ord = 0; ord < orders; ++ord) fine_basis[static_cast<size_t>(ord)] = basis_at(fine_t, ord);
+    for (int ord = 0; ord < orders; ++ord) {
+      fine_basis[static_cast<size_t>(ord)] = basis_at(fine_t, ord);
+      fine_rows[static_cast<size_t>(ord)] = fine_basis[static_cast<size_t>(ord)];
+    }
     const auto per_cell = std::max<Eigen::Index>(1, std::lround(o.cell_dt / o.check_dt));
     for (Eigen::Index k = 0; k < K; k += per_cell) cell_begin.push_back(k);
     if (K - cell_begin.back() < per_cell / 2 && cell_begin.size() > 1) cell_begin.pop_back();  // no tiny last cell
@@ -240,15 +244,73 @@ struct Setup {
     return V;
   }
 
+  // Values at single fine instants, cached for one evaluation of the
+  // constraints (both signs of a limit and neighbouring cells search the same
+  // instants). Each is bit for bit what values_on gives for that row: the same
+  // multiply-adds in the same order as a row of Eigen's column-major product
+  // (accumulated from 0 over the columns), then the same tilt or vehicle map.
+  struct FineCache {
+    std::vector<double> val;      // family-major: f K + k
+    std::vector<unsigned> stamp;  // the evaluation that filled val
+    unsigned now = 0;
+  };
+  void start_evaluation(FineCache& c) const {
+    const size_t size = fams.size() * fine_t.size();
+    if (c.val.size() != size) {
+      c.val.assign(size, 0.0);
+      c.stamp.assign(size, 0);
+      c.now = 0;
+    }
+    if (++c.now == 0) {  // wrapped: forget everything
+      std::fill(c.stamp.begin(), c.stamp.end(), 0u);
+      c.now = 1;
+    }
+  }
+  double row_dot(int order, Eigen::Index k, const Eigen::VectorXd& x, int axis) const {
+    const double* b = fine_rows[static_cast<size_t>(order)].row(k).data();
+    const double* xs = x.data() + axis * n1;
+    double acc = 0.0;
+    for (int j = 0; j < n1; ++j) acc += b[j] * xs[j];
+    return acc;
+  }
+  double fine_value(int f, Eigen::Index k, const Eigen::VectorXd& x, FineCache& c) const {
+    const auto K = fine_t.size();
+    const size_t at = static_cast<size_t>(f) * K + static_cast<size_t>(k);
+    if (c.stamp[at] == c.now) return c.val[at];
+    const Family& fam = fams[static_cast<size_t>(f)];
+    auto store = [&](size_t g, double v) {
+      const size_t i = g * K + static_cast<size_t>(k);
+      c.val[i] = v;
+      c.stamp[i] = c.now;
+    };
+    if (fam.tilt) {  // both angles at once
+      const double ax = row_dot(2, k, x, 0), ay = row_dot(2, k, x, 1), az = row_dot(2, k, x, 2),
+                   psi = row_dot(0, k, x, 3);
+      std::array<double, 2> a{M_PI / 2, M_PI / 2};  // no upward thrust: count as fully tilted
+      if (az + opt.g > 0.0) a = design_detail::tilt_angles(ax, ay, az, psi, opt.g);
+      for (size_t g = 0; g < fams.size(); ++g)
+        if (fams[g].tilt) store(g, a[static_cast<size_t>(fams[g].axis)]);
+    } else if (fam.vehicle) {  // every vehicle limit at once
+      FlatOutput d;
+      for (int i = 0; i < 4; ++i)
+        for (int ord = 0; ord < 5; ++ord) d(i, ord) = row_dot(ord, k, x, i);
+      Eigen::VectorXd vv(vlim.size());
+      if (d(kZ, 2) + opt.g > 0.0)
+        vv = design_detail::vehicle_sample(d, opt.g, vlim, nullptr);
+      else  // as values_on
+        for (Eigen::Index j = 0; j < vv.size(); ++j)
+          vv(j) = j >= 2 ? -1.0 : std::isfinite(opt.limits.rate_max) ? 10.0 * opt.limits.rate_max : 0.0;
+      for (size_t g = 0; g < fams.size(); ++g)
+        if (fams[g].vehicle) store(g, vv(fams[g].axis));
+    } else {
+      store(static_cast<size_t>(f), row_dot(fam.order, k, x, fam.axis));
+    }
+    return c.val[at];
+  }
+
   // Every family's value at every fine instant.
   Eigen::MatrixXd fine_values(const Eigen::VectorXd& x) const {
     return values_on([&](int o) -> const Eigen::MatrixXd& { return fine_basis[static_cast<size_t>(o)]; }, x);
-  }
-  // The values of family f at fine instants lo .. lo + len - 1 (len >= 2: a
-  // product with one row would be evaluated as a dot product, summed in another order).
-  Eigen::VectorXd window_values(int f, Eigen::Index lo, Eigen::Index len, const Eigen::VectorXd& x) const {
-    return values_on([&](int o) { return fine_basis[static_cast<size_t>(o)].middleRows(lo, len); }, x, f)
-        .col(f);
   }
   // Every family's value at the coarse search instants.
   Eigen::MatrixXd coarse_values(const Eigen::VectorXd& x) const {
@@ -304,6 +366,8 @@ struct Round {
   // Per constraint: how far above 0 it may be with the true (untightened)
   // limit still met with room to spare: half the margin at its worst instant.
   mutable std::vector<double> slack;
+  mutable Setup::FineCache cache;  // fine-grid values of the point being evaluated
+  mutable std::vector<double> cc;  // c of one limit and sign at the coarse instants
 
   explicit Round(const Setup& setup) : s(setup) {
     for (const auto& f : s.fams) m += static_cast<unsigned>((f.kind == Family::Abs ? 2 : 1) * s.cells());
@@ -326,6 +390,8 @@ struct Round {
 
   void constraints(double* c, const double* y, double* grad) const {
     const Eigen::VectorXd x = x_of(y);
+    s.start_evaluation(cache);
+    cc.resize(s.coarse_k.size());
     const Eigen::MatrixXd Vc = s.coarse_values(x);
     const auto K = static_cast<Eigen::Index>(s.fine_t.size());
     using RowMat = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
@@ -348,16 +414,13 @@ struct Round {
           if (fam.pinned && (k == 0 || k == K - 1)) return -kInf;
           return sigma * v - bsign * bd(k);
         };
-        // c at fine instant k, evaluated on its own (through a two-row window).
-        auto cval_at = [&](Eigen::Index k) {
-          const Eigen::Index lo = std::min(k, K - 2);
-          return cval(k, s.window_values(fi, lo, 2, x)(k - lo));
-        };
+        auto cval_at = [&](Eigen::Index k) { return cval(k, s.fine_value(fi, k, x, cache)); };
+        for (size_t j = 0; j < s.coarse_k.size(); ++j) cc[j] = cval(s.coarse_k[j], vc(static_cast<Eigen::Index>(j)));
         for (int cell = 0; cell < s.cells(); ++cell, ++row) {
           const Eigen::Index b0 = s.cell_begin[static_cast<size_t>(cell)];
           const Eigen::Index b1 = s.cell_begin[static_cast<size_t>(cell) + 1];
           const size_t j0 = s.cell_coarse[static_cast<size_t>(cell)], j1 = s.cell_coarse[static_cast<size_t>(cell) + 1];
-          auto ccoarse = [&](size_t j) { return cval(s.coarse_k[j], vc(static_cast<Eigen::Index>(j))); };
+          auto ccoarse = [&](size_t j) { return cc[j]; };
           // Far outside the tilt limit (near z_ddot = -g) eqs. (26)-(27) change
           // fast: the whole cell is searched on the fine grid there.
           bool exhaustive = false;
@@ -373,10 +436,8 @@ struct Round {
             if (!exhaustive && ((j > j0 && ccoarse(j - 1) > cj) || (j + 1 < j1 && ccoarse(j + 1) > cj))) continue;
             const Eigen::Index lo = j > j0 ? s.coarse_k[j - 1] + 1 : s.coarse_k[j];
             const Eigen::Index hi = j + 1 < j1 ? s.coarse_k[j + 1] - 1 : s.coarse_k[j];
-            const Eigen::Index wlo = std::min(lo, K - 2), wlen = std::max<Eigen::Index>(2, hi - wlo + 1);
-            const Eigen::VectorXd w = s.window_values(fi, wlo, wlen, x);
             for (Eigen::Index k = lo; k <= hi; ++k) {
-              const double ck = cval(k, w(k - wlo));
+              const double ck = cval_at(k);
               if (ck > best_c || (ck == best_c && k < best)) {
                 best = k;
                 best_c = ck;
@@ -549,29 +610,13 @@ DesignResult design_trajectory(const DesignOptions& opt, const DesignProgress& p
   DesignResult res;
   res.starts.resize(static_cast<size_t>(opt.starts));
   std::vector<Eigen::VectorXd> xs(static_cast<size_t>(opt.starts));
-  const int hw = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  const int nthreads = std::min(opt.starts, opt.threads > 0 ? opt.threads : hw);
-  std::atomic<int> next{0};
-  std::mutex mu;
-  std::exception_ptr error;
-  auto worker = [&] {
-    for (int i = next++; i < opt.starts; i = next++) {
-      try {
-        auto sum = run_start(setup, i, y0[static_cast<size_t>(i)], xs[static_cast<size_t>(i)]);
-        const std::lock_guard<std::mutex> lock(mu);
-        res.starts[static_cast<size_t>(i)] = sum;
-        if (progress) progress(sum, opt.starts);
-      } catch (...) {
-        const std::lock_guard<std::mutex> lock(mu);
-        if (!error) error = std::current_exception();
-      }
-    }
-  };
-  std::vector<std::thread> pool;
-  for (int t = 1; t < nthreads; ++t) pool.emplace_back(worker);
-  worker();
-  for (auto& th : pool) th.join();
-  if (error) std::rethrow_exception(error);
+  std::mutex mu;  // the progress callback sees one start at a time
+  detail::parallel_for(opt.starts, opt.threads, [&](int i) {
+    auto sum = run_start(setup, i, y0[static_cast<size_t>(i)], xs[static_cast<size_t>(i)]);
+    const std::lock_guard<std::mutex> lock(mu);
+    res.starts[static_cast<size_t>(i)] = sum;
+    if (progress) progress(sum, opt.starts);
+  });
 
   // Best feasible start by criterion; ties and infeasible runs go by index / least violation.
   for (int i = 0; i < opt.starts; ++i) {

@@ -1,6 +1,7 @@
 // Monte Carlo identification flights on a thread pool (docs/montecarlo.md).
 #include "quadid/montecarlo.hpp"
 #include "quadid/vehicle.hpp"
+#include "../common/parallel.hpp"
 
 #include <fmt/format.h>
 
@@ -127,25 +128,18 @@ MonteCarloResult run_montecarlo(const MonteCarloOptions& options, const std::fun
   MonteCarloResult res;
   res.options = options;
   res.truth = options.simulation.plant.theta();
-  const int hw = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  res.threads = std::min(options.threads > 0 ? options.threads : hw, options.runs);
+  res.threads = detail::thread_count(options.threads, options.runs);
   res.runs.resize(static_cast<size_t>(options.runs));
   // The pool keeps the cores busy: each identification then runs on one thread.
   MonteCarloOptions per_run = options;
   if (res.threads > 1) per_run.identification.processing.threads = 1;
   const auto t0 = std::chrono::steady_clock::now();
-  std::atomic<int> next{0}, done{0};
-  auto worker = [&] {
-    for (int i = next++; i < options.runs; i = next++) {
-      res.runs[static_cast<size_t>(i)] = fly(per_run, *traj, i);
-      const int d = ++done;
-      if (progress) progress(d, options.runs);
-    }
-  };
-  std::vector<std::thread> pool;
-  for (int k = 1; k < res.threads; ++k) pool.emplace_back(worker);
-  worker();
-  for (auto& t : pool) t.join();
+  std::atomic<int> done{0};
+  detail::parallel_for(options.runs, res.threads, [&](int i) {
+    res.runs[static_cast<size_t>(i)] = fly(per_run, *traj, i);
+    const int d = ++done;
+    if (progress) progress(d, options.runs);
+  });
   res.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   for (const auto& r : res.runs)
     if (!r.ok) ++res.failed;

@@ -22,6 +22,7 @@
 #include "quadid/extended.hpp"
 #include "quadid/regressor.hpp"
 #include "quadid/signal.hpp"
+#include "../common/parallel.hpp"
 
 #include <fmt/format.h>
 
@@ -29,6 +30,7 @@
 #include <array>
 #include <cmath>
 #include <memory>
+#include <utility>
 #include <stdexcept>
 
 namespace quadid {
@@ -137,6 +139,12 @@ Mat7 information_inverse(const Mat7& A, double* condition, const std::string& wh
          d.asDiagonal();
 }
 
+// The pre-filter cutoffs of the force row and of the moment rows, Hz.
+std::pair<double, double> cutoffs(const PrecisionOptions& opt) {
+  const double f = opt.processing.lowpass.cutoff_hz;
+  return {opt.force_cutoff_hz.value_or(f), opt.moment_cutoff_hz.value_or(f)};
+}
+
 }  // namespace
 
 PrecisionOptions PrecisionOptions::from(const SimulationOptions& sim, const IdentificationOptions& id) {
@@ -208,8 +216,8 @@ Vec4 regression_row_noise(const PrecisionOptions& opt, double hover_z) {
   so.sensors.seed = 1;
   FlightLog log = simulate(hover, so).log;
   if (opt.rotors) log = with_rotor_wrench(log, *opt.rotors);  // as identify --vehicle: the wrench of the noisy columns
-  const double f_force = opt.force_cutoff_hz.value_or(opt.processing.lowpass.cutoff_hz);
-  const double f_moment = opt.moment_cutoff_hz.value_or(opt.processing.lowpass.cutoff_hz);
+  const std::pair<double, double> fc = cutoffs(opt);
+  const double f_force = fc.first, f_moment = fc.second;
   const Regression reg(row_signals(log, opt.processing, f_force, f_moment), RegressionModel::Standard,
                        TimeWindow{0.0, kRowNoiseSeconds});
   const Theta theta = opt.params.theta();
@@ -238,8 +246,8 @@ PrecisionResult predict_precision(const Trajectory& traj, const PrecisionOptions
     log.data.row(k) << t, r.p(0), r.p(1), r.p(2), r.eta(0), r.eta(1), r.eta(2), r.omega(0), r.omega(1), r.omega(2),
         F(0), F(1), F(2), F(3);
   }
-  const double f_force = opt.force_cutoff_hz.value_or(opt.processing.lowpass.cutoff_hz);
-  const double f_moment = opt.moment_cutoff_hz.value_or(opt.processing.lowpass.cutoff_hz);
+  const std::pair<double, double> fc = cutoffs(opt);
+  const double f_force = fc.first, f_moment = fc.second;
   const auto signals = row_signals(log, opt.processing, f_force, f_moment);
 
   // Gamma theta = M_a a + M_b b: the regressor is linear in its 4 + 7 signals.
@@ -314,11 +322,15 @@ PrecisionResult predict_precision(const Trajectory& traj, const PrecisionOptions
     so.record_truth = true;
     // The rotor noise only reaches the log (the flight is the same): it is there for the row weights.
     so.rotor_noise = opt.weight_rows ? opt.rotor_noise : 0.0;
-    for (int f = 0; f < opt.closed_loop_flights; ++f) {
-      so.sensors.seed = static_cast<std::uint64_t>(f + 1);
+    // The flights are independent (each its own seed): on every core.
+    flown.resize(static_cast<size_t>(opt.closed_loop_flights));
+    flown_w2.resize(static_cast<size_t>(opt.closed_loop_flights));
+    detail::parallel_for(opt.closed_loop_flights, 0, [&](int f) {
+      SimulationOptions sf = so;
+      sf.sensors.seed = static_cast<std::uint64_t>(f + 1);
       const SimulationResult flight = [&] {
         try {
-          return simulate(traj, so);
+          return simulate(traj, sf);
         } catch (const SimulationDiverged& e) {
           throw InputError(fmt::format(
               "predicted precision: the simulated flight of {} diverged at t = {:.3f} s ({}): the vehicle cannot fly "
@@ -327,7 +339,7 @@ PrecisionResult predict_precision(const Trajectory& traj, const PrecisionOptions
         }
       }();
       if (flight.truth.rows() != n) throw std::logic_error("precision: a simulated flight of another length");
-      flown.push_back(row_signals(flight.truth, opt.processing, f_force, f_moment));
+      flown[static_cast<size_t>(f)] = row_signals(flight.truth, opt.processing, f_force, f_moment);
       std::array<Vec4, 2> w2{Vec4::Ones(), Vec4::Ones()};
       if (opt.weight_rows) {
         // The weights identify gives this flight's log: the real-flight regression with
@@ -342,12 +354,12 @@ PrecisionResult predict_precision(const Trajectory& traj, const PrecisionOptions
         xo.terms.weight_rows = true;
         xo.reference = opt.params;
         const ExtendedResult x =
-            identify_extended(so.rotors ? with_rotor_wrench(flight.log, *so.rotors) : flight.log, xo);
+            identify_extended(sf.rotors ? with_rotor_wrench(flight.log, *sf.rotors) : flight.log, xo);
         for (int m = 0; m < 2; ++m)
           w2[static_cast<size_t>(m)] = x.estimates[static_cast<size_t>(m)].row_weight.cwiseAbs2();
       }
-      flown_w2.push_back(w2);
-    }
+      flown_w2[static_cast<size_t>(f)] = w2;
+    });
   }
 
   signal::LowpassOptions lp_force = opt.processing.lowpass, lp_moment = opt.processing.lowpass;
