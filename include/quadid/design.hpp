@@ -196,7 +196,7 @@ struct DesignOptions {
   int starts = 8;                      // random multi-start
   std::uint64_t seed = 1;              // same seed -> same result, whatever the thread count
   int threads = 0;                     // 0 = min(starts, hardware threads)
-  double grid_dt = 0.05;               // s, criterion samples while optimizing (spectrally accurate, see docs)
+  double grid_dt = 0.1;                // s, criterion samples while optimizing (spectrally accurate: 1e-15, see docs)
   double check_dt = 0.001;             // s, grid on which every limit is imposed and checked
   double cell_dt = 0.5;                // s, one constraint per limit, sign and cell: the worst check_dt instant in it
 

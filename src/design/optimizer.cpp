@@ -13,7 +13,7 @@
 //   absorbs SLSQP's constraint tolerance. A start that ends infeasible is
 //   re-polished from its last point (refine_rounds).
 // - The criterion is sampled every grid_dt: the periodic rectangle rule of
-//   eq. (20) converges spectrally, so 50 ms gives the 2 ms value to ~1e-12.
+//   eq. (20) converges spectrally, so 100 ms gives the 2 ms value to ~1e-15.
 // - Starts are drawn in sequence from one seeded std::mt19937_64 before any
 //   thread runs, and each start is deterministic, so the result does not
 //   depend on the number of threads.
