@@ -30,8 +30,17 @@ double normal_quantile(double p) {
 // Autocovariances of the series c (n values, mean removed) at the kLags lags
 // k, k+1, ...: out[l] = sum_i c[i] c[i + k + l] / n. One pass for the kLags
 // sums, each still summed in the order of i (the same bits as one lag at a
-// time); the kLags independent sums keep the processor's adders busy.
-constexpr int kLags = 8;
+// time): the lags are the vector lanes, so each c[i] load serves 32 lags and
+// the independent sums keep the processor's adders busy. Compiled for AVX-512
+// and AVX2 as well (chosen at run time); multiplication and addition stay
+// separate (no FMA), so every instruction set gives the same bits.
+constexpr int kLags = 32;
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && !defined(__SANITIZE_ADDRESS__)
+#define QUADID_AUTOCOV_CLONES 1
+#pragma GCC push_options
+#pragma GCC optimize("fp-contract=off")  // AVX-512 brings FMA; a fused a*b+s would change the bits
+__attribute__((target_clones("avx512f", "avx2", "default")))
+#endif
 void autocov_lags(const double* c, long n, long k, double out[kLags]) {
   double s[kLags] = {};
   const long full = std::max<long>(0, n - k - (kLags - 1));  // rows where every lag has a partner
@@ -44,6 +53,9 @@ void autocov_lags(const double* c, long n, long k, double out[kLags]) {
     for (long i = full; i + k + l < n; ++i) s[l] += c[i] * c[i + k + l];
   for (int l = 0; l < kLags; ++l) out[l] = s[l] / static_cast<double>(n);
 }
+#ifdef QUADID_AUTOCOV_CLONES
+#pragma GCC pop_options
+#endif
 
 }  // namespace
 
