@@ -4,8 +4,9 @@
 // Memory: a 20-minute log at 1 kHz is 1.2 million rows, and a simulator log may
 // carry 18-30 columns (~0.5-0.8 GB of text). The reader therefore never holds
 // the whole text: it reads fixed-size chunks and parses each complete line
-// straight into a column-major matrix that grows geometrically (x1.5) and is
-// shrunk in place at the end. The lines of a chunk are parsed on two threads,
+// straight into a column-major matrix, sized after the first chunk from the
+// file's size (growing by half if the estimate falls short) and shrunk in place
+// at the end. The lines of a chunk are parsed on two threads,
 // each half into its own rows. Skipped columns are not parsed, only counted.
 #include "quadid/io.hpp"
 
@@ -20,6 +21,7 @@
 #include <cstdio>
 #include <cstdint>
 #include <cstring>
+#include <system_error>
 #include <unistd.h>
 #include <unordered_map>
 
@@ -73,6 +75,46 @@ std::string_view unquote(std::string_view s) {
   return s;
 }
 
+// A decimal number at [s, e) as std::from_chars(s, e, v) reads it, and with
+// the same result bit for bit: the common short case, -?d+(.d+)?([eE][+-]?d+)?
+// with at most 2^53 as its digits and a power of ten within 1e+-22, is m * 10^k
+// or m / 10^-k of two exact doubles, one correctly rounded operation (Clinger's
+// exact fast path); anything else goes to std::from_chars.
+std::from_chars_result parse_double(const char* s, const char* e, double& v) {
+  static constexpr double kPow10[] = {1e0,  1e1,  1e2,  1e3,  1e4,  1e5,  1e6,  1e7,  1e8,  1e9,  1e10, 1e11,
+                                      1e12, 1e13, 1e14, 1e15, 1e16, 1e17, 1e18, 1e19, 1e20, 1e21, 1e22};
+  auto digit = [e](const char* q) { return q < e && static_cast<unsigned>(*q - '0') < 10u; };
+  const char* p = s;
+  const bool neg = p < e && *p == '-';
+  if (neg) ++p;
+  std::uint64_t m = 0;
+  int ndig = 0, exp10 = 0;
+  if (!digit(p)) return std::from_chars(s, e, v);
+  for (; digit(p); ++p, ++ndig) m = 10 * m + static_cast<unsigned>(*p - '0');
+  if (p < e && *p == '.') {
+    ++p;
+    if (!digit(p)) return std::from_chars(s, e, v);
+    for (; digit(p); ++p, ++ndig, --exp10) m = 10 * m + static_cast<unsigned>(*p - '0');
+  }
+  if (p < e && (*p == 'e' || *p == 'E')) {
+    const char* q = p + 1;
+    const bool eneg = q < e && *q == '-';
+    if (q < e && (*q == '-' || *q == '+')) ++q;
+    if (!digit(q)) return std::from_chars(s, e, v);
+    int x = 0, xd = 0;
+    for (; digit(q); ++q, ++xd) x = 10 * x + (*q - '0');
+    if (xd > 3) return std::from_chars(s, e, v);
+    exp10 += eneg ? -x : x;
+    p = q;
+  }
+  // 19 digits cannot overflow 64 bits; m <= 2^53 converts exactly.
+  if (ndig > 19 || m > (std::uint64_t{1} << 53) || exp10 < -22 || exp10 > 22) return std::from_chars(s, e, v);
+  double d = static_cast<double>(m);
+  d = exp10 < 0 ? d / kPow10[-exp10] : d * kPow10[exp10];
+  v = neg ? -d : d;
+  return {p, std::errc()};
+}
+
 struct FileCloser {
   void operator()(std::FILE* f) const {
     if (f) std::fclose(f);
@@ -107,6 +149,14 @@ class LineReader {
     }
   }
   size_t line_no() const { return line_no_; }
+  /// Bytes of the file consumed by the lines returned so far.
+  std::uint64_t consumed() const { return read_ - (len_ - pos_); }
+  /// The file's size in bytes, or 0 when unknown (e.g. a pipe).
+  std::uint64_t file_size() const {
+    std::error_code ec;
+    const std::uintmax_t n = std::filesystem::file_size(file_, ec);
+    return ec ? 0 : static_cast<std::uint64_t>(n);
+  }
 
   // The complete lines now in the buffer (refilling it first when it holds
   // none), in order; valid until the next call. False at the end of the file.
@@ -155,12 +205,14 @@ class LineReader {
       eof_ = true;
     }
     len_ += got;
+    read_ += got;
   }
 
   std::string file_;
   std::unique_ptr<std::FILE, FileCloser> f_;
   std::unique_ptr<char[]> buf_;  // uninitialized: zeroing it would only cost time
   size_t cap_ = 0, pos_ = 0, len_ = 0, line_no_ = 0;
+  std::uint64_t read_ = 0;  // bytes read from the file
   bool eof_ = false;
 };
 
@@ -330,7 +382,7 @@ FlightLog read_flight_log(const std::filesystem::path& path, const CsvReadOption
         while (s < le && (*s == ' ' || *s == '\t')) ++s;
         if (s < le && *s == '+') ++s;
         double val = 0.0;
-        const auto [ptr, ec] = std::from_chars(s, le, val);
+        const auto [ptr, ec] = parse_double(s, le, val);
         const char* e = ptr;
         while (e < le && (*e == ' ' || *e == '\t')) ++e;
         if (ec != std::errc() || (e < le && *e != ',') || !std::isfinite(val)) {
@@ -368,6 +420,11 @@ FlightLog read_flight_log(const std::filesystem::path& path, const CsvReadOption
   RowLines row_lines;
   std::vector<std::string_view> block;
   std::vector<size_t> data_lines;  // indices into block
+  // Capacity: after the first block, the rest of the file at the first rows'
+  // mean length, with 10% to spare (growing by copies costs time and fresh
+  // pages; capacity never written is never touched, so the spare costs little).
+  const std::uint64_t data_start = in.consumed(), file_bytes = in.file_size();
+  bool estimated = false;
   while (true) {
     const size_t first_line_no = in.line_no() + 1;
     if (!in.next_block(block)) break;
@@ -380,6 +437,15 @@ FlightLog read_flight_log(const std::filesystem::path& path, const CsvReadOption
     }
     if (data_lines.empty()) continue;
     const Eigen::Index count = static_cast<Eigen::Index>(data_lines.size());
+    if (!estimated) {
+      estimated = true;
+      const std::uint64_t used = in.consumed() - data_start;
+      if (file_bytes > in.consumed() && used > 0) {
+        const double per_row = static_cast<double>(used) / static_cast<double>(count);
+        const double left = static_cast<double>(file_bytes - in.consumed());
+        store.reserve(count + 16 + static_cast<Eigen::Index>(1.1 * left / per_row));
+      }
+    }
     double* base = store.add_rows(count);
     const Eigen::Index stride = store.capacity();
     auto parse_range = [&](size_t a, size_t b) {
