@@ -75,46 +75,6 @@ std::string_view unquote(std::string_view s) {
   return s;
 }
 
-// A decimal number at [s, e) as std::from_chars(s, e, v) reads it, and with
-// the same result bit for bit: the common short case, -?d+(.d+)?([eE][+-]?d+)?
-// with at most 2^53 as its digits and a power of ten within 1e+-22, is m * 10^k
-// or m / 10^-k of two exact doubles, one correctly rounded operation (Clinger's
-// exact fast path); anything else goes to std::from_chars.
-std::from_chars_result parse_double(const char* s, const char* e, double& v) {
-  static constexpr double kPow10[] = {1e0,  1e1,  1e2,  1e3,  1e4,  1e5,  1e6,  1e7,  1e8,  1e9,  1e10, 1e11,
-                                      1e12, 1e13, 1e14, 1e15, 1e16, 1e17, 1e18, 1e19, 1e20, 1e21, 1e22};
-  auto digit = [e](const char* q) { return q < e && static_cast<unsigned>(*q - '0') < 10u; };
-  const char* p = s;
-  const bool neg = p < e && *p == '-';
-  if (neg) ++p;
-  std::uint64_t m = 0;
-  int ndig = 0, exp10 = 0;
-  if (!digit(p)) return std::from_chars(s, e, v);
-  for (; digit(p); ++p, ++ndig) m = 10 * m + static_cast<unsigned>(*p - '0');
-  if (p < e && *p == '.') {
-    ++p;
-    if (!digit(p)) return std::from_chars(s, e, v);
-    for (; digit(p); ++p, ++ndig, --exp10) m = 10 * m + static_cast<unsigned>(*p - '0');
-  }
-  if (p < e && (*p == 'e' || *p == 'E')) {
-    const char* q = p + 1;
-    const bool eneg = q < e && *q == '-';
-    if (q < e && (*q == '-' || *q == '+')) ++q;
-    if (!digit(q)) return std::from_chars(s, e, v);
-    int x = 0, xd = 0;
-    for (; digit(q); ++q, ++xd) x = 10 * x + (*q - '0');
-    if (xd > 3) return std::from_chars(s, e, v);
-    exp10 += eneg ? -x : x;
-    p = q;
-  }
-  // 19 digits cannot overflow 64 bits; m <= 2^53 converts exactly.
-  if (ndig > 19 || m > (std::uint64_t{1} << 53) || exp10 < -22 || exp10 > 22) return std::from_chars(s, e, v);
-  double d = static_cast<double>(m);
-  d = exp10 < 0 ? d / kPow10[-exp10] : d * kPow10[exp10];
-  v = neg ? -d : d;
-  return {p, std::errc()};
-}
-
 struct FileCloser {
   void operator()(std::FILE* f) const {
     if (f) std::fclose(f);
@@ -382,7 +342,7 @@ FlightLog read_flight_log(const std::filesystem::path& path, const CsvReadOption
         while (s < le && (*s == ' ' || *s == '\t')) ++s;
         if (s < le && *s == '+') ++s;
         double val = 0.0;
-        const auto [ptr, ec] = parse_double(s, le, val);
+        const auto [ptr, ec] = std::from_chars(s, le, val);
         const char* e = ptr;
         while (e < le && (*e == ' ' || *e == '\t')) ++e;
         if (ec != std::errc() || (e < le && *e != ',') || !std::isfinite(val)) {
