@@ -403,8 +403,13 @@ void ZeroPhaseFilter::apply(double* const* columns, int count, Eigen::Index n) {
   check_length(n, impl_->pad);
   int j = 0;
   if (!impl_->fir) {
-    // Four at a time: enough independent work to cover a section's latency.
-    for (; j + 4 <= count; j += 4) impl_->apply_sos_k<4>(columns + j, n);
+    // Four at a time: enough independent work to cover a section's latency;
+    // a last single column goes with the previous group as 3 + 2.
+    for (; j + 4 <= count && count - j != 5; j += 4) impl_->apply_sos_k<4>(columns + j, n);
+    if (count - j == 5) {
+      impl_->apply_sos_k<3>(columns + j, n);
+      j += 3;
+    }
     switch (count - j) {
       case 3: impl_->apply_sos_k<3>(columns + j, n); return;
       case 2: impl_->apply_sos_k<2>(columns + j, n); return;
