@@ -6,6 +6,7 @@
 #include "quadid/model.hpp"
 #include "quadid/regressor.hpp"
 
+#include <algorithm>
 #include <array>
 #include <limits>
 #include <string>
@@ -177,6 +178,8 @@ class InfluenceAccumulator {
  public:
   explicit InfluenceAccumulator(const LeastSquaresSolution& sol);
   void add(const Regressor4x7& G, const Vec4& Y);
+  /// Room for `samples` add() calls (optional: saves the copies of growing).
+  void reserve(long samples) { psi_.reserve(7 * static_cast<size_t>(std::max(0L, samples))); }
   long count() const { return static_cast<long>(psi_.size() / 7); }
   LeastSquaresUncertainty finish(const UncertaintyOptions& opt = {}) const;
 

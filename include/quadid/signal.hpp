@@ -127,6 +127,9 @@ class ZeroPhaseFilter {
   int padlen() const;
   // Needs n > padlen(); throws std::invalid_argument otherwise.
   void apply(double* x, Eigen::Index n);
+  // apply() on each of `count` columns of n samples (the same bits), several at
+  // a time so that their recurrences overlap: faster than one by one.
+  void apply(double* const* columns, int count, Eigen::Index n);
   // One (forward) pass: its response at f_hz and its impulse response from rest.
   std::complex<double> frequency_response(double f_hz, double fs_hz) const;
   Eigen::VectorXd impulse_response(Eigen::Index samples) const;

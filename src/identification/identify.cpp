@@ -215,6 +215,7 @@ IdentificationResult identify(const FlightLog& log, const IdentificationOptions&
     // Second pass: the influence of each sample on the estimate, for the HAC
     // covariance (docs/uncertainty.md).
     InfluenceAccumulator infl(sol);
+    infl.reserve(static_cast<long>(reg.size()));
     reg.for_each([&](Eigen::Index, const Regressor4x7& G, const Vec4& Y) { infl.add(G, Y); });
     attach_uncertainty(sol, infl.finish(opt.uncertainty), prior, opt.ls);
     // The physically consistent set: the closest consistent Theta in the LS metric.

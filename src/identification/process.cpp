@@ -10,9 +10,12 @@
 
 #include <fmt/format.h>
 
+#include <array>
 #include <cmath>
+#include <initializer_list>
 #include <numbers>
 #include <stdexcept>
+#include <utility>
 
 namespace quadid {
 namespace {
@@ -140,24 +143,25 @@ std::shared_ptr<const RegressionSignals> process_log(const FlightLog& log, const
   // starts), and step 2: p_dot by eq. (33) from the filtered position. The
   // columns are independent: rates and wrench on one thread, attitude and
   // position on the other (each with its own filter work buffer).
-  auto filter_into = [&](signal::ZeroPhaseFilter& f, int log_col, int x_col) {
-    X.col(x_col) = log.data.col(log_col);
-    f.apply(X.col(x_col).data(), n);
+  // The columns of each half are filtered together (ZeroPhaseFilter's
+  // several-column apply: the same bits as one at a time, faster).
+  auto filter_into = [&](signal::ZeroPhaseFilter& f, std::initializer_list<std::pair<int, int>> log_to_x) {
+    std::array<double*, 7> cols{};
+    int count = 0;
+    for (const auto& [log_col, x_col] : log_to_x) {
+      if (log_col >= 0) X.col(x_col) = log.data.col(log_col);
+      cols[static_cast<size_t>(count++)] = X.col(x_col).data();
+    }
+    f.apply(cols.data(), count, n);
   };
-  auto rates_and_wrench = [&] {
-    for (int i = 0; i < 3; ++i) filter_into(zf, col[7 + i], 1 + i);    // p q r
-    for (int i = 0; i < 4; ++i) filter_into(zf, col[10 + i], 11 + i);  // Fz tau
+  auto rates_and_wrench = [&] {  // p q r, Fz tau
+    filter_into(zf, {{col[7], 1}, {col[8], 2}, {col[9], 3}, {col[10], 11}, {col[11], 12}, {col[12], 13}, {col[13], 14}});
   };
   auto attitude_and_position = [&, T](signal::ZeroPhaseFilter& f) {
-    filter_into(f, col[4], 8);          // phi
-    filter_into(f, col[5], 9);          // theta
     X.col(10) = log.data.col(col[6]);  // psi
     if (opt.unwrap_yaw) unwrap(X.col(10).data(), n);
-    f.apply(X.col(10).data(), n);
-    for (int i = 0; i < 3; ++i) {
-      filter_into(f, col[1 + i], 5 + i);
-      signal::central_difference_inplace(X.col(5 + i).data(), n, T);
-    }
+    filter_into(f, {{col[4], 8}, {col[5], 9}, {-1, 10}, {col[1], 5}, {col[2], 6}, {col[3], 7}});  // phi theta psi x y z
+    for (int i = 0; i < 3; ++i) signal::central_difference_inplace(X.col(5 + i).data(), n, T);
   };
   if (detail::use_second_thread(opt.threads)) {
     signal::ZeroPhaseFilter zf2(opt.lowpass, fs);

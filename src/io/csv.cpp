@@ -4,8 +4,9 @@
 // Memory: a 20-minute log at 1 kHz is 1.2 million rows, and a simulator log may
 // carry 18-30 columns (~0.5-0.8 GB of text). The reader therefore never holds
 // the whole text: it reads fixed-size chunks and parses each complete line
-// straight into a column-major matrix that grows geometrically (x1.5) and is
-// shrunk in place at the end. The lines of a chunk are parsed on two threads,
+// straight into a column-major matrix, sized after the first chunk from the
+// file's size (growing by half if the estimate falls short) and shrunk in place
+// at the end. The lines of a chunk are parsed on two threads,
 // each half into its own rows. Skipped columns are not parsed, only counted.
 #include "quadid/io.hpp"
 
@@ -20,6 +21,7 @@
 #include <cstdio>
 #include <cstdint>
 #include <cstring>
+#include <system_error>
 #include <unistd.h>
 #include <unordered_map>
 
@@ -107,6 +109,14 @@ class LineReader {
     }
   }
   size_t line_no() const { return line_no_; }
+  /// Bytes of the file consumed by the lines returned so far.
+  std::uint64_t consumed() const { return read_ - (len_ - pos_); }
+  /// The file's size in bytes, or 0 when unknown (e.g. a pipe).
+  std::uint64_t file_size() const {
+    std::error_code ec;
+    const std::uintmax_t n = std::filesystem::file_size(file_, ec);
+    return ec ? 0 : static_cast<std::uint64_t>(n);
+  }
 
   // The complete lines now in the buffer (refilling it first when it holds
   // none), in order; valid until the next call. False at the end of the file.
@@ -155,12 +165,14 @@ class LineReader {
       eof_ = true;
     }
     len_ += got;
+    read_ += got;
   }
 
   std::string file_;
   std::unique_ptr<std::FILE, FileCloser> f_;
   std::unique_ptr<char[]> buf_;  // uninitialized: zeroing it would only cost time
   size_t cap_ = 0, pos_ = 0, len_ = 0, line_no_ = 0;
+  std::uint64_t read_ = 0;  // bytes read from the file
   bool eof_ = false;
 };
 
@@ -368,6 +380,11 @@ FlightLog read_flight_log(const std::filesystem::path& path, const CsvReadOption
   RowLines row_lines;
   std::vector<std::string_view> block;
   std::vector<size_t> data_lines;  // indices into block
+  // Capacity: after the first block, the rest of the file at the first rows'
+  // mean length, with 10% to spare (growing by copies costs time and fresh
+  // pages; capacity never written is never touched, so the spare costs little).
+  const std::uint64_t data_start = in.consumed(), file_bytes = in.file_size();
+  bool estimated = false;
   while (true) {
     const size_t first_line_no = in.line_no() + 1;
     if (!in.next_block(block)) break;
@@ -380,6 +397,15 @@ FlightLog read_flight_log(const std::filesystem::path& path, const CsvReadOption
     }
     if (data_lines.empty()) continue;
     const Eigen::Index count = static_cast<Eigen::Index>(data_lines.size());
+    if (!estimated) {
+      estimated = true;
+      const std::uint64_t used = in.consumed() - data_start;
+      if (file_bytes > in.consumed() && used > 0) {
+        const double per_row = static_cast<double>(used) / static_cast<double>(count);
+        const double left = static_cast<double>(file_bytes - in.consumed());
+        store.reserve(count + 16 + static_cast<Eigen::Index>(1.1 * left / per_row));
+      }
+    }
     double* base = store.add_rows(count);
     const Eigen::Index stride = store.capacity();
     auto parse_range = [&](size_t a, size_t b) {

@@ -82,6 +82,36 @@ void section_pass(const double* c, double* z, double* p, std::ptrdiff_t count, s
   z[1] = z1;
 }
 
+// section_pass on K signals at once (p[j][0], p[j][step], ... for j < K), each
+// with its state z[2j], z[2j+1]: the K recurrences are independent, so interleaving them
+// hides the latency of each (one signal alone waits on its previous output);
+// every signal gets exactly section_pass's operations, in its order.
+template <int K>
+void section_pass_k(const double* c, double* z, double* const* p, std::ptrdiff_t count, std::ptrdiff_t step) {
+  const double b0 = c[0], b1 = c[1], b2 = c[2], a1 = c[4], a2 = c[5];
+  double z0[K], z1[K];
+  double* q[K];
+  for (int j = 0; j < K; ++j) {
+    z0[j] = z[2 * j];
+    z1[j] = z[2 * j + 1];
+    q[j] = p[j];
+  }
+  for (std::ptrdiff_t i = 0; i < count; ++i) {
+    for (int j = 0; j < K; ++j) {
+      const double x = q[j][0];
+      const double y = b0 * x + z0[j];
+      z0[j] = b1 * x - a1 * y + z1[j];
+      z1[j] = b2 * x - a2 * y;
+      q[j][0] = y;
+      q[j] += step;
+    }
+  }
+  for (int j = 0; j < K; ++j) {
+    z[2 * j] = z0[j];
+    z[2 * j + 1] = z1[j];
+  }
+}
+
 // Neumaier-compensated sum: the DC gain sum(b)/sum(a) of a narrow low-pass is a
 // ratio of two tiny sums of O(1) coefficients, so plain summation loses digits.
 double accurate_sum(const double* v, std::size_t n) {
@@ -250,6 +280,51 @@ struct ZeroPhaseFilter::Impl {
     }
   }
 
+  // apply_sos on K columns at once (the same operations on each).
+  std::vector<double> pre_k, post_k;  // K pads each, column j at j * pad
+  template <int K>
+  void apply_sos_k(double* const* x, Eigen::Index n) {
+    const std::ptrdiff_t P = pad;
+    pre_k.resize(static_cast<std::size_t>(K * P));
+    post_k.resize(static_cast<std::size_t>(K * P));
+    double* pr[K];
+    double* po[K];
+    double* xs[K];
+    for (int j = 0; j < K; ++j) {
+      make_pads(x[j], n);
+      pr[j] = pre_k.data() + j * P;
+      po[j] = post_k.data() + j * P;
+      std::copy(pre.begin(), pre.end(), pr[j]);
+      std::copy(post.begin(), post.end(), po[j]);
+    }
+    const Eigen::Index S = sos.rows();
+    std::vector<double> zk(static_cast<std::size_t>(S * K * 2));  // section i, column j at 2 (K i + j)
+    auto zs = [&](Eigen::Index i) { return zk.data() + i * K * 2; };
+    auto start = [&](const double* const* first) {  // z = zi * (first sample), per column
+      for (Eigen::Index i = 0; i < S; ++i)
+        for (int j = 0; j < K; ++j) {
+          zs(i)[2 * j] = zi(i, 0) * *first[j];
+          zs(i)[2 * j + 1] = zi(i, 1) * *first[j];
+        }
+    };
+    auto cascade_k = [&](double* const* p, std::ptrdiff_t count, std::ptrdiff_t step) {
+      for (Eigen::Index i = 0; i < S; ++i) section_pass_k<K>(sos.row(i).data(), zs(i), p, count, step);
+    };
+    // forward pass, from zi * (first padded sample)
+    double* first[K];
+    for (int j = 0; j < K; ++j) first[j] = P > 0 ? pr[j] : x[j];
+    start(first);
+    cascade_k(pr, P, 1);
+    cascade_k(x, n, 1);
+    cascade_k(po, P, 1);
+    // backward pass, from zi * (last forward output)
+    for (int j = 0; j < K; ++j) first[j] = P > 0 ? po[j] + (P - 1) : x[j] + (n - 1);
+    start(first);
+    if (P > 0) cascade_k(first, P, -1);
+    for (int j = 0; j < K; ++j) xs[j] = x[j] + (n - 1);
+    cascade_k(xs, n, -1);
+  }
+
   void apply_sos(double* x, Eigen::Index n) {
     // The padded signal is [pre | x | post]; only the two short pads need work
     // space, the middle is filtered in place, and the states carry across the pieces.
@@ -324,6 +399,26 @@ void ZeroPhaseFilter::apply(double* x, Eigen::Index n) {
   else impl_->apply_sos(x, n);
 }
 
+void ZeroPhaseFilter::apply(double* const* columns, int count, Eigen::Index n) {
+  check_length(n, impl_->pad);
+  int j = 0;
+  if (!impl_->fir) {
+    // Four at a time: enough independent work to cover a section's latency;
+    // a last single column goes with the previous group as 3 + 2.
+    for (; j + 4 <= count && count - j != 5; j += 4) impl_->apply_sos_k<4>(columns + j, n);
+    if (count - j == 5) {
+      impl_->apply_sos_k<3>(columns + j, n);
+      j += 3;
+    }
+    switch (count - j) {
+      case 3: impl_->apply_sos_k<3>(columns + j, n); return;
+      case 2: impl_->apply_sos_k<2>(columns + j, n); return;
+      default: break;
+    }
+  }
+  for (; j < count; ++j) apply(columns[j], n);
+}
+
 std::complex<double> ZeroPhaseFilter::frequency_response(double f_hz, double fs_hz) const {
   if (impl_->fir) return signal::frequency_response(TransferFunction{impl_->taps, {1.0}}, f_hz, fs_hz);
   return signal::frequency_response(impl_->sos, f_hz, fs_hz);
@@ -343,7 +438,9 @@ namespace {
 Eigen::MatrixXd apply_columns(ZeroPhaseFilter& zf, const Eigen::MatrixXd& columns) {
   check_length(columns.rows(), zf.padlen());
   Eigen::MatrixXd y = columns;
-  for (Eigen::Index j = 0; j < y.cols(); ++j) zf.apply(y.col(j).data(), y.rows());
+  std::vector<double*> cols(static_cast<std::size_t>(y.cols()));
+  for (Eigen::Index j = 0; j < y.cols(); ++j) cols[static_cast<std::size_t>(j)] = y.col(j).data();
+  zf.apply(cols.data(), static_cast<int>(cols.size()), y.rows());
   return y;
 }
 Eigen::VectorXd apply_vector(ZeroPhaseFilter& zf, const Eigen::VectorXd& x) {
