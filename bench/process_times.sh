@@ -36,13 +36,15 @@ for cmd in "identify $TMP/log.csv" \
   while [ $i -lt "$RUNS" ]; do  # alternating, so that a busy machine weighs on both alike
     # shellcheck disable=SC2086
     one "$NEW" "$TMP/new.txt" $cmd
+    if [ -d "$TMP/rep" ]; then du -sm "$TMP/rep" | cut -f1 >"$TMP/rep_mb.txt"; fi
+    rm -rf "$TMP/rep"
     # shellcheck disable=SC2086
-    [ -n "$OLD" ] && one "$OLD" "$TMP/old.txt" $cmd
+    if [ -n "$OLD" ]; then one "$OLD" "$TMP/old.txt" $cmd; fi
     rm -rf "$TMP/rep"
     i=$((i + 1))
   done
   old=-
-  [ -n "$OLD" ] && old=$(median "$TMP/old.txt")
+  if [ -n "$OLD" ]; then old=$(median "$TMP/old.txt"); fi
   printf '%-40s %8s %8s\n' "$(echo "$cmd" | sed "s|$TMP/||g")" "$(median "$TMP/new.txt")" "$old"
 done
-echo "reproduce folder: $(du -sm "$TMP/rep" | cut -f1) MB"
+echo "reproduce folder (new build): $(cat "$TMP/rep_mb.txt") MB"
