@@ -207,8 +207,8 @@ struct Setup {
           const auto a = design_detail::tilt_angles(ax(k), ay(k), az(k), psi(k), opt.g);
           phi(k) = a[0];
           theta(k) = a[1];
-        } else {  // no upward thrust: eqs. (26)-(27) undefined, count as fully tilted
-          phi(k) = theta(k) = M_PI / 2;
+        } else {  // no upward thrust (kNoThrustTilt)
+          phi(k) = theta(k) = kNoThrustTilt;
         }
       }
     }
@@ -225,9 +225,9 @@ struct Setup {
           for (int ord = 0; ord < 5; ++ord) d(i, ord) = F(k, 5 * i + ord);
         if (d(kZ, 2) + opt.g > 0.0)
           VV.row(k) = design_detail::vehicle_sample(d, opt.g, vlim, nullptr).transpose();
-        else  // no upward thrust: the rotors would have to pull (rotor_min violated), rates count as 10x the limit
+        else  // no upward thrust (no_thrust_vehicle_value)
           for (Eigen::Index j = 0; j < VV.cols(); ++j)
-            VV(k, j) = j >= 2 ? -1.0 : std::isfinite(opt.limits.rate_max) ? 10.0 * opt.limits.rate_max : 0.0;
+            VV(k, j) = no_thrust_vehicle_value(j);
       }
     }
     for (size_t f = 0; f < fams.size(); ++f) {
@@ -242,6 +242,14 @@ struct Setup {
         V.col(c).noalias() = B(fam.order) * x.segment(fam.axis * n1, n1);
     }
     return V;
+  }
+
+  // Where the reference has no upward thrust (z_ddot <= -g) eqs. (26)-(27) are
+  // undefined: the tilt counts as 90 deg, the rotors as pulling (rotor_min
+  // violated) and the rates as 10x their limit.
+  static constexpr double kNoThrustTilt = M_PI / 2;
+  double no_thrust_vehicle_value(Eigen::Index j) const {
+    return j >= 2 ? -1.0 : std::isfinite(opt.limits.rate_max) ? 10.0 * opt.limits.rate_max : 0.0;
   }
 
   // Values at single fine instants, cached for one evaluation of the
@@ -286,7 +294,7 @@ struct Setup {
     if (fam.tilt) {  // both angles at once
       const double ax = row_dot(2, k, x, 0), ay = row_dot(2, k, x, 1), az = row_dot(2, k, x, 2),
                    psi = row_dot(0, k, x, 3);
-      std::array<double, 2> a{M_PI / 2, M_PI / 2};  // no upward thrust: count as fully tilted
+      std::array<double, 2> a{kNoThrustTilt, kNoThrustTilt};
       if (az + opt.g > 0.0) a = design_detail::tilt_angles(ax, ay, az, psi, opt.g);
       for (size_t g = 0; g < fams.size(); ++g)
         if (fams[g].tilt) store(g, a[static_cast<size_t>(fams[g].axis)]);
@@ -297,9 +305,8 @@ struct Setup {
       Eigen::VectorXd vv(vlim.size());
       if (d(kZ, 2) + opt.g > 0.0)
         vv = design_detail::vehicle_sample(d, opt.g, vlim, nullptr);
-      else  // as values_on
-        for (Eigen::Index j = 0; j < vv.size(); ++j)
-          vv(j) = j >= 2 ? -1.0 : std::isfinite(opt.limits.rate_max) ? 10.0 * opt.limits.rate_max : 0.0;
+      else
+        for (Eigen::Index j = 0; j < vv.size(); ++j) vv(j) = no_thrust_vehicle_value(j);
       for (size_t g = 0; g < fams.size(); ++g)
         if (fams[g].vehicle) store(g, vv(fams[g].axis));
     } else {
