@@ -49,7 +49,9 @@ for name, opts in configs:
         j = json.loads(p.stdout)
         rec = j.get("recommended", {}).get("set") or "LS"
         e = j["estimates"][rec]
-        s = e.get("extra", {}).get("thrust_scale", float("nan"))
+        # PC / FMPC keep the mass and move only the inertia: the thrust scale is their base set's.
+        base_set = {"PC": "LS", "FMPC": "FMLS"}.get(rec, rec)
+        s = j["estimates"][base_set].get("extra", {}).get("thrust_scale", float("nan"))
         I = [e["Ixx"], e["Iyy"], e["Izz"]]
         rf = j.get("real_flight", {})
         cut = rf.get("cutoff_selection", {})
@@ -67,6 +69,11 @@ for name, opts in configs:
     if len(rows) > 1:
         print(f"{'CV %':14} {cv([r[1] for r in rows]):7.2f} {cv([r[2][0] for r in rows]):8.1f} "
               f"{cv([r[2][1] for r in rows]):8.1f} {cv([r[2][2] for r in rows]):8.1f}")
+        wd = []
+        for k, n in enumerate(("Ixx", "Iyy", "Izz")):
+            xs = [r[2][k] for r in rows if n not in r[8]]
+            wd.append(f"{n} {cv(xs):.1f} % (n = {len(xs)})" if len(xs) > 1 else f"{n} - (n = {len(xs)})")
+        print("CV over the flights where the moment is well determined: " + ", ".join(wd))
         # Issue 11: the median of the other flights inside this flight's 95 %
         # interval (or within 10 %), per moment.
         hits, total = 0, 0

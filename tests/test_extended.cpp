@@ -255,3 +255,44 @@ TEST(Extended, HeldOutCutoffChoice) {
   fmt::print("chosen cutoffs: force {:g} Hz, moment {:g} Hz; sum of |errors| of Ixx Iyy Izz {:.3g}%\n",
              sel.force_cutoff_hz, sel.moment_cutoff_hz, 100 * chosen);
 }
+
+// Model error that changes along the flight: the logged roll torque holds
+// Ixx in the first half and 1.1 Ixx in the second (as if a part had shifted).
+// Every sample fits a model, but not the same one; the residuals stay small
+// and the HAC sandwich sees nothing. The fits without one time block move by
+// the change: the jackknife's standard error is the block means' spread,
+// sqrt(sum_j (b_j - mean)^2 / (K (K - 1))) = 0.05 Ixx sqrt(K / (K (K - 1)))
+// ~ 1.9 % of Ixx for 8 blocks split 4 and 4 (weighted by the excitation, so
+// accept 1-3 %), and it becomes the reported standard error.
+TEST(Extended, JackknifeSeesModelErrorThatChangesAlongTheFlight) {
+  const Params truth = Params::qball2_virtual();
+  FlightLog log = perfect_log(truth, 500.0, 50.0);
+  const auto traj = FourierTrajectory::table2();
+  for (Eigen::Index k = 0; k < log.rows(); ++k) {
+    const double t = log.data(k, 0);
+    if (t >= 25.0) log.data(k, 11) += 0.1 * truth.theta()(1) * reference_at(traj, t).omega_dot(0);
+  }
+  ExtendedOptions o;
+  const ExtendedResult x = identify_extended(log, o);
+  for (const auto& e : x.estimates) {
+    ASSERT_EQ(e.jackknife_blocks, 8) << e.name;
+    const double jk = e.jackknife_std_error(1), hac = e.hac_std_error(1);
+    EXPECT_GT(jk, 0.01 * truth.theta()(1)) << e.name;
+    EXPECT_LT(jk, 0.03 * truth.theta()(1)) << e.name;
+    EXPECT_GT(jk, 10.0 * hac) << e.name;
+    fmt::print("{}: Ixx {:.4g} (truth {:.4g} / {:.4g}), jackknife {:.3g} %, HAC {:.3g} % of Ixx\n", e.name, e.value(1),
+               truth.theta()(1), 1.1 * truth.theta()(1), 100 * jk / truth.theta()(1), 100 * hac / truth.theta()(1));
+    for (Eigen::Index j = 0; j < e.value.size(); ++j) {
+      EXPECT_EQ(e.std_error(j), std::max(e.hac_std_error(j), e.jackknife_std_error(j))) << e.name << " " << j;
+      const double half = std::max(e.quantile * e.hac_std_error(j), e.jackknife_quantile * e.jackknife_std_error(j));
+      EXPECT_NEAR(e.ci_high(j) - e.value(j), half, 1e-12 * std::abs(half) + 1e-300) << e.name << " " << j;
+    }
+    // Student t with 7 dof (scipy.stats.t.ppf(0.975, 7) = 2.364624).
+    EXPECT_NEAR(e.jackknife_quantile, 2.364624, 2e-3);
+  }
+  // Off: the HAC alone.
+  o.uncertainty.jackknife_blocks = 0;
+  const ExtendedResult y = identify_extended(log, o);
+  EXPECT_EQ(y.estimates[0].jackknife_blocks, 0);
+  EXPECT_EQ(y.estimates[0].std_error(1), y.estimates[0].hac_std_error(1));
+}

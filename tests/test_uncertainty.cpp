@@ -316,3 +316,31 @@ TEST(PhysicalConsistency, NegativeMassGoesToTheBound) {
 }
 
 }  // namespace
+
+// Closed form: for the mean of the data, the delete-a-block jackknife variance
+// is the sample variance of the K block means over K (x_j - mean(x) =
+// -(b_j - mean(b)) / (K - 1) for the mean without block j).
+TEST(Uncertainty, JackknifeOfTheMeanIsTheVarianceOfBlockMeansOverK) {
+  std::mt19937_64 rng(5);
+  std::normal_distribution<double> N(3.0, 2.0);
+  const int K = 8, per = 50;
+  std::vector<double> y(K * per);
+  for (auto& v : y) v = N(rng);
+  Eigen::VectorXd b(K);
+  double total = 0.0;
+  for (int j = 0; j < K; ++j) {
+    b(j) = 0.0;
+    for (int i = 0; i < per; ++i) b(j) += y[static_cast<size_t>(j * per + i)];
+    total += b(j);
+    b(j) /= per;
+  }
+  std::vector<Eigen::VectorXd> loo;
+  for (int j = 0; j < K; ++j) loo.push_back(Eigen::VectorXd::Constant(1, (total - per * b(j)) / (per * (K - 1))));
+  const double expected = (b.array() - b.mean()).square().sum() / (K - 1) / K;
+  // Round-off only: sums of 400 numbers of size ~3.
+  EXPECT_NEAR(jackknife_covariance(loo)(0, 0), expected, 1e-12 * expected);
+  EXPECT_THROW(jackknife_covariance({loo.front()}), std::invalid_argument);
+  UncertaintyOptions bad;
+  bad.jackknife_blocks = 2;
+  EXPECT_THROW(bad.validate(), std::invalid_argument);
+}

@@ -31,6 +31,7 @@ struct IdentifyArgs {
   ProcessingArgs proc;
   bool allow_rank_deficient = false;
   bool ignore_input_errors = false;
+  int jackknife_blocks = UncertaintyOptions{}.jackknife_blocks;
   std::string evolution;
   double evolution_interval = 0.01;
   std::string out;
@@ -55,6 +56,7 @@ void run(const IdentifyArgs& a) {
   opt.reference = NamedParams{param_set_name(a.nominal), load_params(a.nominal)};
   if (a.gd_init != "nominal") opt.gd_initial = load_params(a.gd_init);
   opt.allow_rank_deficient = a.allow_rank_deficient;
+  opt.uncertainty.jackknife_blocks = a.jackknife_blocks;
   opt.ignore_input_errors = a.ignore_input_errors;
   opt.evolution_interval = a.evolution_interval;
   opt.record_evolution = !a.evolution.empty();  // only --evolution writes it
@@ -182,6 +184,11 @@ void register_identify(CLI::App& app) {
   sub->add_option("--time-offsets", a->real.time_offsets,
                   "with a rotor model: estimate (the gyro's and the rotor signals' time offsets against the pose, "
                   "estimated and applied) or none (docs/real-flights.md)")
+      ->capture_default_str();
+  sub->add_option("--jackknife-blocks", a->jackknife_blocks,
+                  "with --vehicle: time blocks of the jackknife whose standard error is a floor under the HAC one, "
+                  "so that model error that changes along the flight widens the intervals (0 = off, else 3-100; "
+                  "docs/uncertainty.md)")
       ->capture_default_str();
   sub->add_flag("--allow-rank-deficient", a->allow_rank_deficient,
                 "warn instead of failing when the data do not determine some parameters (they keep the nominal values)");

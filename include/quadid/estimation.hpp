@@ -85,6 +85,14 @@ struct LeastSquaresUncertainty {
   /// and the Student-t quantile used for the intervals.
   double dof = std::numeric_limits<double>::infinity();
   double quantile = 1.959963984540054;
+  /// Real-flight regression only (ExtendedEstimate): the delete-a-block
+  /// jackknife's standard errors, its blocks and Student-t quantile (0 blocks:
+  /// not computed). std_error is then the larger of the two estimates and the
+  /// interval the wider of the two, per parameter.
+  Theta jackknife_std_error = Theta::Constant(std::numeric_limits<double>::quiet_NaN());
+  Theta hac_std_error = Theta::Constant(std::numeric_limits<double>::quiet_NaN());  // before the jackknife's floor
+  int jackknife_blocks = 0;
+  double jackknife_quantile = std::numeric_limits<double>::quiet_NaN();
 };
 
 /// The batch solution of eq. (40) with its diagnostics.
@@ -153,6 +161,13 @@ struct UncertaintyOptions {
   /// Longest lag searched for the correlation time (samples; the search also
   /// stops at a quarter of the samples). Reaching it is reported.
   long max_lag = 20000;
+  /// Contiguous time blocks of the delete-a-block jackknife of the real-flight
+  /// regression (0 = off). Its standard error is a floor under the HAC one:
+  /// when the parameters fitted without one part of the flight move more than
+  /// the noise allows, the model does not hold alike over the flight, and the
+  /// interval says so (docs/uncertainty.md). 8 blocks: 7 degrees of freedom
+  /// (t quantile 2.36) while each block stays several correlation times long.
+  int jackknife_blocks = 8;
   /// Throws std::invalid_argument naming the bad option.
   void validate() const;
 };
@@ -171,6 +186,12 @@ struct LongRunCovariance {
 /// psi: n x P influences, row-major (sample k's P numbers contiguous). The
 /// series is centred first. Needs n >= 8.
 LongRunCovariance long_run_covariance(const std::vector<double>& psi, int P, const UncertaintyOptions& opt);
+
+/// The delete-a-block jackknife covariance of K estimates, each fitted
+/// without one of K blocks: (K - 1) / K sum_j (x_j - mean)(x_j - mean)^T
+/// (Kuensch 1989; for the mean of the data it is the variance of the block
+/// means over K). Needs K >= 2 estimates of one size.
+Eigen::MatrixXd jackknife_covariance(const std::vector<Eigen::VectorXd>& leave_one_out);
 
 /// Second pass over the samples of a solved regression: stores the influence
 /// psi_k of each sample (7 numbers per sample).

@@ -35,8 +35,18 @@ struct ExtendedEstimate {
   /// m (or s), Ixx Ixy Ixz Iyy Iyz Izz, then the extra terms.
   std::vector<std::string> names;
   Eigen::VectorXd value, std_error;
-  /// Of `value`: HAC (Bartlett) from each sample's influence on the weighted
-  /// fit (long_run_covariance), honest about coloured residuals.
+  /// std_error is the larger of two estimates, per parameter: the HAC
+  /// (Bartlett) sandwich of each sample's influence on the weighted fit
+  /// (long_run_covariance; coloured noise), and the delete-a-block jackknife
+  /// (UncertaintyOptions::jackknife_blocks; model error that changes along
+  /// the flight). The 95 % interval is the wider of their two Student-t
+  /// intervals.
+  Eigen::VectorXd hac_std_error, jackknife_std_error;  // jackknife: NaN when not computed
+  int jackknife_blocks = 0;                           // 0: not computed
+  double jackknife_quantile = std::numeric_limits<double>::quiet_NaN();  // Student t, blocks - 1 dof
+  Eigen::VectorXd ci_low, ci_high;
+  /// Of `value`: the HAC covariance with its standard deviations raised to
+  /// std_error (its correlations kept).
   Eigen::MatrixXd covariance;
   Eigen::VectorXd white_std_error;  // the same ignoring the residuals' correlation
   long correlation_time = 0, bandwidth = 0;  // samples

@@ -95,6 +95,24 @@ void UncertaintyOptions::validate() const {
   if (!(bandwidth_factor >= 1.0) || !std::isfinite(bandwidth_factor))
     throw std::invalid_argument(fmt::format("UncertaintyOptions: bandwidth_factor={} must be >= 1", bandwidth_factor));
   if (max_lag < 1) throw std::invalid_argument(fmt::format("UncertaintyOptions: max_lag={} must be >= 1", max_lag));
+  if (jackknife_blocks != 0 && (jackknife_blocks < 3 || jackknife_blocks > 100))
+    throw std::invalid_argument(
+        fmt::format("UncertaintyOptions: jackknife_blocks={} must be 0 (off) or in 3..100", jackknife_blocks));
+}
+
+Eigen::MatrixXd jackknife_covariance(const std::vector<Eigen::VectorXd>& leave_one_out) {
+  const size_t K = leave_one_out.size();
+  if (K < 2) throw std::invalid_argument("jackknife_covariance: needs at least 2 leave-one-out estimates");
+  const Eigen::Index P = leave_one_out.front().size();
+  Eigen::VectorXd mean = Eigen::VectorXd::Zero(P);
+  for (const auto& x : leave_one_out) {
+    if (x.size() != P) throw std::invalid_argument("jackknife_covariance: estimates of different sizes");
+    mean += x;
+  }
+  mean /= static_cast<double>(K);
+  Eigen::MatrixXd C = Eigen::MatrixXd::Zero(P, P);
+  for (const auto& x : leave_one_out) C.noalias() += (x - mean) * (x - mean).transpose();
+  return C * (static_cast<double>(K - 1) / static_cast<double>(K));
 }
 
 double student_t_quantile(double p, double nu) {

@@ -9,7 +9,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
+#include <optional>
 #include <stdexcept>
 
 namespace quadid {
@@ -452,31 +454,84 @@ ExtendedResult identify_extended(const FlightLog& log, const ExtendedOptions& op
       e.dof = lr.dof;
       e.quantile = lr.quantile;
     }
+    // "Weigh it, fly it": the regression found m' = m / s and every other
+    // parameter divided by s; with m known, s = m / m' and the others are
+    // multiplied by s.
+    const auto weigh_it = [&](const Eigen::VectorXd& xr) -> std::optional<Eigen::VectorXd> {
+      if (!terms.known_mass) return xr;
+      if (!(xr(0) > 0.0)) return std::nullopt;
+      Eigen::VectorXd out = xr * (*terms.known_mass / xr(0));
+      out(0) = *terms.known_mass / xr(0);
+      return out;
+    };
     Eigen::VectorXd x = f.sol.x;
     if (terms.known_mass) {
-      // "Weigh it, fly it": the regression found m' = m / s and every other
-      // parameter divided by s; with m known, s = m / m' and the others are
-      // multiplied by s. Covariance by the Jacobian of that map (exact: it is
-      // linear in x given x0, and x0's own variance enters through J.col(0)).
+      // Covariance by the Jacobian of that map (exact: it is linear in x given
+      // x0, and x0's own variance enters through J.col(0)).
       const double m0 = *terms.known_mass, x0 = f.sol.x(0);
       if (!(x0 > 0.0))
         throw InputError(fmt::format("the flight gives a mass {:.4g} kg from the rotor model's thrust, not a positive "
                                      "one: the thrust scale cannot be found (check the rotor model and the log's units)",
                                      x0));
-      const double sc = m0 / x0;
+      x = *weigh_it(f.sol.x);
       Eigen::MatrixXd J = Eigen::MatrixXd::Zero(P, P);
-      x(0) = sc;
       J(0, 0) = -m0 / (x0 * x0);
       for (Eigen::Index j = 1; j < P; ++j) {
-        x(j) = sc * f.sol.x(j);
-        J(j, j) = sc;
+        J(j, j) = m0 / x0;
         J(j, 0) = -m0 * f.sol.x(j) / (x0 * x0);
       }
       e.covariance = J * e.covariance * J.transpose();
-      e.white_std_error *= sc;  // the leading term of the same map
+      e.white_std_error *= m0 / x0;  // the leading term of the same map
+    }
+    e.hac_std_error = e.covariance.diagonal().cwiseSqrt();
+    e.std_error = e.hac_std_error;
+    e.ci_low = x - e.quantile * e.hac_std_error;
+    e.ci_high = x + e.quantile * e.hac_std_error;
+    e.jackknife_std_error = Eigen::VectorXd::Constant(P, std::numeric_limits<double>::quiet_NaN());
+    // Delete-a-block jackknife: the fit without each of K contiguous time
+    // blocks (the final row weights kept). Model error that differs along
+    // the flight (an excitation that grows, a battery that sags, an effect no
+    // term models) moves these fits more than the noise does; the HAC
+    // sandwich, which sees only the residuals' size and correlation, does not.
+    const int K = opt.uncertainty.jackknife_blocks;
+    if (K > 0 && k1 - k0 >= 8 * static_cast<Eigen::Index>(K)) {
+      const auto blocks = block_factors(disc, k0, k1, K, assemble, f.w, 0xFu);
+      std::vector<Eigen::VectorXd> loo;
+      for (int b = 0; b < K; ++b) {
+        StreamingQR qr(P);
+        long rows = 0;
+        for (int i = 0; i < K; ++i) {
+          if (i == b) continue;
+          const auto& fb = blocks[static_cast<size_t>(i)];
+          for (Eigen::Index q = 0; q < P; ++q) qr.add_row(fb.R.row(q).transpose(), fb.qty(q));
+          rows += 4 * ((k1 - k0) * (i + 1) / K - (k1 - k0) * i / K);
+        }
+        const auto xb = weigh_it(solve_qr(qr.factor(), rows, prior, opt.ls.rank_tolerance).x);
+        if (!xb || !xb->allFinite()) break;
+        loo.push_back(*xb);
+      }
+      if (static_cast<int>(loo.size()) == K) {
+        e.jackknife_blocks = K;
+        e.jackknife_std_error = jackknife_covariance(loo).diagonal().cwiseSqrt();
+        e.jackknife_quantile = student_t_quantile(0.5 + 0.5 * opt.uncertainty.confidence, K - 1.0);
+        for (Eigen::Index j = 0; j < P; ++j) {
+          const double jk = e.jackknife_std_error(j);
+          const double half = std::max(e.quantile * e.hac_std_error(j), e.jackknife_quantile * jk);
+          e.std_error(j) = std::max(e.hac_std_error(j), jk);
+          e.ci_low(j) = x(j) - half;
+          e.ci_high(j) = x(j) + half;
+        }
+        const Eigen::VectorXd raise =
+            (e.std_error.array() / e.hac_std_error.array().max(1e-300)).matrix();
+        e.covariance = raise.asDiagonal() * e.covariance * raise.asDiagonal();
+      } else {
+        res.warnings.push_back(fmt::format(
+            "{}: the block jackknife was not computed (a fit without one time block gave a non-positive mass or a "
+            "non-finite value); the intervals are the HAC ones only",
+            mi == 0 ? "LS" : "FMLS"));
+      }
     }
     e.value = x;
-    e.std_error = e.covariance.diagonal().cwiseSqrt();
     e.theta = x.head<7>();
     if (terms.known_mass) e.theta(0) = *terms.known_mass;
     for (Eigen::Index j = 7; j < P; ++j) e.extra.emplace_back(names[static_cast<size_t>(j)], x(j));

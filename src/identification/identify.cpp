@@ -283,10 +283,22 @@ IdentificationResult identify(const FlightLog& log, const IdentificationOptions&
       u.bandwidth = x.bandwidth;
       u.dof = x.dof;
       u.quantile = x.quantile;
-      u.ci_low = x.theta - u.quantile * sol.std_error;
-      u.ci_high = x.theta + u.quantile * sol.std_error;
-      sol.std_error_method = "real-flight regression: HAC (Bartlett) covariance of each sample's influence on the "
-                             "weighted fit";
+      u.ci_low = x.ci_low.head<7>();
+      u.ci_high = x.ci_high.head<7>();
+      u.jackknife_std_error = x.jackknife_std_error.head<7>();
+      u.hac_std_error = x.hac_std_error.head<7>();
+      u.jackknife_blocks = x.jackknife_blocks;
+      u.jackknife_quantile = x.jackknife_quantile;
+      if (opt.terms.known_mass) {  // m is given: its interval is the point
+        u.ci_low(0) = u.ci_high(0) = x.theta(0);
+        u.jackknife_std_error(0) = u.hac_std_error(0) = 0.0;
+      }
+      sol.std_error_method =
+          x.jackknife_blocks > 0
+              ? fmt::format("real-flight regression: the larger of the HAC (Bartlett) covariance of each sample's "
+                            "influence on the weighted fit and the jackknife over {} time blocks",
+                            x.jackknife_blocks)
+              : "real-flight regression: HAC (Bartlett) covariance of each sample's influence on the weighted fit";
       // The physically consistent set closest to it, in the metric of its
       // covariance (m held at the known mass when given).
       Mat7 info = Mat7::Zero();

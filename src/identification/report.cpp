@@ -66,6 +66,10 @@ json ls_json(const LeastSquaresSolution& s) {
                 {"dof", finite_or_null(u.dof)},
                 {"t_quantile", u.quantile},
                 {"white_std_error", theta_json(u.white_std_error)}};
+  if (u.computed && u.jackknife_blocks > 0)
+    j["jackknife"] = {{"blocks", u.jackknife_blocks},
+                      {"t_quantile", u.jackknife_quantile},
+                      {"std_error", theta_json(u.jackknife_std_error)}};
   return j;
 }
 
@@ -139,21 +143,31 @@ std::string format_uncertainty_table(const IdentificationResult& r) {
                    "Student t, {:.0f} dof, quantile {:.3f})\n",
                    name, u.bandwidth, u.correlation_time > 0 ? double(u.bandwidth) / double(u.correlation_time) : 0.0,
                    u.correlation_time, u.correlation_time_capped ? " (search capped)" : "", u.dof, u.quantile);
-    fmt::format_to(it, "{:<10}{:>14}{:>11}{:>9}{:>29}{:>10}\n", "Parameter", "estimate", "std err", "rel %",
-                   "95% interval", "x white");
+    const bool jk = u.jackknife_blocks > 0;
+    if (jk)
+      fmt::format_to(it,
+                     "   and a jackknife over {} time blocks (Student t, {} dof, quantile {:.3f}); each parameter takes "
+                     "the larger std err and the wider interval\n",
+                     u.jackknife_blocks, u.jackknife_blocks - 1, u.jackknife_quantile);
+    fmt::format_to(it, "{:<10}{:>14}{:>11}{:>9}{:>29}{:>10}{}\n", "Parameter", "estimate", "std err", "rel %",
+                   "95% interval", "x white", jk ? "  jackknife/HAC" : "");
     const double iscale = (std::abs(s.theta(1)) + std::abs(s.theta(4)) + std::abs(s.theta(6))) / 3.0;
     for (int j = 0; j < 7; ++j) {
       const std::string n = kThetaNames[static_cast<size_t>(j)];
       const double scale = j == 0 ? std::abs(s.theta(0)) : iscale;
       const bool poor = std::find(s.poorly_determined.begin(), s.poorly_determined.end(), n) != s.poorly_determined.end();
-      fmt::format_to(it, "{:<10}{:>14}{:>11}{:>9}{:>29}{:>10}{}\n", n, num(s.theta(j)),
+      const double hac = u.hac_std_error(j), jse = u.jackknife_std_error(j);
+      const std::string ratio = !jk                                      ? ""
+                                : hac > 0.0 && std::isfinite(jse) ? fmt::format("{:>15.2f}", jse / hac)
+                                                                       : fmt::format("{:>15}", "-");
+      fmt::format_to(it, "{:<10}{:>14}{:>11}{:>9}{:>29}{:>10}{}{}\n", n, num(s.theta(j)),
                      std::isfinite(u.std_error(j)) ? fmt::format("{:.2g}", u.std_error(j)) : "-",
                      std::isfinite(u.std_error(j)) && scale > 0 ? fmt::format("{:.2f}", 100.0 * u.std_error(j) / scale) : "-",
                      std::isfinite(u.ci_low(j)) ? fmt::format("[{:.5g}, {:.5g}]", u.ci_low(j), u.ci_high(j)) : "-",
                      u.white_std_error(j) > 0.0 && std::isfinite(u.std_error(j))
                          ? fmt::format("{:.2f}", u.std_error(j) / u.white_std_error(j))
                          : "-",
-                     poor ? "  poorly determined" : "");
+                     ratio, poor ? "  poorly determined" : "");
     }
   }
   fmt::format_to(it, "(rel % against |m| for m, the mean principal moment for inertia entries; x white: the std error "
@@ -321,13 +335,18 @@ json to_json(const ExtendedResult& x) {
     json params = json::object();
     for (size_t j = 0; j < e.names.size(); ++j) {
       const auto jj = static_cast<Eigen::Index>(j);
-      params[e.names[j]] = {{"value", e.value(jj)}, {"std_error", e.std_error(jj)}};
+      params[e.names[j]] = {{"value", e.value(jj)},
+                            {"std_error", e.std_error(jj)},
+                            {"hac_std_error", e.hac_std_error(jj)},
+                            {"jackknife_std_error", finite_or_null(e.jackknife_std_error(jj))},
+                            {"ci95", json::array({e.ci_low(jj), e.ci_high(jj)})}};
     }
     sets[e.name] = {{"model", to_string(e.model)},
                     {"parameters", params},
                     {"row_weight", {e.row_weight(0), e.row_weight(1), e.row_weight(2), e.row_weight(3)}},
                     {"residual_rms", {e.residual_rms(0), e.residual_rms(1), e.residual_rms(2), e.residual_rms(3)}},
                     {"condition", e.condition},
+                    {"jackknife_blocks", e.jackknife_blocks},
                     {"unidentifiable", e.unidentifiable},
                     {"poorly_determined", e.poorly_determined}};
   }
