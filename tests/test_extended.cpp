@@ -11,6 +11,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <random>
@@ -295,4 +296,42 @@ TEST(Extended, JackknifeSeesModelErrorThatChangesAlongTheFlight) {
   const ExtendedResult y = identify_extended(log, o);
   EXPECT_EQ(y.estimates[0].jackknife_blocks, 0);
   EXPECT_EQ(y.estimates[0].std_error(1), y.estimates[0].hac_std_error(1));
+}
+
+// A known rotor inertia (the vehicle file's) is applied, not estimated. With
+// the mass known and the logged wrench 1/0.8 of the true one, the s = 1
+// regression must hold the term as J_r / s = 1.25 J_r, a fixed point in s.
+// Here Omega_r is synthetic and uncorrelated with r_dot, so an error in the
+// term goes to the yaw row's residual rather than into Izz: the residual is
+// the test. Noise-free: 1 % on the moments and 0.5 % on s, as
+// KnownMassRecoversThrustScale.
+TEST(Extended, KnownRotorInertiaIsAppliedNotEstimated) {
+  const Params truth = Params::qball2_virtual();
+  TrueTerms tt;
+  tt.s = 0.8;
+  tt.Jr = 3e-5;
+  const FlightLog log = altered_log(truth, tt);
+  ExtendedOptions o;
+  o.terms = ModelTerms::real_flight(true);
+  o.terms.known_mass = truth.m;
+  o.terms.known_rotor_inertia = tt.Jr;
+  const ExtendedResult x = identify_extended(log, o);
+  for (const auto& e : x.estimates) {
+    EXPECT_EQ(std::find(e.names.begin(), e.names.end(), "rotor_inertia"), e.names.end()) << e.name;
+    ASSERT_EQ(e.given.size(), 1u);
+    EXPECT_EQ(e.given[0].first, "rotor_inertia");
+    EXPECT_EQ(extra(e, "rotor_inertia"), tt.Jr);
+    EXPECT_NEAR(extra(e, "thrust_scale"), 0.8, 0.005 * 0.8) << e.name;
+    for (int j : {1, 4, 6}) EXPECT_NEAR(e.theta(j), truth.theta()(j), 0.01 * truth.theta()(j)) << e.name << " " << j;
+  }
+  // Given as 0.8 J_r, the term is what it would be without the rescaling (J_r
+  // in the s = 1 regression): the yaw residual is then the 20 % of the term
+  // left over, far above the right one's.
+  o.terms.known_rotor_inertia = 0.8 * tt.Jr;
+  const ExtendedResult y = identify_extended(log, o);
+  const double right = x.estimates[0].residual_rms(3), unscaled = y.estimates[0].residual_rms(3);
+  fmt::print("yaw residual RMS: right {:.3g} N m, unscaled {:.3g} N m\n", right, unscaled);
+  EXPECT_LT(right, 0.2 * unscaled);
+  o.terms.known_rotor_inertia = -1.0;
+  EXPECT_THROW(identify_extended(log, o), std::invalid_argument);
 }

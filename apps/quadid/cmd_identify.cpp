@@ -181,6 +181,10 @@ void register_identify(CLI::App& app) {
                   "model's, estimated from the flight when the log holds commands and the model gives none (PX4 "
                   "does not log it); or a value in seconds (docs/real-flights.md)")
       ->capture_default_str();
+  sub->add_option("--rotor-inertia", a->real.rotor_inertia,
+                  "with the rotor-inertia term: auto (the vehicle file's rotor_inertia when it gives one, else "
+                  "estimated), estimate, or one rotor's inertia in kg m^2 (docs/real-flights.md)")
+      ->capture_default_str();
   sub->add_option("--time-offsets", a->real.time_offsets,
                   "with a rotor model: estimate (the gyro's and the rotor signals' time offsets against the pose, "
                   "estimated and applied) or none (docs/real-flights.md)")

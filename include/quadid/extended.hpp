@@ -57,6 +57,9 @@ struct ExtendedEstimate {
   Theta theta = Theta::Zero();
   /// The extra parameters (thrust_scale, offset_x, ... rotor_inertia), name -> value.
   std::vector<std::pair<std::string, double>> extra;
+  /// Terms applied with a known value, not estimated (rotor_inertia from the
+  /// vehicle file): name -> value. Also in `extra`.
+  std::vector<std::pair<std::string, double>> given;
   Vec4 row_weight = Vec4::Ones();  // 1/N, 1/(N m): weights of the last pass
   Vec4 residual_rms = Vec4::Zero();  // N, N m: per row, unweighted
   double condition = 0.0;  // of the column-scaled weighted regressor

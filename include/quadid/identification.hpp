@@ -201,6 +201,12 @@ struct ModelTerms {
   bool flapping = false;        // K_x, K_y: blade-flapping moment, -K (e_z x v_body) (N s)
   bool rate_damping = false;    // D_x, D_y, D_z: -D w (N m s)
   bool rotor_inertia = false;   // J_r: yaw reaction and gyroscopic torque (kg m^2); needs Omega_r
+  /// With rotor_inertia: J_r of one rotor, kg m^2, known (the vehicle file's
+  /// rotor_inertia, or --rotor-inertia VALUE): the term is applied with it
+  /// instead of being estimated. J_r shares the yaw row with Izz (the yaw
+  /// torque drives both r_dot and Omega_r_dot), so an estimated J_r, attenuated
+  /// by the noise of the differentiated rotor speeds, pulls Izz with it.
+  std::optional<double> known_rotor_inertia{};
   bool force_drag = false;      // k_w: -k_w w in the force row (N s/m)
   /// Horizontal moments fixed in the world frame (N m), seen in the body frame:
   /// a steady wind on flapping blades (-K (e_z x R^T w_wind)). 4 parameters.

@@ -62,6 +62,7 @@ struct RealFlightArgs {
   std::string gd_gain = "auto";        // --gd-gain auto|paper|normalized (auto: normalized with a vehicle)
   std::string motor_time_constant = "auto";  // --motor-time-constant auto|S
   std::string time_offsets = "estimate";     // --time-offsets estimate|none
+  std::string rotor_inertia = "auto";        // --rotor-inertia auto|estimate|KG_M2
 };
 
 /// Everything `quadid identify` needs besides the log: the identification and

@@ -85,7 +85,7 @@ std::vector<Term> active_terms(const ModelTerms& t) {
   if (t.torque_offsets) add(kOffsetTerms);
   if (t.flapping) add(kFlapTerms);
   if (t.rate_damping) add(kDampTerms);
-  if (t.rotor_inertia) add(kRotorTerms);
+  if (t.rotor_inertia && !t.known_rotor_inertia) add(kRotorTerms);
   if (t.force_drag) add(kDragTerms);
   if (t.wind) add(kWindTerms);
   return v;
@@ -96,6 +96,9 @@ struct Assembler {
   const ModelTerms& terms;
   const std::vector<Term>& extra;
   Eigen::Index P;
+  /// A known J_r, in the regression's units (divided by the thrust scale when
+  /// the mass is known): its term moves to the right-hand side.
+  double known_jr = 0.0;
   void operator()(const double* da, const double* b, Eigen::Matrix<double, 4, Eigen::Dynamic>& G, Vec4& Y) const {
     Eigen::Matrix<double, 7, 1> bb;
     for (int i = 0; i < 7; ++i) bb(i) = b[i];
@@ -107,6 +110,7 @@ struct Assembler {
     // on real data their model error would pull all of them toward zero.
     G.leftCols<7>() = Gamma;
     Y = F;
+    if (known_jr != 0.0) Y -= known_jr * kRotorTerms[0].column(da, b);
     for (size_t j = 0; j < extra.size(); ++j) G.col(7 + static_cast<Eigen::Index>(j)) = extra[j].column(da, b);
   }
 };
@@ -154,6 +158,9 @@ ModelTerms parse_model_terms(std::string_view spec, bool have_rotor_speeds) {
 void ModelTerms::validate() const {
   if (known_mass && !(*known_mass > 0.0 && std::isfinite(*known_mass)))
     throw std::invalid_argument(fmt::format("--known-mass {}: must be a positive mass in kg", *known_mass));
+  if (known_rotor_inertia && !(*known_rotor_inertia >= 0.0 && std::isfinite(*known_rotor_inertia)))
+    throw std::invalid_argument(
+        fmt::format("--rotor-inertia {}: must be a rotor's inertia in kg m^2, >= 0", *known_rotor_inertia));
 }
 
 void ExtendedOptions::validate() const {
@@ -381,7 +388,9 @@ struct Unknowns {
     prior = Eigen::VectorXd::Zero(P);
     prior.head<7>() = opt.reference.theta();
   }
-  Assembler assembler(const ModelTerms& terms) const { return Assembler{terms, extra, P}; }
+  Assembler assembler(const ModelTerms& terms) const {
+    return Assembler{terms, extra, P, terms.rotor_inertia ? terms.known_rotor_inertia.value_or(0.0) : 0.0};
+  }
 };
 
 }  // namespace
@@ -415,7 +424,19 @@ ExtendedResult identify_extended(const FlightLog& log, const ExtendedOptions& op
       res.window_samples = k1 - k0;
     }
     const Discrete disc = discretize(raw, model, opt);
-    const Fit f = fit(disc, k0, k1, assemble, prior, opt);
+    Assembler assemble_m = assemble;
+    Fit f = fit(disc, k0, k1, assemble_m, prior, opt);
+    if (terms.known_mass && assemble_m.known_jr != 0.0) {
+      // The s = 1 regression holds the known J_r as J_r / s, s = m / m'
+      // (below): a fixed point in s. J_r's share of the yaw torque is small,
+      // so a few rounds settle it.
+      for (int round = 0; round < 8 && f.sol.x(0) > 0.0; ++round) {
+        const double jr = *terms.known_rotor_inertia * f.sol.x(0) / *terms.known_mass;
+        if (std::abs(jr - assemble_m.known_jr) <= 1e-12 * std::abs(jr)) break;
+        assemble_m.known_jr = jr;
+        f = fit(disc, k0, k1, assemble_m, prior, opt);
+      }
+    }
     ExtendedEstimate e;
     e.name = mi == 0 ? "LS" : "FMLS";
     e.model = model;
@@ -432,7 +453,7 @@ ExtendedResult identify_extended(const FlightLog& log, const ExtendedOptions& op
       Eigen::VectorXd g(P);
       double wss = 0.0;
       for (Eigen::Index k = k0; k < k1; ++k) {
-        assemble(disc.DA.row(k).data(), disc.BV.row(k).data(), G, Y);
+        assemble_m(disc.DA.row(k).data(), disc.BV.row(k).data(), G, Y);
         const Vec4 r = Y - G * f.sol.x;
         g.noalias() = G.transpose() * (f.w.cwiseAbs2().cwiseProduct(r));
         wss += f.w.cwiseProduct(r).squaredNorm();
@@ -495,7 +516,7 @@ ExtendedResult identify_extended(const FlightLog& log, const ExtendedOptions& op
     // sandwich, which sees only the residuals' size and correlation, does not.
     const int K = opt.uncertainty.jackknife_blocks;
     if (K > 0 && k1 - k0 >= 8 * static_cast<Eigen::Index>(K)) {
-      const auto blocks = block_factors(disc, k0, k1, K, assemble, f.w, 0xFu);
+      const auto blocks = block_factors(disc, k0, k1, K, assemble_m, f.w, 0xFu);
       std::vector<Eigen::VectorXd> loo;
       for (int b = 0; b < K; ++b) {
         StreamingQR qr(P);
@@ -536,6 +557,10 @@ ExtendedResult identify_extended(const FlightLog& log, const ExtendedOptions& op
     if (terms.known_mass) e.theta(0) = *terms.known_mass;
     for (Eigen::Index j = 7; j < P; ++j) e.extra.emplace_back(names[static_cast<size_t>(j)], x(j));
     if (terms.known_mass) e.extra.insert(e.extra.begin(), {"thrust_scale", x(0)});
+    if (terms.rotor_inertia && terms.known_rotor_inertia) {
+      e.extra.emplace_back("rotor_inertia", *terms.known_rotor_inertia);
+      e.given.emplace_back("rotor_inertia", *terms.known_rotor_inertia);
+    }
     e.row_weight = f.w;
     e.residual_rms = f.res_rms;
     e.condition = f.sol.condition;

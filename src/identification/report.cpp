@@ -329,6 +329,14 @@ json to_json(const IdentificationResult& r) {
   return out;
 }
 
+namespace {
+json given_json(const std::vector<std::pair<std::string, double>>& g) {
+  json j = json::object();
+  for (const auto& [n, v] : g) j[n] = v;
+  return j;
+}
+}  // namespace
+
 json to_json(const ExtendedResult& x) {
   json sets = json::object();
   for (const auto& e : x.estimates) {
@@ -347,6 +355,7 @@ json to_json(const ExtendedResult& x) {
                     {"residual_rms", {e.residual_rms(0), e.residual_rms(1), e.residual_rms(2), e.residual_rms(3)}},
                     {"condition", e.condition},
                     {"jackknife_blocks", e.jackknife_blocks},
+                    {"given", given_json(e.given)},
                     {"unidentifiable", e.unidentifiable},
                     {"poorly_determined", e.poorly_determined}};
   }
@@ -382,6 +391,7 @@ std::string format_real_flight(const ExtendedResult& x) {
     out += fmt::format("  {:<14} {:>12.5g} +- {:<9.2g} {:>12.5g} +- {:<9.2g}\n", a.names[j], a.value(jj),
                        a.std_error(jj), b.value(jj), b.std_error(jj));
   }
+  for (const auto& [n, v] : a.given) out += fmt::format("  {:<14} {:>12.5g} (given, not estimated)\n", n, v);
   out += fmt::format("  residual RMS  Fz {:.3g} N, tau {:.3g} {:.3g} {:.3g} N m (LS)\n", a.residual_rms(0),
                      a.residual_rms(1), a.residual_rms(2), a.residual_rms(3));
   for (const auto* e : {&a, &b}) {

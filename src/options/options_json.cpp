@@ -79,6 +79,8 @@ const std::vector<OptionSpec>& identify_specs() {
           {"cutoff-moment", K::Number, "pre-filter cutoff of the moment rows, Hz"},
           {"motor-time-constant", K::String, "auto (the rotor model's; estimated when it takes commands and gives none) or seconds"},
           {"time-offsets", K::String, "estimate (gyro and rotor groups against the pose, with a rotor model) or none"},
+          {"rotor-inertia", K::String, "auto (the vehicle file's when given, else estimated), estimate, or kg m^2"},
+          {"jackknife-blocks", K::Integer, "time blocks of the jackknife under the HAC errors, 0 = off (default 8)"},
       },
       processing_specs());
   return s;
@@ -420,6 +422,7 @@ IdentifyRequest identify_options_from_json(const nlohmann::json& j) {
   if (init != "nominal") opt.gd_initial = load_params(init);
   opt.allow_rank_deficient = r.flag("allow-rank-deficient");
   opt.evolution_interval = r.number("evolution-interval").value_or(0.01);
+  opt.uncertainty.jackknife_blocks = r.integer32("jackknife-blocks").value_or(opt.uncertainty.jackknife_blocks);
   Processing p = read_processing(r);
   opt.processing = p.processing;
   opt.lambda = p.lambda;
@@ -436,6 +439,7 @@ IdentifyRequest identify_options_from_json(const nlohmann::json& j) {
   rf.cutoff_moment = r.number("cutoff-moment");
   rf.motor_time_constant = r.string("motor-time-constant").value_or("auto");
   rf.time_offsets = r.string("time-offsets").value_or("estimate");
+  rf.rotor_inertia = r.string("rotor-inertia").value_or("auto");
   rf.window_given = j.contains("window");
   rf.nominal_given = j.contains("nominal");
   r.finish();
@@ -480,6 +484,24 @@ void apply_real_flight(IdentifyRequest& req, const RealFlightArgs& a) {
   if (opt.terms.rotor_inertia && !vehicle)
     throw std::invalid_argument("--terms rotor-inertia needs the rotor speeds: give --vehicle");
   opt.terms.known_mass = a.known_mass;
+  // The rotor inertia: known when the vehicle file gives it (as the motor time
+  // constant), estimated otherwise or when asked.
+  if (a.rotor_inertia == "auto") {
+    if (opt.terms.rotor_inertia && req.vehicle && req.vehicle->rotors.rotor_inertia > 0.0)
+      opt.terms.known_rotor_inertia = req.vehicle->rotors.rotor_inertia;
+  } else if (a.rotor_inertia != "estimate") {
+    double v = NAN;
+    try {
+      std::size_t used = 0;
+      v = std::stod(a.rotor_inertia, &used);
+      if (used != a.rotor_inertia.size()) v = NAN;
+    } catch (const std::exception&) {
+    }
+    if (!(v >= 0.0 && v < 1.0))
+      throw std::invalid_argument(fmt::format(
+          "--rotor-inertia {}: expected auto, estimate or one rotor's inertia in kg m^2 (>= 0)", a.rotor_inertia));
+    if (opt.terms.rotor_inertia) opt.terms.known_rotor_inertia = v;
+  }
   opt.force_cutoff_hz = a.cutoff_force;
   opt.moment_cutoff_hz = a.cutoff_moment;
   if (a.cutoffs == "auto") {
