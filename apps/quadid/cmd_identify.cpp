@@ -185,6 +185,10 @@ void register_identify(CLI::App& app) {
                   "with the rotor-inertia term: auto (the vehicle file's rotor_inertia when it gives one, else "
                   "estimated), estimate, or one rotor's inertia in kg m^2 (docs/real-flights.md)")
       ->capture_default_str();
+  sub->add_option("--moment-highpass", a->real.moment_highpass,
+                  "high-pass of the roll and pitch rows (real-flight regression): auto (with --vehicle the lowest "
+                  "cutoff, 0-3 Hz, above which Ixx and Iyy stop moving; else off), off, or Hz (docs/real-flights.md)")
+      ->capture_default_str();
   sub->add_option("--time-offsets", a->real.time_offsets,
                   "with a rotor model: estimate (the gyro's and the rotor signals' time offsets against the pose, "
                   "estimated and applied) or none (docs/real-flights.md)")

@@ -45,8 +45,8 @@ struct ExtendedEstimate {
   int jackknife_blocks = 0;                           // 0: not computed
   double jackknife_quantile = std::numeric_limits<double>::quiet_NaN();  // Student t, blocks - 1 dof
   Eigen::VectorXd ci_low, ci_high;
-  /// Of `value`: the HAC covariance with its standard deviations raised to
-  /// std_error (its correlations kept).
+  /// Of `value`: standard deviations std_error, correlations of the lag-0
+  /// (white) sandwich, which is full rank whatever the HAC bandwidth.
   Eigen::MatrixXd covariance;
   Eigen::VectorXd white_std_error;  // the same ignoring the residuals' correlation
   long correlation_time = 0, bandwidth = 0;  // samples
@@ -93,7 +93,45 @@ struct ExtendedOptions {
   /// otherwise favours shrunk parameters (1 s picks 2 Hz, 0.3 s 4 Hz and
   /// 0.1 s 8 Hz on the test's noisy Table 2 log, where 1.5-3 Hz is best).
   double cv_segment = 0.5;
+  /// Hz, high-pass of the roll and pitch rows (every column and the output,
+  /// zero-phase Butterworth of `highpass_order`): 0 = off; nullopt = chosen
+  /// from the data (HighpassSelection). It removes the low frequencies where
+  /// the aerodynamic moments of translational flight, which no term models
+  /// exactly, outweigh the inertial torque (~ frequency^2). The constant
+  /// roll and pitch offsets then drop out (offset_z stays).
+  std::optional<double> moment_highpass_hz = 0.0;
+  int highpass_order = 2;
   void validate() const;
+};
+
+/// The roll and pitch rows' high-pass chosen from the data: for each
+/// candidate (off, 0.5-3 Hz below 40 % of the moment rows' cutoff), LS
+/// (standard model) and the jackknife standard errors of Ixx and Iyy. The
+/// reference is the highest candidate that determines every parameter; the
+/// choice is the lowest candidate whose Ixx and Iyy both lie within two of
+/// the reference's standard errors of the reference's values.
+struct HighpassCandidate {
+  double hz = 0.0;
+  /// Every parameter determined, the window long enough, and noise_share at
+  /// most HighpassSelection::max_noise_share.
+  bool usable = false;
+  double Ixx = 0.0, Iyy = 0.0, se_Ixx = 0.0, se_Iyy = 0.0;  // kg m^2
+  /// The larger of the two: the gyro noise's share of the power of the roll
+  /// row's p_dot column and of the pitch row's q_dot column, in this band.
+  /// Noise in a regressor biases its parameter toward zero by about this
+  /// fraction (errors in variables), the same way in every time block, so
+  /// neither the jackknife nor the sandwich sees it.
+  double noise_share = 0.0;
+  /// The fraction of the roll and pitch rows' output (mean square, in this
+  /// band) that the fit leaves unexplained, the mean of the two rows.
+  double unexplained = 1.0;
+};
+struct HighpassSelection {
+  static constexpr double max_noise_share = 0.01;
+  double hz = 0.0;
+  double gyro_noise = 0.0;  // rad/s, white-noise standard deviation of p and q (the larger)
+  std::vector<HighpassCandidate> candidates;
+  std::string reason;
 };
 
 /// The held-out choice of the two cutoffs: for each candidate, LS is fitted on
@@ -118,6 +156,8 @@ struct ExtendedResult {
   Eigen::Index window_samples = 0;
   ProcessingSummary force_processing, moment_processing;
   std::optional<CutoffSelection> cutoff_selection;  // with ExtendedOptions::auto_cutoffs
+  double moment_highpass_hz = 0.0;                   // used (0 = off)
+  std::optional<HighpassSelection> highpass_selection;  // when chosen from the data
   std::vector<std::string> warnings;
 };
 

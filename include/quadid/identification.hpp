@@ -261,6 +261,9 @@ struct IdentificationOptions {
   std::optional<double> moment_cutoff_hz{};  // Hz, default processing.lowpass.cutoff_hz
   /// Choose both cutoffs on held-out time blocks (extended.hpp, select_cutoffs).
   bool auto_cutoffs = false;
+  /// Hz, high-pass of the real-flight regression's roll and pitch rows:
+  /// 0 = off, nullopt = chosen from the data (ExtendedOptions::moment_highpass_hz).
+  std::optional<double> moment_highpass_hz = 0.0;
   bool extended() const;
   static constexpr double kMaxEvolutionInterval = 3600.0;  // s (an hour): the largest validate() accepts
   /// Standard errors and intervals of LS and FMLS (HAC sandwich, docs/uncertainty.md).

@@ -63,6 +63,7 @@ struct RealFlightArgs {
   std::string motor_time_constant = "auto";  // --motor-time-constant auto|S
   std::string time_offsets = "estimate";     // --time-offsets estimate|none
   std::string rotor_inertia = "auto";        // --rotor-inertia auto|estimate|KG_M2
+  std::string moment_highpass = "auto";      // --moment-highpass auto|off|HZ
 };
 
 /// Everything `quadid identify` needs besides the log: the identification and

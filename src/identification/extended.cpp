@@ -12,6 +12,7 @@
 #include <limits>
 #include <numbers>
 #include <optional>
+#include <random>
 #include <stdexcept>
 
 namespace quadid {
@@ -77,12 +78,15 @@ const Term kDragTerms[] = {
     {"drag_z", [](const double*, const double* b) { return v4(b[B_W], 0, 0, 0); }},
 };
 
-std::vector<Term> active_terms(const ModelTerms& t) {
+// highpass: the roll and pitch rows are high-passed, which leaves nothing of
+// a constant moment there: only offset_z remains.
+std::vector<Term> active_terms(const ModelTerms& t, bool highpass = false) {
   std::vector<Term> v;
   auto add = [&](const auto& arr) {
     for (const Term& t : arr) v.push_back(t);
   };
-  if (t.torque_offsets) add(kOffsetTerms);
+  if (t.torque_offsets && highpass) v.push_back(kOffsetTerms[2]);
+  else if (t.torque_offsets) add(kOffsetTerms);
   if (t.flapping) add(kFlapTerms);
   if (t.rate_damping) add(kDampTerms);
   if (t.rotor_inertia && !t.known_rotor_inertia) add(kRotorTerms);
@@ -176,6 +180,12 @@ void ExtendedOptions::validate() const {
     throw std::invalid_argument(fmt::format("--cv-segment {}: must be a positive duration in s", cv_segment));
   if (cv_blocks < 2 || cv_blocks > 100)
     throw std::invalid_argument(fmt::format("--cv-blocks {}: must be in 2..100", cv_blocks));
+  if (moment_highpass_hz && !(*moment_highpass_hz >= 0.0 && *moment_highpass_hz < 0.5 * moment_cutoff_hz))
+    throw std::invalid_argument(fmt::format(
+        "--moment-highpass {}: must be off (0) or a frequency in Hz below half the moment rows' cutoff ({:g} Hz)",
+        *moment_highpass_hz, moment_cutoff_hz));
+  if (highpass_order < 1 || highpass_order > 8)
+    throw std::invalid_argument(fmt::format("highpass_order {}: must be in 1..8", highpass_order));
 }
 
 namespace {
@@ -189,6 +199,7 @@ struct RawSignals {
   ProcessingSummary pf, pm;
   Eigen::MatrixXd a, b;
   double T = 0.0;
+  double f_moment = 0.0;  // Hz, the moment rows' low-pass cutoff
 };
 
 RawSignals raw_signals(const FlightLog& log, const ExtendedOptions& opt, double f_force, double f_moment) {
@@ -203,6 +214,7 @@ RawSignals raw_signals(const FlightLog& log, const ExtendedOptions& opt, double 
   if (r.sm == r.sf) r.pm = r.pf;
   const Eigen::Index n = r.sf->size();
   r.T = r.sf->T;
+  r.f_moment = f_moment;
   Eigen::VectorXd omega_r = Eigen::VectorXd::Zero(n);
   if (terms.rotor_inertia) {
     if (!log.has(kRotorMomentumColumn))
@@ -268,6 +280,61 @@ Discrete discretize(const RawSignals& r, RegressionModel model, const ExtendedOp
   return d;
 }
 
+// The regression rows of every sample, assembled once: G (4 x P), Y (4) and
+// the column of a known rotor inertia (Y - known_jr J is the right-hand side),
+// so that the roll and pitch rows can be high-passed as a whole (a linear
+// filter applied to every column and the output keeps G x = Y) and the passes
+// of the weighted fit, the influences and the jackknife read them back.
+struct RowCache {
+  Eigen::Index P = 0;
+  RowMajor M;  // n x 4 (P + 2): per row r, G_r (P), Y_r, J_r
+  Eigen::Index stride() const { return P + 2; }
+  void get(Eigen::Index k, double known_jr, Eigen::Matrix<double, 4, Eigen::Dynamic>& G, Vec4& Y) const {
+    const double* m = M.row(k).data();
+    for (int r = 0; r < 4; ++r, m += stride()) {
+      for (Eigen::Index j = 0; j < P; ++j) G(r, j) = m[j];
+      Y(r) = m[P] - known_jr * m[P + 1];
+    }
+  }
+};
+
+RowCache build_rows(const Discrete& d, const Assembler& assemble) {
+  RowCache c;
+  c.P = assemble.P;
+  const Eigen::Index n = d.DA.rows();
+  c.M.resize(n, 4 * c.stride());
+  Assembler a = assemble;
+  a.known_jr = 0.0;
+  Eigen::Matrix<double, 4, Eigen::Dynamic> G(4, c.P);
+  Vec4 Y;
+  const bool jr = assemble.known_jr != 0.0;
+  for (Eigen::Index k = 0; k < n; ++k) {
+    a(d.DA.row(k).data(), d.BV.row(k).data(), G, Y);
+    const Vec4 J = jr ? kRotorTerms[0].column(d.DA.row(k).data(), d.BV.row(k).data()) : Vec4::Zero();
+    double* m = c.M.row(k).data();
+    for (int r = 0; r < 4; ++r, m += c.stride()) {
+      for (Eigen::Index j = 0; j < c.P; ++j) m[j] = G(r, j);
+      m[c.P] = Y(r);
+      m[c.P + 1] = J(r);
+    }
+  }
+  return c;
+}
+
+// High-passes the roll and pitch rows (every column and the output) at f_hz:
+// x - the zero-phase Butterworth low-pass of x, whose squared magnitude is
+// exactly the zero-phase Butterworth high-pass's (1 - 1/(1 + (f/fc)^2N)).
+void highpass_rows(RowCache& c, double f_hz, double fs_hz, int order) {
+  const Eigen::Index n = c.M.rows(), w = 2 * c.stride();
+  Eigen::MatrixXd cols = c.M.middleCols(c.stride(), w);  // rows 1 and 2, column-major copy
+  Eigen::MatrixXd low = cols;
+  signal::ZeroPhaseFilter lp(signal::butter_sos(order, f_hz, fs_hz));
+  std::vector<double*> ptr(static_cast<size_t>(w));
+  for (Eigen::Index j = 0; j < w; ++j) ptr[static_cast<size_t>(j)] = low.col(j).data();
+  lp.apply(ptr.data(), static_cast<int>(w), n);
+  c.M.middleCols(c.stride(), w) = cols - low;
+}
+
 struct Fit {
   QRSolution sol;
   Vec4 w = Vec4::Ones();
@@ -276,14 +343,18 @@ struct Fit {
 
 // Weighted least squares over samples [k0, k1); with weight_rows, three
 // passes, each weighting the rows by the inverse of the last pass's residual RMS.
-Fit fit(const Discrete& d, Eigen::Index k0, Eigen::Index k1, const Assembler& assemble, const Eigen::VectorXd& prior,
+Fit fit(const RowCache& c, Eigen::Index k0, Eigen::Index k1, double known_jr, const Eigen::VectorXd& prior,
         const ExtendedOptions& opt) {
-  const Eigen::Index P = assemble.P;
+  const Eigen::Index P = c.P;
   Eigen::Matrix<double, 4, Eigen::Dynamic> G(4, P);
   Vec4 Y;
   Fit f;
-  Vec4 out_rms = Vec4::Zero();
-  for (int r = 0; r < 4; ++r) out_rms(r) = rms(d.BV.col(B_FZ + r).segment(k0, k1 - k0));
+  Vec4 out_ss = Vec4::Zero();
+  for (Eigen::Index k = k0; k < k1; ++k) {
+    c.get(k, known_jr, G, Y);
+    out_ss += Y.cwiseAbs2();
+  }
+  const Vec4 out_rms = (out_ss / static_cast<double>(k1 - k0)).cwiseSqrt();
   // Pass 0 weights: the inverse RMS of each row's output (N, N m), so that the
   // rows count alike whatever the vehicle's size.
   if (opt.terms.weight_rows)
@@ -292,13 +363,13 @@ Fit fit(const Discrete& d, Eigen::Index k0, Eigen::Index k1, const Assembler& as
   for (int pass = 0; pass < passes; ++pass) {
     StreamingQR qr(P);
     for (Eigen::Index k = k0; k < k1; ++k) {
-      assemble(d.DA.row(k).data(), d.BV.row(k).data(), G, Y);
+      c.get(k, known_jr, G, Y);
       for (int r = 0; r < 4; ++r) qr.add_row(f.w(r) * G.row(r).transpose(), f.w(r) * Y(r));
     }
     f.sol = solve_qr(qr.factor(), qr.rows(), prior, opt.ls.rank_tolerance);
     Vec4 ss = Vec4::Zero();
     for (Eigen::Index k = k0; k < k1; ++k) {
-      assemble(d.DA.row(k).data(), d.BV.row(k).data(), G, Y);
+      c.get(k, known_jr, G, Y);
       ss += (G * f.sol.x - Y).cwiseAbs2();
     }
     f.res_rms = (ss / static_cast<double>(k1 - k0)).cwiseSqrt();
@@ -309,22 +380,41 @@ Fit fit(const Discrete& d, Eigen::Index k0, Eigen::Index k1, const Assembler& as
 }
 
 // Per time block: the QR factor of the weighted rows of `rows` (bit r = row r).
-std::vector<StreamingQR::Factor> block_factors(const Discrete& d, Eigen::Index k0, Eigen::Index k1, int blocks,
-                                               const Assembler& assemble, const Vec4& w, unsigned rows) {
+std::vector<StreamingQR::Factor> block_factors(const RowCache& c, Eigen::Index k0, Eigen::Index k1, int blocks,
+                                               double known_jr, const Vec4& w, unsigned rows) {
   std::vector<StreamingQR::Factor> out;
-  Eigen::Matrix<double, 4, Eigen::Dynamic> G(4, assemble.P);
+  Eigen::Matrix<double, 4, Eigen::Dynamic> G(4, c.P);
   Vec4 Y;
   for (int j = 0; j < blocks; ++j) {
     const Eigen::Index b0 = k0 + (k1 - k0) * j / blocks, b1 = k0 + (k1 - k0) * (j + 1) / blocks;
-    StreamingQR qr(assemble.P);
+    StreamingQR qr(c.P);
     for (Eigen::Index k = b0; k < b1; ++k) {
-      assemble(d.DA.row(k).data(), d.BV.row(k).data(), G, Y);
+      c.get(k, known_jr, G, Y);
       for (int r = 0; r < 4; ++r)
         if (rows & (1u << r)) qr.add_row(w(r) * G.row(r).transpose(), w(r) * Y(r));
     }
     out.push_back(qr.factor());
   }
   return out;
+}
+
+// The fits without each of K blocks, from the blocks' factors.
+std::vector<Eigen::VectorXd> leave_one_block_out(const std::vector<StreamingQR::Factor>& blocks, Eigen::Index k0,
+                                                 Eigen::Index k1, const Eigen::VectorXd& prior, double rank_tolerance) {
+  const int K = static_cast<int>(blocks.size());
+  std::vector<Eigen::VectorXd> loo;
+  for (int b = 0; b < K; ++b) {
+    StreamingQR qr(prior.size());
+    long rows = 0;
+    for (int i = 0; i < K; ++i) {
+      if (i == b) continue;
+      const auto& fb = blocks[static_cast<size_t>(i)];
+      for (Eigen::Index q = 0; q < prior.size(); ++q) qr.add_row(fb.R.row(q).transpose(), fb.qty(q));
+      rows += 4 * ((k1 - k0) * (i + 1) / K - (k1 - k0) * i / K);
+    }
+    loo.push_back(solve_qr(qr.factor(), rows, prior, rank_tolerance).x);
+  }
+  return loo;
 }
 
 // Per time block: the QR factor of the weighted rows of `rows`, integrated
@@ -380,7 +470,7 @@ struct Unknowns {
   Eigen::Index P = 0;
   std::vector<std::string> names;
   Eigen::VectorXd prior;
-  explicit Unknowns(const ExtendedOptions& opt) : extra(active_terms(opt.terms)) {
+  explicit Unknowns(const ExtendedOptions& opt, bool highpass = false) : extra(active_terms(opt.terms, highpass)) {
     P = 7 + static_cast<Eigen::Index>(extra.size());
     names.emplace_back(opt.terms.known_mass ? "thrust_scale" : "m");  // thrust_scale: after the rescaling
     for (int j = 1; j < 7; ++j) names.emplace_back(kThetaNames[static_cast<size_t>(j)]);
@@ -393,17 +483,150 @@ struct Unknowns {
   }
 };
 
+// Samples left out at each end of the window after the roll and pitch rows'
+// high-pass at f_hz (its zero-phase response has settled to ~1 % by then).
+Eigen::Index highpass_edge(double f_hz, double T) { return f_hz > 0.0 ? std::llround(0.5 / f_hz / T) : 0; }
+
+// Candidates of the roll and pitch rows' high-pass, Hz: off, then up to
+// 3 Hz, below 40 % of the moment rows' low-pass cutoff (the band between
+// them must keep the excitation the fit needs).
+std::vector<double> highpass_candidates(double moment_cutoff_hz) {
+  std::vector<double> c{0.0};
+  for (double f : {0.5, 1.0, 1.5, 2.0, 3.0})
+    if (f <= 0.4 * moment_cutoff_hz) c.push_back(f);
+  return c;
+}
+
+// The roll and pitch rows' high-pass, chosen on the standard model: for each
+// candidate, LS and the jackknife standard errors of Ixx and Iyy; the
+// reference is the highest candidate that determines every parameter; the
+// choice is the lowest candidate whose Ixx and Iyy lie within two of the
+// reference's standard errors of the reference's. Where low-frequency model
+// error (aerodynamic moments of translational flight, which the inertial
+// torque, ~ frequency^2, outgrows) moves the estimates, the choice leaves
+// those frequencies out; where it does not, it keeps every frequency.
+// The white-noise standard deviation of a gyro column: its part above a
+// quarter of the sample rate, where a smooth flight has no motion, holds half
+// of a white noise's power (the zero-phase Butterworth's |H|^2 is symmetric
+// about its cutoff on the way to Nyquist). Vibration counts as noise: it
+// overstates the noise inside the moment rows' band, which errs on the side
+// of fewer high-pass candidates.
+double white_noise_sd(const Eigen::VectorXd& x, double fs) {
+  Eigen::VectorXd low = x;
+  signal::ZeroPhaseFilter lp(signal::butter_sos(4, 0.25 * fs, fs));
+  lp.apply(low.data(), low.size());
+  return std::sqrt(2.0 * (x - low).squaredNorm() / static_cast<double>(x.size()));
+}
+
+// The variance that a unit white noise on p has in the roll row's p_dot
+// column at high-pass f_hz: the same chain (the moment rows' low-pass, the
+// central difference, the high-pass) on a fixed pseudo-random sequence.
+double noise_gain(const ExtendedOptions& opt, double f_moment, double f_hz, double T, Eigen::Index n,
+                  Eigen::Index k0, Eigen::Index k1) {
+  std::mt19937_64 rng(1);
+  std::normal_distribution<double> N(0.0, 1.0);
+  Eigen::VectorXd x(n);
+  for (auto& v : x) v = N(rng);
+  signal::LowpassOptions lo = opt.processing.lowpass;
+  lo.cutoff_hz = f_moment;
+  x = signal::zero_phase_lowpass(Eigen::MatrixXd(x), 1.0 / T, lo).col(0);
+  Eigen::VectorXd d = signal::central_difference(Eigen::MatrixXd(x), T).col(0);
+  if (f_hz > 0.0) {
+    Eigen::VectorXd low = d;
+    signal::ZeroPhaseFilter hp(signal::butter_sos(opt.highpass_order, f_hz, 1.0 / T));
+    hp.apply(low.data(), low.size());
+    d -= low;
+  }
+  return d.segment(k0, k1 - k0).squaredNorm() / static_cast<double>(k1 - k0);
+}
+
+HighpassSelection choose_highpass(const FlightLog& log, const RawSignals& raw, const ExtendedOptions& opt) {
+  HighpassSelection sel;
+  const Discrete disc = discretize(raw, RegressionModel::Standard, opt);
+  const auto [k0, k1] = window_range(raw, RegressionModel::Standard, opt);
+  const int K = opt.uncertainty.jackknife_blocks > 0 ? opt.uncertainty.jackknife_blocks : 8;
+  const double fs = 1.0 / raw.T;
+  const double sd_p = white_noise_sd(log.column("p"), fs), sd_q = white_noise_sd(log.column("q"), fs);
+  sel.gyro_noise = std::max(sd_p, sd_q);
+  for (double f : highpass_candidates(raw.f_moment)) {
+    HighpassCandidate hc;
+    hc.hz = f;
+    const Unknowns u(opt, f > 0.0);
+    const Assembler a = u.assembler(opt.terms);
+    RowCache c = build_rows(disc, a);
+    if (f > 0.0) highpass_rows(c, f, fs, opt.highpass_order);
+    const Eigen::Index e = highpass_edge(f, raw.T), b0 = k0 + e, b1 = k1 - e;
+    if (b1 - b0 >= 32 * K) {
+      const Fit ft = fit(c, b0, b1, a.known_jr, u.prior, opt);
+      const auto loo =
+          leave_one_block_out(block_factors(c, b0, b1, K, a.known_jr, ft.w, 0xFu), b0, b1, u.prior, opt.ls.rank_tolerance);
+      // In the known mass's units when it is given (the s = 1 fit's m' = m / s).
+      const double sc = opt.terms.known_mass && ft.sol.x(0) > 0.0 ? *opt.terms.known_mass / ft.sol.x(0) : 1.0;
+      const Eigen::VectorXd se = jackknife_covariance(loo).diagonal().cwiseSqrt();
+      hc.Ixx = sc * ft.sol.x(1);
+      hc.Iyy = sc * ft.sol.x(4);
+      hc.se_Ixx = sc * se(1);
+      hc.se_Iyy = sc * se(4);
+      // Power of the p_dot and q_dot columns (roll row's Ixx, pitch row's Iyy) in the band.
+      double pp = 0.0, qq = 0.0;
+      for (Eigen::Index k = b0; k < b1; ++k) {
+        pp += c.M(k, 1 * c.stride() + 1) * c.M(k, 1 * c.stride() + 1);
+        qq += c.M(k, 2 * c.stride() + 4) * c.M(k, 2 * c.stride() + 4);
+      }
+      // Against the outputs' variance about their means: without the
+      // high-pass the constant offsets explain the mean, which says nothing
+      // about the inertia.
+      const double nb = static_cast<double>(b1 - b0);
+      const auto var = [&](Eigen::Index col) {
+        const auto y = c.M.col(col).segment(b0, b1 - b0);
+        return (y.array() - y.mean()).square().sum();
+      };
+      const double y1 = var(1 * c.stride() + c.P), y2 = var(2 * c.stride() + c.P);
+      hc.unexplained = 0.5 * (ft.res_rms(1) * ft.res_rms(1) * nb / std::max(y1, 1e-300) +
+                              ft.res_rms(2) * ft.res_rms(2) * nb / std::max(y2, 1e-300));
+      const double g = noise_gain(opt, raw.f_moment, f, raw.T, c.M.rows(), b0, b1) * static_cast<double>(b1 - b0);
+      hc.noise_share = std::max(sd_p * sd_p * g / std::max(pp, 1e-300), sd_q * sd_q * g / std::max(qq, 1e-300));
+      hc.usable = ft.sol.unidentifiable.empty() && ft.sol.x.allFinite() && se.allFinite() && ft.sol.x(0) > 0.0 &&
+                  hc.noise_share <= HighpassSelection::max_noise_share;
+    }
+    sel.candidates.push_back(hc);
+  }
+  // The reference: the usable band where the rigid-body rows explain the
+  // roll and pitch torques best (the least unexplained variance). Below the
+  // aerodynamic moments of translational flight that is a high band; with
+  // broadband disturbances (gusts) and slow excitation it is a low one.
+  const HighpassCandidate* ref = nullptr;
+  for (const auto& c : sel.candidates)
+    if (c.usable && (!ref || c.unexplained < ref->unexplained)) ref = &c;
+  if (!ref) {
+    sel.reason = "no candidate determines every parameter with little enough gyro noise in its band: off";
+    return sel;
+  }
+  for (const auto& c : sel.candidates) {
+    if (!c.usable) continue;
+    if (std::abs(c.Ixx - ref->Ixx) <= 2.0 * ref->se_Ixx && std::abs(c.Iyy - ref->Iyy) <= 2.0 * ref->se_Iyy) {
+      sel.hz = c.hz;
+      sel.reason =
+          c.hz == 0.0
+              ? fmt::format("the rows fit best at {:g} Hz ({:.2g} % unexplained), and without a high-pass Ixx and Iyy "
+                            "lie within two standard errors of those there: off",
+                            ref->hz, 100.0 * ref->unexplained)
+              : fmt::format("the rows fit best at {:g} Hz ({:.2g} % unexplained); {:g} Hz is the lowest cutoff whose "
+                            "Ixx and Iyy lie within two standard errors of those there: below it they move with the "
+                            "cutoff (low-frequency model error)",
+                            ref->hz, 100.0 * ref->unexplained, c.hz);
+      break;
+    }
+  }
+  return sel;
+}
+
 }  // namespace
 
 ExtendedResult identify_extended(const FlightLog& log, const ExtendedOptions& opt) {
   opt.validate();
   ExtendedResult res;
   const ModelTerms& terms = opt.terms;
-  const Unknowns u(opt);
-  const Eigen::Index P = u.P;
-  const std::vector<std::string>& names = u.names;
-  const Eigen::VectorXd& prior = u.prior;
-  const Assembler assemble = u.assembler(terms);
 
   double f_force = opt.force_cutoff_hz, f_moment = opt.moment_cutoff_hz;
   if (opt.auto_cutoffs) {
@@ -414,30 +637,50 @@ ExtendedResult identify_extended(const FlightLog& log, const ExtendedOptions& op
   const RawSignals raw = raw_signals(log, opt, f_force, f_moment);
   res.force_processing = raw.pf;
   res.moment_processing = raw.pm;
+  // The roll and pitch rows' high-pass: given, or chosen from the data.
+  double hp = opt.moment_highpass_hz.value_or(0.0);
+  if (!opt.moment_highpass_hz) {
+    res.highpass_selection = choose_highpass(log, raw, opt);
+    hp = res.highpass_selection->hz;
+  }
+  res.moment_highpass_hz = hp;
+  const Unknowns u(opt, hp > 0.0);
+  const Eigen::Index P = u.P;
+  const std::vector<std::string>& names = u.names;
+  const Eigen::VectorXd& prior = u.prior;
+  const Assembler assemble = u.assembler(terms);
+  const Eigen::Index edge = highpass_edge(hp, raw.T);
 
   const RegressionModel models[2] = {RegressionModel::Standard, RegressionModel::Filtered};
   for (int mi = 0; mi < 2; ++mi) {
     const RegressionModel model = models[mi];
-    const auto [k0, k1] = window_range(raw, model, opt);
+    auto [k0, k1] = window_range(raw, model, opt);
+    k0 += edge;
+    k1 -= edge;
+    if (k1 - k0 < 8)
+      throw InputError(fmt::format("window {}: fewer than 8 samples clear of the filters' edges (high-pass {:g} Hz)",
+                                   opt.window.to_string(), hp));
     if (mi == 0) {
       res.window = {static_cast<double>(k0) * raw.T, static_cast<double>(k1 - 1) * raw.T};
       res.window_samples = k1 - k0;
     }
-    const Discrete disc = discretize(raw, model, opt);
-    Assembler assemble_m = assemble;
-    Fit f = fit(disc, k0, k1, assemble_m, prior, opt);
-    if (terms.known_mass && assemble_m.known_jr != 0.0) {
+    RowCache rows = build_rows(discretize(raw, model, opt), assemble);
+    if (hp > 0.0) highpass_rows(rows, hp, 1.0 / raw.T, opt.highpass_order);
+    double jr = assemble.known_jr;
+    Fit f = fit(rows, k0, k1, jr, prior, opt);
+    if (terms.known_mass && jr != 0.0) {
       // The s = 1 regression holds the known J_r as J_r / s, s = m / m'
       // (below): a fixed point in s. J_r's share of the yaw torque is small,
       // so a few rounds settle it.
       for (int round = 0; round < 8 && f.sol.x(0) > 0.0; ++round) {
-        const double jr = *terms.known_rotor_inertia * f.sol.x(0) / *terms.known_mass;
-        if (std::abs(jr - assemble_m.known_jr) <= 1e-12 * std::abs(jr)) break;
-        assemble_m.known_jr = jr;
-        f = fit(disc, k0, k1, assemble_m, prior, opt);
+        const double next = *terms.known_rotor_inertia * f.sol.x(0) / *terms.known_mass;
+        if (std::abs(next - jr) <= 1e-12 * std::abs(next)) break;
+        jr = next;
+        f = fit(rows, k0, k1, jr, prior, opt);
       }
     }
     ExtendedEstimate e;
+    Eigen::MatrixXd white;  // lag-0 sandwich: its correlations shape the reported covariance
     e.name = mi == 0 ? "LS" : "FMLS";
     e.model = model;
     e.names = names;
@@ -453,7 +696,7 @@ ExtendedResult identify_extended(const FlightLog& log, const ExtendedOptions& op
       Eigen::VectorXd g(P);
       double wss = 0.0;
       for (Eigen::Index k = k0; k < k1; ++k) {
-        assemble_m(disc.DA.row(k).data(), disc.BV.row(k).data(), G, Y);
+        rows.get(k, jr, G, Y);
         const Vec4 r = Y - G * f.sol.x;
         g.noalias() = G.transpose() * (f.w.cwiseAbs2().cwiseProduct(r));
         wss += f.w.cwiseProduct(r).squaredNorm();
@@ -468,6 +711,7 @@ ExtendedResult identify_extended(const FlightLog& log, const ExtendedOptions& op
       }
       const LongRunCovariance lr = long_run_covariance(psi, static_cast<int>(P), opt.uncertainty);
       e.covariance = lr.covariance;
+      white = lr.white_covariance;
       e.white_std_error = lr.white_covariance.diagonal().cwiseSqrt();
       e.correlation_time = lr.correlation_time;
       e.correlation_time_capped = lr.correlation_time_capped;
@@ -502,6 +746,7 @@ ExtendedResult identify_extended(const FlightLog& log, const ExtendedOptions& op
         J(j, 0) = -m0 * f.sol.x(j) / (x0 * x0);
       }
       e.covariance = J * e.covariance * J.transpose();
+      white = J * white * J.transpose();
       e.white_std_error *= m0 / x0;  // the leading term of the same map
     }
     e.hac_std_error = e.covariance.diagonal().cwiseSqrt();
@@ -516,20 +761,12 @@ ExtendedResult identify_extended(const FlightLog& log, const ExtendedOptions& op
     // sandwich, which sees only the residuals' size and correlation, does not.
     const int K = opt.uncertainty.jackknife_blocks;
     if (K > 0 && k1 - k0 >= 8 * static_cast<Eigen::Index>(K)) {
-      const auto blocks = block_factors(disc, k0, k1, K, assemble_m, f.w, 0xFu);
       std::vector<Eigen::VectorXd> loo;
-      for (int b = 0; b < K; ++b) {
-        StreamingQR qr(P);
-        long rows = 0;
-        for (int i = 0; i < K; ++i) {
-          if (i == b) continue;
-          const auto& fb = blocks[static_cast<size_t>(i)];
-          for (Eigen::Index q = 0; q < P; ++q) qr.add_row(fb.R.row(q).transpose(), fb.qty(q));
-          rows += 4 * ((k1 - k0) * (i + 1) / K - (k1 - k0) * i / K);
-        }
-        const auto xb = weigh_it(solve_qr(qr.factor(), rows, prior, opt.ls.rank_tolerance).x);
-        if (!xb || !xb->allFinite()) break;
-        loo.push_back(*xb);
+      for (const auto& xb : leave_one_block_out(block_factors(rows, k0, k1, K, jr, f.w, 0xFu), k0, k1, prior,
+                                                opt.ls.rank_tolerance)) {
+        const auto w = weigh_it(xb);
+        if (!w || !w->allFinite()) break;
+        loo.push_back(*w);
       }
       if (static_cast<int>(loo.size()) == K) {
         e.jackknife_blocks = K;
@@ -542,15 +779,26 @@ ExtendedResult identify_extended(const FlightLog& log, const ExtendedOptions& op
           e.ci_low(j) = x(j) - half;
           e.ci_high(j) = x(j) + half;
         }
-        const Eigen::VectorXd raise =
-            (e.std_error.array() / e.hac_std_error.array().max(1e-300)).matrix();
-        e.covariance = raise.asDiagonal() * e.covariance * raise.asDiagonal();
       } else {
         res.warnings.push_back(fmt::format(
             "{}: the block jackknife was not computed (a fit without one time block gave a non-positive mass or a "
             "non-finite value); the intervals are the HAC ones only",
             mi == 0 ? "LS" : "FMLS"));
       }
+    }
+    // The reported covariance: the standard errors above, with the
+    // correlations of the lag-0 sandwich. The HAC matrix itself is nearly
+    // singular when its bandwidth spans the window (real flights: a few
+    // effective degrees of freedom), and the physically consistent set, which
+    // is the closest one in this metric, would then move along whatever
+    // direction it happens to leave cheap.
+    {
+      const Eigen::VectorXd wsd = white.diagonal().cwiseSqrt();
+      Eigen::MatrixXd corr = Eigen::MatrixXd::Identity(P, P);
+      for (Eigen::Index a = 0; a < P; ++a)
+        for (Eigen::Index b = 0; b < P; ++b)
+          if (a != b && wsd(a) > 0.0 && wsd(b) > 0.0) corr(a, b) = white(a, b) / (wsd(a) * wsd(b));
+      e.covariance = e.std_error.asDiagonal() * corr * e.std_error.asDiagonal();
     }
     e.value = x;
     e.theta = x.head<7>();
@@ -606,7 +854,7 @@ CutoffSelection select_cutoffs(const FlightLog& log, const ExtendedOptions& opt)
   // Weights: the final weights of a fit at the given cutoffs, so that every
   // candidate is scored on the same footing.
   const Discrete d0 = discretize(first, RegressionModel::Standard, opt);
-  Vec4 w = fit(d0, k0, k1, assemble, prior, opt).w;
+  Vec4 w = fit(build_rows(d0, assemble), k0, k1, assemble.known_jr, prior, opt).w;
   if (!opt.terms.weight_rows) {
     for (int r = 0; r < 4; ++r) {
       const double s = rms(eval.BV.col(B_FZ + r).segment(k0, k1 - k0));
@@ -622,7 +870,7 @@ CutoffSelection select_cutoffs(const FlightLog& log, const ExtendedOptions& opt)
   auto score = [&](double ff, double fm) {
     const RawSignals r = raw_signals(log, opt, ff, fm);
     const Discrete d = discretize(r, RegressionModel::Standard, opt);
-    const auto train = block_factors(d, k0, k1, K, assemble, w, 0xFu);
+    const auto train = block_factors(build_rows(d, assemble), k0, k1, K, assemble.known_jr, w, 0xFu);
     Scores s{Eigen::VectorXd(K), Eigen::VectorXd(K)};
     for (int j = 0; j < K; ++j) {
       StreamingQR qr(P);

@@ -111,12 +111,14 @@ ExtendedOptions extended_options(const IdentificationOptions& opt) {
   xo.ls = opt.ls;
   xo.uncertainty = opt.uncertainty;
   xo.auto_cutoffs = opt.auto_cutoffs;
+  xo.moment_highpass_hz = opt.moment_highpass_hz;
   return xo;
 }
 
 bool IdentificationOptions::extended() const {
   const double c = processing.lowpass.cutoff_hz;
-  return terms.any() || auto_cutoffs || force_cutoff_hz.value_or(c) != c || moment_cutoff_hz.value_or(c) != c;
+  return terms.any() || auto_cutoffs || force_cutoff_hz.value_or(c) != c || moment_cutoff_hz.value_or(c) != c ||
+         moment_highpass_hz != 0.0;
 
 }
 
@@ -305,7 +307,15 @@ IdentificationResult identify(const FlightLog& log, const IdentificationOptions&
       const Theta sd = sol.std_error.cwiseMax(1e-12 * x.theta.cwiseAbs().maxCoeff());
       const Eigen::LDLT<Mat7> ldlt(cov + Mat7(sd.cwiseAbs2().asDiagonal()) * 1e-9);
       info = ldlt.solve(Mat7::Identity());
-      if (opt.terms.known_mass) info(0, 0) = 1e12 * info.diagonal().tail<6>().maxCoeff();
+      if (opt.terms.known_mass) {
+        // Pin m: a million times the inertia entries' weight in the problem's
+        // own scaling (m / |m|, I / mean principal moment). Not more: the
+        // projection's ridge is relative to the metric's size, and a larger
+        // pin would make that ridge, not the covariance, decide how the
+        // inertia moves.
+        const double ms = std::abs(x.theta(0)), sI = (std::abs(x.theta(1)) + std::abs(x.theta(4)) + std::abs(x.theta(6))) / 3.0;
+        if (ms > 0.0 && sI > 0.0) info(0, 0) = 1e6 * info.diagonal().tail<6>().maxCoeff() * (sI * sI) / (ms * ms);
+      }
       const Eigen::LLT<Mat7> llt(0.5 * (info + info.transpose()));
       const Mat7 F = llt.matrixU();
       PhysicalProjection pr = closest_physical(F, x.theta, prior, opt.physical);

@@ -363,6 +363,24 @@ json to_json(const ExtendedResult& x) {
               {"window", {{"t0", x.window.t0}, {"t1", x.window.t1}, {"samples", x.window_samples}}},
               {"force_prefilter", x.force_processing.filter},
               {"moment_prefilter", x.moment_processing.filter}};
+  out["moment_highpass_hz"] = x.moment_highpass_hz;
+  if (x.highpass_selection) {
+    json cands = json::array();
+    for (const auto& c : x.highpass_selection->candidates)
+      cands.push_back({{"highpass_hz", c.hz},
+                       {"usable", c.usable},
+                       {"Ixx", c.Ixx},
+                       {"Iyy", c.Iyy},
+                       {"Ixx_std_error", c.se_Ixx},
+                       {"Iyy_std_error", c.se_Iyy},
+                       {"noise_share", c.noise_share},
+                       {"unexplained", c.unexplained}});
+    out["highpass_selection"] = {{"highpass_hz", x.highpass_selection->hz},
+                                 {"gyro_noise", x.highpass_selection->gyro_noise},
+                                 {"max_noise_share", HighpassSelection::max_noise_share},
+                                 {"reason", x.highpass_selection->reason},
+                                 {"candidates", cands}};
+  }
   if (x.cutoff_selection) {
     const auto& c = *x.cutoff_selection;
     auto table = [](const std::vector<std::pair<double, double>>& v) {
@@ -383,6 +401,24 @@ std::string format_real_flight(const ExtendedResult& x) {
                                 x.window.t0, x.window.t1, x.window_samples);
   out += fmt::format("  force row: pre-filter {}; moment rows: {}", x.force_processing.filter, x.moment_processing.filter);
   out += x.cutoff_selection ? " (chosen on held-out time blocks)\n" : "\n";
+  if (x.moment_highpass_hz > 0.0)
+    out += fmt::format("  roll and pitch rows: high-pass Butterworth {:g} Hz (zero-phase){}\n", x.moment_highpass_hz,
+                       x.highpass_selection ? ", chosen from the data" : "");
+  else if (x.highpass_selection)
+    out += "  roll and pitch rows: no high-pass (chosen from the data)\n";
+  if (x.highpass_selection) {
+    out += fmt::format("    {}\n    {:>9} {:>22} {:>22} {:>12} {:>12}\n", x.highpass_selection->reason, "high-pass",
+                       "Ixx (kg m^2)", "Iyy (kg m^2)", "gyro noise", "unexplained");
+    for (const auto& c : x.highpass_selection->candidates) {
+      const std::string note = c.hz == x.moment_highpass_hz ? "  <- used"
+                               : c.noise_share > HighpassSelection::max_noise_share
+                                   ? "  (too little motion above the cutoff: noise biases toward zero)"
+                               : !c.usable ? "  (does not determine every parameter)"
+                                           : "";
+      out += fmt::format("    {:>6g} Hz {:>11.4g} +- {:<7.2g} {:>11.4g} +- {:<7.2g} {:>10.2g} % {:>10.3g} %{}\n", c.hz,
+                         c.Ixx, c.se_Ixx, c.Iyy, c.se_Iyy, 100.0 * c.noise_share, 100.0 * c.unexplained, note);
+    }
+  }
   const auto& a = x.estimates[0];
   const auto& b = x.estimates[1];
   out += fmt::format("  {:<14} {:>24} {:>24}\n", "parameter", "LS", "FMLS");

@@ -207,6 +207,9 @@ TimingEstimate estimate_timing(const FlightLog& log, const RotorModel& rotors, c
   // weighting barely moves the residual's minimum; unweighted, a fit is one pass
   // instead of three.
   xo.terms.weight_rows = false;
+  // The residual's minimum is the same without the roll and pitch rows'
+  // high-pass, and choosing it would cost six fits per evaluation.
+  xo.moment_highpass_hz = 0.0;
 
   FlightLog base = log;
   if (opt.estimate_offsets) {

@@ -80,6 +80,7 @@ const std::vector<OptionSpec>& identify_specs() {
           {"motor-time-constant", K::String, "auto (the rotor model's; estimated when it takes commands and gives none) or seconds"},
           {"time-offsets", K::String, "estimate (gyro and rotor groups against the pose, with a rotor model) or none"},
           {"rotor-inertia", K::String, "auto (the vehicle file's when given, else estimated), estimate, or kg m^2"},
+          {"moment-highpass", K::String, "auto (with a vehicle chosen from the data, else off), off, or Hz"},
           {"jackknife-blocks", K::Integer, "time blocks of the jackknife under the HAC errors, 0 = off (default 8)"},
       },
       processing_specs());
@@ -440,6 +441,7 @@ IdentifyRequest identify_options_from_json(const nlohmann::json& j) {
   rf.motor_time_constant = r.string("motor-time-constant").value_or("auto");
   rf.time_offsets = r.string("time-offsets").value_or("estimate");
   rf.rotor_inertia = r.string("rotor-inertia").value_or("auto");
+  rf.moment_highpass = r.string("moment-highpass").value_or("auto");
   rf.window_given = j.contains("window");
   rf.nominal_given = j.contains("nominal");
   r.finish();
@@ -504,6 +506,25 @@ void apply_real_flight(IdentifyRequest& req, const RealFlightArgs& a) {
   }
   opt.force_cutoff_hz = a.cutoff_force;
   opt.moment_cutoff_hz = a.cutoff_moment;
+  // The roll and pitch rows' high-pass: chosen from the data on a real
+  // vehicle's log (docs/real-flights.md), off on the paper's model.
+  if (a.moment_highpass == "auto") {
+    opt.moment_highpass_hz = vehicle ? std::nullopt : std::optional<double>(0.0);
+  } else if (a.moment_highpass == "off") {
+    opt.moment_highpass_hz = 0.0;
+  } else {
+    double v = NAN;
+    try {
+      std::size_t used = 0;
+      v = std::stod(a.moment_highpass, &used);
+      if (used != a.moment_highpass.size()) v = NAN;
+    } catch (const std::exception&) {
+    }
+    if (!(v >= 0.0 && v < 100.0))
+      throw std::invalid_argument(
+          fmt::format("--moment-highpass {}: expected auto, off or a frequency in Hz", a.moment_highpass));
+    opt.moment_highpass_hz = v;
+  }
   if (a.cutoffs == "auto") {
     // The moment rows differentiate the gyro once, the force row the motion
     // capture twice: with a rotor-level log the moment rows get twice the
