@@ -4,6 +4,7 @@
 // rate damping and the rotor inertia, computed here from the exact reference.
 #include "quadid/extended.hpp"
 #include "quadid/qr_least_squares.hpp"
+#include "quadid/signal.hpp"
 
 #include "perfect_log.hpp"
 
@@ -334,4 +335,75 @@ TEST(Extended, KnownRotorInertiaIsAppliedNotEstimated) {
   EXPECT_LT(right, 0.2 * unscaled);
   o.terms.known_rotor_inertia = -1.0;
   EXPECT_THROW(identify_extended(log, o), std::invalid_argument);
+}
+
+// The roll and pitch rows' high-pass chosen from the data. The flight is
+// Table 2 (0.1-0.5 Hz) plus its own harmonics again at 1.6-2 Hz with a
+// hundredth of the amplitude: tilts from the slow part, angular accelerations
+// (~ frequency^2 x tilt) from both, as on a real flight with slow manoeuvres
+// and fast corrections. A moment that no term models, proportional to the
+// tilt (0.003 N m/rad, as an aerodynamic moment of translational flight,
+// whose velocity follows the tilt), looks like inertia: at a frequency w the
+// tilt is -p_dot / w^2, so Ixx moves by about -0.003 / (Ixx w^2), tens of
+// percent at 0.1-0.5 Hz, 0.2 % at 1.6 Hz. The choice must leave the slow band
+// out and cut the errors of Ixx and Iyy at least four-fold (noise-free).
+TEST(Extended, HighpassChoiceLeavesOutSlowModelError) {
+  const Params truth = Params::qball2_virtual();
+  const FourierTrajectory t2 = FourierTrajectory::table2();
+  std::array<FourierTrajectory::AxisCoeffs, 4> axes;
+  for (int i = 0; i < 4; ++i) {
+    auto& ax = axes[static_cast<size_t>(i)];
+    const auto& src = t2.axis(i);
+    ax.a = Eigen::VectorXd::Zero(20);
+    ax.b = Eigen::VectorXd::Zero(20);
+    ax.a.head(5) = src.a;
+    ax.b.head(5) = src.b;
+    ax.a.tail(5) = 0.01 * src.a;
+    ax.b.tail(5) = 0.01 * src.b;
+    ax.c = src.c;
+  }
+  const FourierTrajectory both(t2.wf(), axes);
+  FlightLog log = perfect_log(truth, 500.0, 50.0, 30.0, both);
+  for (Eigen::Index k = 0; k < log.rows(); ++k) {
+    log.data(k, 11) += 0.003 * log.data(k, 4);  // phi
+    log.data(k, 12) += 0.003 * log.data(k, 5);  // theta
+  }
+  ExtendedOptions o;
+  o.terms = ModelTerms::real_flight(false);
+  o.moment_cutoff_hz = 8.0;
+  o.moment_highpass_hz = 0.0;
+  const ExtendedResult off = identify_extended(log, o);
+  o.moment_highpass_hz.reset();
+  const ExtendedResult chosen = identify_extended(log, o);
+  ASSERT_TRUE(chosen.highpass_selection.has_value());
+  fmt::print("{}", format_real_flight(chosen));
+  EXPECT_GT(chosen.moment_highpass_hz, 0.0);
+  for (int j : {1, 4}) {
+    const double e_off = std::abs(off.estimates[0].theta(j) / truth.theta()(j) - 1.0);
+    const double e_hp = std::abs(chosen.estimates[0].theta(j) / truth.theta()(j) - 1.0);
+    fmt::print("theta({}): error {:.3g} % without the high-pass, {:.3g} % with it\n", j, 100 * e_off, 100 * e_hp);
+    EXPECT_GT(e_off, 0.01) << j;
+    EXPECT_LT(e_hp, 0.25 * e_off) << j;
+  }
+  // No offset_x / offset_y under a high-pass: the rows have no constant part left.
+  for (const auto& n : chosen.estimates[0].names) EXPECT_TRUE(n != "offset_x" && n != "offset_y") << n;
+
+  FlightLog quiet = perfect_log(truth, 500.0, 50.0);  // Table 2: little motion above 1 Hz
+  std::mt19937 rng(3);
+  std::normal_distribution<double> gyro(0.0, 0.01);  // rad/s
+  for (Eigen::Index k = 0; k < quiet.rows(); ++k)
+    for (int c = 7; c < 10; ++c) quiet.data(k, c) += gyro(rng);
+  const ExtendedResult q = identify_extended(quiet, o);
+  ASSERT_TRUE(q.highpass_selection.has_value());
+  EXPECT_EQ(q.moment_highpass_hz, 0.0) << format_real_flight(q);
+  EXPECT_GT(q.highpass_selection->candidates.back().noise_share, HighpassSelection::max_noise_share);
+  EXPECT_FALSE(q.highpass_selection->candidates.back().usable);
+  // Option checks name the option.
+  o.moment_highpass_hz = 5.0;  // not below half the 8 Hz moment cutoff
+  try {
+    identify_extended(log, o);
+    FAIL();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("--moment-highpass"), std::string::npos) << e.what();
+  }
 }
