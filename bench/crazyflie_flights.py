@@ -20,12 +20,13 @@ MASS = 0.0347  # kg, weighed (the data set's README)
 
 F48 = ["--cutoffs", "fixed", "--cutoff-force", "4", "--cutoff-moment", "8"]
 configs = [
-    ("paper model, 4 Hz everywhere", ["--terms", "paper", "--cutoffs", "fixed"]),
-    ("paper model, moment rows at 8 Hz", ["--terms", "paper"] + F48),
-    ("+ weighting", ["--terms", "weighting"] + F48),
-    ("+ offsets", ["--terms", "weighting,offsets"] + F48),
-    ("+ flapping", ["--terms", "weighting,offsets,flapping"] + F48),
-    ("default (real: + rotor inertia; 4/8 Hz)", []),
+    ("paper model, 4 Hz everywhere", ["--terms", "paper", "--cutoffs", "fixed"] + ["--moment-highpass", "off"]),
+    ("paper model, moment rows at 8 Hz", ["--terms", "paper"] + F48 + ["--moment-highpass", "off"]),
+    ("+ weighting", ["--terms", "weighting"] + F48 + ["--moment-highpass", "off"]),
+    ("+ offsets", ["--terms", "weighting,offsets"] + F48 + ["--moment-highpass", "off"]),
+    ("+ flapping", ["--terms", "weighting,offsets,flapping", "--moment-highpass", "off"] + F48),
+    ("+ rotor inertia, no high-pass (real terms; 4/8 Hz)", ["--moment-highpass", "off"]),
+    ("default (+ roll/pitch high-pass chosen from the data)", []),
     ("default terms, held-out cutoffs", ["--cutoffs", "held-out"]),
 ]
 

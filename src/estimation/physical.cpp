@@ -197,6 +197,12 @@ PhysicalProjection closest_physical(const Mat7& F, const Theta& theta_ls, const 
   nlopt::opt o(nlopt::LD_SLSQP, 7);
   std::vector<double> lb(7, -HUGE_VAL), ub(7, HUGE_VAL);
   lb[0] = opt.min_mass_fraction;
+  // Cholesky diagonal of the scaled second moments away from 0: Sigma then
+  // stays positive definite, and every principal moment (a sum of two of its
+  // eigenvalues) strictly positive. Without it the closest set in a metric
+  // that makes one direction cheap can land on a principal moment of 1e-21,
+  // a flat body that the consistency check rightly refuses.
+  for (int i : {1, 3, 6}) lb[static_cast<size_t>(i)] = 1e-5;
   o.set_lower_bounds(lb);
   o.set_upper_bounds(ub);
   o.set_min_objective(objective, &P);
