@@ -450,6 +450,19 @@ IdentifyRequest identify_options_from_json(const nlohmann::json& j) {
   return req;
 }
 
+namespace {
+// The number a whole option value spells ("0.005"), or NaN ("5 ms", "auto").
+double whole_number(const std::string& text) {
+  try {
+    std::size_t used = 0;
+    const double v = std::stod(text, &used);
+    return used == text.size() ? v : NAN;
+  } catch (const std::exception&) {
+    return NAN;
+  }
+}
+}  // namespace
+
 void apply_real_flight(IdentifyRequest& req, const RealFlightArgs& a) {
   IdentificationOptions& opt = req.options;
   req.real = a;
@@ -461,13 +474,7 @@ void apply_real_flight(IdentifyRequest& req, const RealFlightArgs& a) {
   if (a.motor_time_constant == "auto") {
     req.motor_time_constant.reset();
   } else {
-    double v = NAN;
-    try {
-      std::size_t used = 0;
-      v = std::stod(a.motor_time_constant, &used);
-      if (used != a.motor_time_constant.size()) v = NAN;
-    } catch (const std::exception&) {
-    }
+    const double v = whole_number(a.motor_time_constant);
     if (!(v >= 0.0 && v <= 1.0))
       throw std::invalid_argument(fmt::format("--motor-time-constant {}: expected auto or a time in [0, 1] s",
                                               a.motor_time_constant));
@@ -492,13 +499,7 @@ void apply_real_flight(IdentifyRequest& req, const RealFlightArgs& a) {
     if (opt.terms.rotor_inertia && req.vehicle && req.vehicle->rotors.rotor_inertia > 0.0)
       opt.terms.known_rotor_inertia = req.vehicle->rotors.rotor_inertia;
   } else if (a.rotor_inertia != "estimate") {
-    double v = NAN;
-    try {
-      std::size_t used = 0;
-      v = std::stod(a.rotor_inertia, &used);
-      if (used != a.rotor_inertia.size()) v = NAN;
-    } catch (const std::exception&) {
-    }
+    const double v = whole_number(a.rotor_inertia);
     if (!(v >= 0.0 && v < 1.0))
       throw std::invalid_argument(fmt::format(
           "--rotor-inertia {}: expected auto, estimate or one rotor's inertia in kg m^2 (>= 0)", a.rotor_inertia));
@@ -513,13 +514,7 @@ void apply_real_flight(IdentifyRequest& req, const RealFlightArgs& a) {
   } else if (a.moment_highpass == "off") {
     opt.moment_highpass_hz = 0.0;
   } else {
-    double v = NAN;
-    try {
-      std::size_t used = 0;
-      v = std::stod(a.moment_highpass, &used);
-      if (used != a.moment_highpass.size()) v = NAN;
-    } catch (const std::exception&) {
-    }
+    const double v = whole_number(a.moment_highpass);
     if (!(v >= 0.0 && v < 100.0))
       throw std::invalid_argument(
           fmt::format("--moment-highpass {}: expected auto, off or a frequency in Hz", a.moment_highpass));
