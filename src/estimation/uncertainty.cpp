@@ -97,7 +97,8 @@ void UncertaintyOptions::validate() const {
   if (max_lag < 1) throw std::invalid_argument(fmt::format("UncertaintyOptions: max_lag={} must be >= 1", max_lag));
   if (jackknife_blocks != 0 && (jackknife_blocks < 3 || jackknife_blocks > 100))
     throw std::invalid_argument(
-        fmt::format("--jackknife-blocks {} (UncertaintyOptions::jackknife_blocks): must be 0 (off) or in 3..100", jackknife_blocks));
+        fmt::format("--jackknife-blocks {} (UncertaintyOptions::jackknife_blocks): must be 0 (off) or in 3..100",
+                    jackknife_blocks));
 }
 
 Eigen::MatrixXd jackknife_covariance(const std::vector<Eigen::VectorXd>& leave_one_out) {
