@@ -829,7 +829,6 @@ CutoffSelection select_cutoffs(const FlightLog& log, const ExtendedOptions& opt)
   opt.validate();
   CutoffSelection sel;
   const Unknowns u(opt);
-  const Eigen::Index P = u.P;
   const Eigen::VectorXd& prior = u.prior;
   const Assembler assemble = u.assembler(opt.terms);
   const int K = opt.cv_blocks;
@@ -872,18 +871,10 @@ CutoffSelection select_cutoffs(const FlightLog& log, const ExtendedOptions& opt)
     const Discrete d = discretize(r, RegressionModel::Standard, opt);
     const auto train = block_factors(build_rows(d, assemble), k0, k1, K, assemble.known_jr, w, 0xFu);
     Scores s{Eigen::VectorXd(K), Eigen::VectorXd(K)};
+    const auto loo = leave_one_block_out(train, k0, k1, prior, opt.ls.rank_tolerance);
     for (int j = 0; j < K; ++j) {
-      StreamingQR qr(P);
-      long rows = 0;
-      for (int i = 0; i < K; ++i) {
-        if (i == j) continue;
-        const auto& f = train[static_cast<size_t>(i)];
-        for (Eigen::Index q = 0; q < P; ++q) qr.add_row(f.R.row(q).transpose(), f.qty(q));
-        rows += (k1 - k0) / K * 4;
-      }
-      const QRSolution sol = solve_qr(qr.factor(), rows, prior, opt.ls.rank_tolerance);
-      s.first(j) = factor_sse(eval_force[static_cast<size_t>(j)], sol.x);
-      s.second(j) = factor_sse(eval_moment[static_cast<size_t>(j)], sol.x);
+      s.first(j) = factor_sse(eval_force[static_cast<size_t>(j)], loo[static_cast<size_t>(j)]);
+      s.second(j) = factor_sse(eval_moment[static_cast<size_t>(j)], loo[static_cast<size_t>(j)]);
     }
     return s;
   };
