@@ -260,12 +260,14 @@ TEST(Extended, HeldOutCutoffChoice) {
 
 // Model error that changes along the flight: the logged roll torque holds
 // Ixx in the first half and 1.1 Ixx in the second (as if a part had shifted).
-// Every sample fits a model, but not the same one; the residuals stay small
-// and the HAC sandwich sees nothing. The fits without one time block move by
-// the change: the jackknife's standard error is the block means' spread,
-// sqrt(sum_j (b_j - mean)^2 / (K (K - 1))) = 0.05 Ixx sqrt(K / (K (K - 1)))
-// ~ 1.9 % of Ixx for 8 blocks split 4 and 4 (weighted by the excitation, so
-// accept 1-3 %), and it becomes the reported standard error.
+// Every sample fits a model, but not the same one. The fits without one time
+// block move by the change: the jackknife's standard error is the block
+// means' spread, sqrt(sum_j (b_j - mean)^2 / (K (K - 1))) =
+// 0.05 Ixx sqrt(K / (K (K - 1))) ~ 1.9 % of Ixx for 8 blocks split 4 and 4
+// (weighted by the excitation, so accept 1-3 %). The HAC sandwich sees it as
+// the residual's power at the lowest frequency (the two halves' opposite
+// misfits; a lag-window sandwich with a bandwidth spanning the window saw
+// 0.0002 %): both exceed 1 %, and the larger is the reported standard error.
 TEST(Extended, JackknifeSeesModelErrorThatChangesAlongTheFlight) {
   const Params truth = Params::qball2_virtual();
   FlightLog log = perfect_log(truth, 500.0, 50.0);
@@ -281,13 +283,14 @@ TEST(Extended, JackknifeSeesModelErrorThatChangesAlongTheFlight) {
     const double jk = e.jackknife_std_error(1), hac = e.hac_std_error(1);
     EXPECT_GT(jk, 0.01 * truth.theta()(1)) << e.name;
     EXPECT_LT(jk, 0.03 * truth.theta()(1)) << e.name;
-    EXPECT_GT(jk, 10.0 * hac) << e.name;
+    EXPECT_GT(hac, 0.01 * truth.theta()(1)) << e.name;
     fmt::print("{}: Ixx {:.4g} (truth {:.4g} / {:.4g}), jackknife {:.3g} %, HAC {:.3g} % of Ixx\n", e.name, e.value(1),
                truth.theta()(1), 1.1 * truth.theta()(1), 100 * jk / truth.theta()(1), 100 * hac / truth.theta()(1));
     for (Eigen::Index j = 0; j < e.value.size(); ++j) {
       EXPECT_EQ(e.std_error(j), std::max(e.hac_std_error(j), e.jackknife_std_error(j))) << e.name << " " << j;
       const double half = std::max(e.quantile * e.hac_std_error(j), e.jackknife_quantile * e.jackknife_std_error(j));
-      EXPECT_NEAR(e.ci_high(j) - e.value(j), half, 1e-12 * std::abs(half) + 1e-300) << e.name << " " << j;
+      // ci_high - value loses the last bits of value itself.
+      EXPECT_NEAR(e.ci_high(j) - e.value(j), half, 1e-12 * std::abs(half) + 4e-16 * std::abs(e.value(j))) << e.name << " " << j;
     }
     // Student t with 7 dof (scipy.stats.t.ppf(0.975, 7) = 2.364624).
     EXPECT_NEAR(e.jackknife_quantile, 2.364624, 2e-3);

@@ -117,11 +117,20 @@ TEST(Identification, AssembledRegressorIsPhiAndPhiAPlusPhiB) {
 }
 
 // The 15 processed signals against the textbook pipeline written with the
-// signal module (filtfilt, central_difference) and the model (rotation).
+// signal module (filtfilt, central_difference) and the model (rotation), on
+// the log's columns as they are (the held pose's interpolation, step 0, is
+// tested in HeldSamples.* and below).
 TEST(Identification, ProcessingMatchesSectionIIC) {
   const FlightLog& log = perfect_table2();
+  ProcessingSummary held;
+  process_log(log, {}, &held);  // the simulator's 30 Hz motion capture, held in the 500 Hz log
+  EXPECT_EQ(held.held_columns, (std::vector<std::string>{"x", "y", "z", "psi"}));
+  EXPECT_NEAR(held.held_rate_hz, 30.0, 0.05);
+  ProcessingOptions as_logged;
+  as_logged.interpolate_held = false;
   ProcessingSummary sum;
-  const auto sig = process_log(log, {}, &sum);
+  const auto sig = process_log(log, as_logged, &sum);
+  EXPECT_TRUE(sum.held_columns.empty());
   EXPECT_EQ(sum.samples, 25001);
   EXPECT_NEAR(sum.fs, 500.0, 1e-9);
   EXPECT_EQ(sum.padlen, 15);  // scipy sosfiltfilt's 3 (2 sections + 1)
@@ -150,7 +159,9 @@ TEST(Identification, ProcessingMatchesSectionIIC) {
 // Phi_a, Phi_b as full 4x7 matrices per sample, f_D and g_D from the signal module.
 TEST(Identification, RegressionsMatchEquations34And38) {
   const FlightLog& log = perfect_table2();
-  const auto sig = process_log(log);
+  ProcessingOptions as_logged;  // the textbook below filters the columns as they are
+  as_logged.interpolate_held = false;
+  const auto sig = process_log(log, as_logged);
   const double T = sig->T;
   const signal::Sos sos = signal::butter_sos(4, 4.0, 500.0);
   auto f = [&](const char* c) { return signal::sosfiltfilt(sos, log.column(c)); };

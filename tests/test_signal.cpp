@@ -640,3 +640,58 @@ TEST(Spectrum, WelchMatchesScipy) {
   for (size_t k = 0; k < got.size(); ++k) EXPECT_NEAR(got[k], want[k], 1e-10 * peak) << "bin " << k;
   EXPECT_THROW(quadid::signal::welch_psd(x.head(10), 250.0, 128), std::invalid_argument);
 }
+
+// A quadratic sampled at 30 Hz and held in a 480 Hz log (16 log samples per
+// sensor sample) is put back on its sample instants: between two samples the
+// reconstruction is the chord, so it differs from the quadratic by at most
+// a T^2 / 8 |x''| (closed form, T = 1/30 s), and it passes exactly through
+// every sample. The held signal itself lags by half a period.
+TEST(HeldSamples, InterpolatesBetweenTheSampleInstants) {
+  const double fs = 480.0, fm = 30.0, a = 0.7;  // x = a t^2
+  const Eigen::Index n = 4800, per = 16;
+  std::vector<double> x(static_cast<size_t>(n)), truth(static_cast<size_t>(n));
+  for (Eigen::Index k = 0; k < n; ++k) {
+    const double t = static_cast<double>(k) / fs;
+    truth[static_cast<size_t>(k)] = a * t * t;
+    const double ts = static_cast<double>(k / per) / fm;  // the sensor's last sample instant
+    x[static_cast<size_t>(k)] = a * ts * ts;
+  }
+  const auto h = quadid::signal::interpolate_held_samples(x.data(), n);
+  EXPECT_TRUE(h.held);
+  EXPECT_EQ(h.median_run, 16.0);
+  EXPECT_EQ(h.samples, n / per);
+  EXPECT_EQ(h.long_runs, 0);
+  const double chord = a * 2.0 / 8.0 / (fm * fm);  // T^2/8 |x''|
+  for (Eigen::Index k = 0; k < n - per; ++k) {
+    const size_t i = static_cast<size_t>(k);
+    EXPECT_LE(std::abs(x[i] - truth[i]), chord * (1 + 1e-9) + 1e-12) << k;
+    if (k % per == 0) {
+      EXPECT_NEAR(x[i], truth[i], 1e-12) << k;
+    }
+  }
+}
+
+// A signal at the log's rate is left alone bit for bit, and a hold far longer
+// than the sensor's period (the vehicle standing still) stays a hold.
+TEST(HeldSamples, LeavesFreshSamplesAndLongStillsAlone) {
+  std::vector<double> fresh(200);
+  for (size_t k = 0; k < fresh.size(); ++k) fresh[k] = std::sin(0.1 * static_cast<double>(k));
+  const auto before = fresh;
+  const auto h = quadid::signal::interpolate_held_samples(fresh.data(), 200);
+  EXPECT_FALSE(h.held);
+  EXPECT_EQ(fresh, before);
+
+  // Held 4 samples each, except a still of 40 samples at 1.0 in the middle.
+  std::vector<double> x;
+  for (int j = 0; j < 10; ++j)
+    for (int r = 0; r < 4; ++r) x.push_back(0.1 * j);
+  for (int r = 0; r < 40; ++r) x.push_back(1.0);
+  for (int j = 11; j < 20; ++j)
+    for (int r = 0; r < 4; ++r) x.push_back(0.1 * j);
+  const auto g = quadid::signal::interpolate_held_samples(x.data(), static_cast<Eigen::Index>(x.size()));
+  EXPECT_TRUE(g.held);
+  EXPECT_EQ(g.long_runs, 1);
+  for (size_t k = 40; k < 80; ++k) EXPECT_EQ(x[k], 1.0) << k;  // the still
+  EXPECT_NEAR(x[2], 0.0 + 0.1 * 2.0 / 4.0, 1e-15);  // inside a hold: on the chord
+  EXPECT_NEAR(x[82], 1.1 + 0.1 * 2.0 / 4.0, 1e-15);
+}

@@ -100,6 +100,10 @@ void run(const IdentifyArgs& a) {
              a.log, res.processing.samples, res.processing.fs, res.processing.duration, res.processing.filter,
              res.processing.filter_f3db, res.processing.filter_settling,
              opt_used.processing.exclude_edges ? ", left out at both ends of the log" : "");
+  if (!res.processing.held_columns.empty())
+    fmt::print("Pose {} held between samples at {:.3g} Hz: put back on its sample instants (straight lines between "
+               "them; --keep-held-samples to use it as logged)\n\n",
+               fmt::join(res.processing.held_columns, " "), res.processing.held_rate_hz);
   fmt::print("{}\n", format_input(in));
   if (!res.input_findings.empty()) fmt::print("Input checks:\n{}\n", format_findings(res.input_findings));
   fmt::print("{}\n", format_estimates_table(res));

@@ -37,6 +37,10 @@ void ProcessingArgs::add_to(CLI::App* sub) {
   sub->add_flag("--keep-edges", keep_edges,
                 "use the windows literally, including the filters' settling at the log's two ends (by default the "
                 "pre-filter's settling time, 0.57 s for the default filter, is left out at each end)");
+  sub->add_flag("--keep-held-samples", keep_held,
+                "use the pose (x y z psi) as logged even where it repeats each sample until the next (by default a "
+                "held pose, e.g. 30 Hz motion capture in a 500 Hz log, is put back on its sample instants: a hold "
+                "delays it by half its period)");
   sub->add_option("--map", map, "column name mapping CANONICAL=NAME, e.g. --map tau_phi=tau_x (repeatable)");
 }
 
@@ -52,6 +56,7 @@ ProcessingOptions ProcessingArgs::processing() const {
   p.g = g;
   p.period_tolerance = period_tolerance;
   p.exclude_edges = !keep_edges;
+  p.interpolate_held = !keep_held;
   return p;
 }
 

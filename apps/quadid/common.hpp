@@ -30,6 +30,7 @@ struct ProcessingArgs {
   double g = kDefaultGravity;
   double period_tolerance = signal::kDefaultPeriodTolerance;
   bool keep_edges = false;
+  bool keep_held = false;
   std::vector<std::string> map;
 
   void add_to(CLI::App* sub);

@@ -66,8 +66,8 @@ struct LeastSquaresOptions {
 struct LeastSquaresUncertainty {
   bool computed = false;
   long samples = 0;
-  /// Cov(theta) = sum_k sum_l w(|k - l|) psi_k psi_l^T with the influence
-  /// psi_k = (A^T A)^+ Gamma_k^T e_k and Bartlett weights w (Newey-West).
+  /// Cov(theta) = Var(sum_k psi_k), the influence psi_k = (A^T A)^+ Gamma_k^T e_k:
+  /// the mean periodogram of psi over its lowest frequencies (long_run_covariance).
   Mat7 covariance = Mat7::Constant(std::numeric_limits<double>::quiet_NaN());
   Theta std_error = Theta::Constant(std::numeric_limits<double>::quiet_NaN());
   /// The same with lag 0 only (heteroscedasticity-consistent, white residuals):
@@ -80,9 +80,9 @@ struct LeastSquaresUncertainty {
   /// (Politis & White 2004).
   long correlation_time = 0;
   bool correlation_time_capped = false;  // the search reached max_lag
-  long bandwidth = 0;                    // Bartlett bandwidth used (samples)
-  /// Effective degrees of freedom of the Bartlett variance estimate, 3 n / (2 L),
-  /// and the Student-t quantile used for the intervals.
+  long frequencies = 0;                  // K: Fourier frequencies averaged (UncertaintyOptions)
+  /// Degrees of freedom of the variance estimate, 2 K, and the Student-t
+  /// quantile used for the intervals.
   double dof = std::numeric_limits<double>::infinity();
   double quantile = 1.959963984540054;
   /// Real-flight regression only (ExtendedEstimate): the delete-a-block
@@ -151,13 +151,15 @@ LeastSquaresSolution solve_least_squares(const LeastSquaresAccumulator& acc, con
 struct UncertaintyOptions {
   /// Level of the confidence intervals.
   double confidence = 0.95;
-  /// Bartlett kernel bandwidth in samples; 0 = automatic: bandwidth_factor times
-  /// the correlation time of the influence series (below).
-  long bandwidth = 0;
-  /// Automatic bandwidth / correlation time. 4: the Bartlett weights stay above
-  /// 0.75 over the lags that carry the correlation, so the variance is
-  /// underestimated by a few percent only (docs/uncertainty.md).
-  double bandwidth_factor = 4.0;
+  /// K, the number of lowest non-zero Fourier frequencies whose periodogram is
+  /// averaged for the long-run covariance (2 K degrees of freedom); 0 =
+  /// automatic: n / (band_factor x the correlation time of the influence
+  /// series, below), at least 1.
+  long frequencies = 0;
+  /// Automatic K: the frequencies stay below 1 / (band_factor x correlation
+  /// time) cycles per sample, where the influences' spectrum is that of
+  /// frequency 0 to a few per cent (docs/uncertainty.md).
+  double band_factor = 10.0;
   /// Longest lag searched for the correlation time (samples; the search also
   /// stops at a quarter of the samples). Reaching it is reported.
   long max_lag = 20000;
@@ -172,14 +174,15 @@ struct UncertaintyOptions {
   void validate() const;
 };
 
-/// The long-run (HAC) covariance of a sum of influences: Bartlett kernel with
-/// the bandwidth from the series' correlation time (docs/uncertainty.md).
+/// The long-run (HAC) covariance of a sum of influences: the mean periodogram
+/// over the lowest Fourier frequencies, as many as the series' correlation
+/// time allows (docs/uncertainty.md).
 struct LongRunCovariance {
   Eigen::MatrixXd covariance;       // of sum_k psi_k: n times the long-run covariance
   Eigen::MatrixXd white_covariance;  // lag 0 only (white residuals)
   long correlation_time = 0;
   bool correlation_time_capped = false;
-  long bandwidth = 0;
+  long frequencies = 0;
   double dof = std::numeric_limits<double>::infinity();
   double quantile = 1.959963984540054;  // Student t at opt.confidence, dof
 };

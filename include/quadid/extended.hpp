@@ -36,7 +36,7 @@ struct ExtendedEstimate {
   std::vector<std::string> names;
   Eigen::VectorXd value, std_error;
   /// std_error is the larger of two estimates, per parameter: the HAC
-  /// (Bartlett) sandwich of each sample's influence on the weighted fit
+  /// sandwich of each sample's influence on the weighted fit
   /// (long_run_covariance; coloured noise), and the delete-a-block jackknife
   /// (UncertaintyOptions::jackknife_blocks; model error that changes along
   /// the flight). The 95 % interval is the wider of their two Student-t
@@ -46,10 +46,11 @@ struct ExtendedEstimate {
   double jackknife_quantile = std::numeric_limits<double>::quiet_NaN();  // Student t, blocks - 1 dof
   Eigen::VectorXd ci_low, ci_high;
   /// Of `value`: standard deviations std_error, correlations of the lag-0
-  /// (white) sandwich, which is full rank whatever the HAC bandwidth.
+  /// (white) sandwich, which is full rank however few frequencies the HAC one has.
   Eigen::MatrixXd covariance;
   Eigen::VectorXd white_std_error;  // the same ignoring the residuals' correlation
-  long correlation_time = 0, bandwidth = 0;  // samples
+  long correlation_time = 0;  // samples
+  long frequencies = 0;       // of the long-run covariance (UncertaintyOptions)
   bool correlation_time_capped = false;
   double dof = std::numeric_limits<double>::infinity();
   double quantile = 1.959963984540054;  // Student t of the 95 % intervals

@@ -64,6 +64,13 @@ struct ProcessingOptions {
   /// (RegressionSignals::world_axes), for the blade-flapping and wind terms of
   /// the real-flight regression.
   bool keep_body_velocity = false;
+  /// Put the pose (x y z psi) back on its sample instants when the log repeats
+  /// each of its samples until the next (motion capture held at 30-120 Hz in a
+  /// faster log): signal::interpolate_held_samples, before the pre-filter. The
+  /// hold delays the pose by half its period against the wrench and the IMU
+  /// (16.7 ms at 30 Hz), an error that is the same in every flight.
+  /// false (--keep-held-samples): the log's values as they are.
+  bool interpolate_held = true;
   /// Threads for the independent parts of the processing and of identify()
   /// (the pre-filter's columns, the two regressions, the input checks):
   /// 0 = two when the machine has two cores or more, 1 = one (e.g. inside a
@@ -81,6 +88,11 @@ struct ProcessingSummary {
   int padlen = 0;                           // filtfilt's padding (samples)
   double filter_f3db = 0.0;                 // Hz, -3 dB of the zero-phase pre-filter
   double filter_settling = 0.0;             // s, the pre-filter's impulse response above 1% of its peak
+  /// Pose columns found held and put back on their sample instants
+  /// (ProcessingOptions::interpolate_held), and their rate: distinct samples
+  /// per second of log (the lowest over those columns).
+  std::vector<std::string> held_columns;
+  double held_rate_hz = 0.0;
 };
 
 /// The processed signals both regressions are built from, one row per log

@@ -174,6 +174,20 @@ struct SamplePeriodCheck {
 SamplePeriodCheck check_sample_period(const Eigen::Ref<const Eigen::VectorXd>& t,
                                       double tolerance = kDefaultPeriodTolerance);
 
+// A signal logged faster than it was sampled (each sample repeated until the
+// next, e.g. 30 Hz motion capture in a 500 Hz log) is put back on its sample
+// instants: each run of equal values becomes the straight line from its first
+// sample to the next run's first one. Applied only when the median run is at
+// least 2 samples long; runs longer than twice the median (the signal standing
+// still, a dropout) and the last run stay as they are. In place on x[0..n).
+struct HeldSamples {
+  bool held = false;          // repeated samples found and interpolated
+  double median_run = 1.0;    // samples per sensor sample (the log rate / the sensor's)
+  Eigen::Index samples = 0;   // distinct sensor samples (runs)
+  Eigen::Index long_runs = 0; // runs left as they are (longer than 2 x median)
+};
+HeldSamples interpolate_held_samples(double* x, Eigen::Index n);
+
 // Eq. (33) at sample k of n samples: (x[k+1] - x[k-1]) / (2T) in the interior;
 // at the two ends the second-order one-sided (-3 x[0] + 4 x[1] - x[2]) / (2T)
 // and (3 x[n-1] - 4 x[n-2] + x[n-3]) / (2T) (exact for quadratics, like the

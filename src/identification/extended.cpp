@@ -715,7 +715,7 @@ ExtendedResult identify_extended(const FlightLog& log, const ExtendedOptions& op
       e.white_std_error = lr.white_covariance.diagonal().cwiseSqrt();
       e.correlation_time = lr.correlation_time;
       e.correlation_time_capped = lr.correlation_time_capped;
-      e.bandwidth = lr.bandwidth;
+      e.frequencies = lr.frequencies;
       e.dof = lr.dof;
       e.quantile = lr.quantile;
     }
@@ -787,9 +787,9 @@ ExtendedResult identify_extended(const FlightLog& log, const ExtendedOptions& op
       }
     }
     // The reported covariance: the standard errors above, with the
-    // correlations of the lag-0 sandwich. The HAC matrix itself is nearly
-    // singular when its bandwidth spans the window (real flights: a few
-    // effective degrees of freedom), and the physically consistent set, which
+    // correlations of the lag-0 sandwich. The HAC matrix itself has rank 2 K
+    // at most, below the number of parameters when the correlation time is
+    // a good part of the window (real flights: K = 1 or 2), and the physically consistent set, which
     // is the closest one in this metric, would then move along whatever
     // direction it happens to leave cheap.
     {

@@ -282,7 +282,7 @@ IdentificationResult identify(const FlightLog& log, const IdentificationOptions&
       if (opt.terms.known_mass) u.white_std_error(0) = 0.0;
       u.correlation_time = x.correlation_time;
       u.correlation_time_capped = x.correlation_time_capped;
-      u.bandwidth = x.bandwidth;
+      u.frequencies = x.frequencies;
       u.dof = x.dof;
       u.quantile = x.quantile;
       u.ci_low = x.ci_low.head<7>();
@@ -297,10 +297,11 @@ IdentificationResult identify(const FlightLog& log, const IdentificationOptions&
       }
       sol.std_error_method =
           x.jackknife_blocks > 0
-              ? fmt::format("real-flight regression: the larger of the HAC (Bartlett) covariance of each sample's "
-                            "influence on the weighted fit and the jackknife over {} time blocks",
+              ? fmt::format("real-flight regression: the larger of the HAC (low-frequency periodogram) covariance of "
+                            "each sample's influence on the weighted fit and the jackknife over {} time blocks",
                             x.jackknife_blocks)
-              : "real-flight regression: HAC (Bartlett) covariance of each sample's influence on the weighted fit";
+              : "real-flight regression: HAC (low-frequency periodogram) covariance of each sample's influence on the "
+                "weighted fit";
       // The physically consistent set closest to it, in the metric of its
       // covariance (m held at the known mass when given).
       Mat7 info = Mat7::Zero();

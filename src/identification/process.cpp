@@ -157,10 +157,20 @@ std::shared_ptr<const RegressionSignals> process_log(const FlightLog& log, const
   auto rates_and_wrench = [&] {  // p q r, Fz tau
     filter_into(zf, {{col[7], 1}, {col[8], 2}, {col[9], 3}, {col[10], 11}, {col[11], 12}, {col[12], 13}, {col[13], 14}});
   };
+  // The pose, put back on its sample instants when held. The yaw is unwrapped
+  // first: a wrapped yaw's 2 pi jump, interpolated over a hold, would become
+  // a fast turn that the unwrap could no longer see (unwrapping keeps a run of
+  // equal values equal).
+  std::array<signal::HeldSamples, 4> held{};
+  auto pose_into = [&](int log_col, int x_col, size_t i) {
+    X.col(x_col) = log.data.col(log_col);
+    if (x_col == 10 && opt.unwrap_yaw) unwrap(X.col(10).data(), n);
+    if (opt.interpolate_held) held[i] = signal::interpolate_held_samples(X.col(x_col).data(), n);
+  };
   auto attitude_and_position = [&, T](signal::ZeroPhaseFilter& f) {
-    X.col(10) = log.data.col(col[6]);  // psi
-    if (opt.unwrap_yaw) unwrap(X.col(10).data(), n);
-    filter_into(f, {{col[4], 8}, {col[5], 9}, {-1, 10}, {col[1], 5}, {col[2], 6}, {col[3], 7}});  // phi theta psi x y z
+    pose_into(col[6], 10, 3);  // psi
+    for (int i = 0; i < 3; ++i) pose_into(col[1 + static_cast<size_t>(i)], 5 + i, static_cast<size_t>(i));  // x y z
+    filter_into(f, {{col[4], 8}, {col[5], 9}, {-1, 10}, {-1, 5}, {-1, 6}, {-1, 7}});  // phi theta psi x y z
     for (int i = 0; i < 3; ++i) signal::central_difference_inplace(X.col(5 + i).data(), n, T);
   };
   if (detail::use_second_thread(opt.threads)) {
@@ -169,6 +179,15 @@ std::shared_ptr<const RegressionSignals> process_log(const FlightLog& log, const
   } else {
     rates_and_wrench();
     attitude_and_position(zf);
+  }
+  if (summary) {
+    static constexpr std::array<const char*, 4> kPose{"x", "y", "z", "psi"};
+    for (size_t i = 0; i < held.size(); ++i)
+      if (held[i].held) {
+        summary->held_columns.emplace_back(kPose[i]);
+        const double rate = static_cast<double>(held[i].samples) / (static_cast<double>(n) * T);
+        summary->held_rate_hz = summary->held_rate_hz > 0.0 ? std::min(summary->held_rate_hz, rate) : rate;
+      }
   }
   // Step 3: v = R(eta)^T p_dot (eq. 3), then the Phi_b signals.
   const double g = opt.g;

@@ -59,10 +59,10 @@ json ls_json(const LeastSquaresSolution& s) {
         fmt::join(s.unidentifiable, ", "));
   const auto& u = s.uncertainty;
   if (u.computed)
-    j["hac"] = {{"kernel", "Bartlett"},
+    j["hac"] = {{"kernel", "periodogram"},
                 {"correlation_time_samples", u.correlation_time},
                 {"correlation_time_capped", u.correlation_time_capped},
-                {"bandwidth_samples", u.bandwidth},
+                {"frequencies", u.frequencies},
                 {"dof", finite_or_null(u.dof)},
                 {"t_quantile", u.quantile},
                 {"white_std_error", theta_json(u.white_std_error)}};
@@ -139,9 +139,11 @@ std::string format_uncertainty_table(const IdentificationResult& r) {
     const auto& u = s.uncertainty;
     if (!u.computed) continue;
     fmt::format_to(it,
-                   "{}: 95% intervals (HAC, Bartlett bandwidth {} samples = {:.3g} x correlation time {} samples{}; "
-                   "Student t, {:.0f} dof, quantile {:.3f})\n",
-                   name, u.bandwidth, u.correlation_time > 0 ? double(u.bandwidth) / double(u.correlation_time) : 0.0,
+                   "{}: 95% intervals (HAC: periodogram of the influences at the {} lowest frequencies, below "
+                   "1/{:.3g} s; correlation time {} samples{}; Student t, {:.0f} dof, quantile {:.3f})\n",
+                   name, u.frequencies, r.window_samples > 0 && u.frequencies > 0
+                       ? static_cast<double>(r.window_samples) * r.processing.T / static_cast<double>(u.frequencies)
+                       : 0.0,
                    u.correlation_time, u.correlation_time_capped ? " (search capped)" : "", u.dof, u.quantile);
     const bool jk = u.jackknife_blocks > 0;
     if (jk)
@@ -313,6 +315,8 @@ json to_json(const IdentificationResult& r) {
             {"prefilter_f3db_hz", p.filter_f3db},
             {"prefilter_settling_s", p.filter_settling},
             {"edges_excluded", r.options.processing.exclude_edges},
+            {"held_pose_columns", p.held_columns},
+            {"held_pose_rate_hz", p.held_columns.empty() ? json(nullptr) : json(p.held_rate_hz)},
             {"padlen", p.padlen}}},
           {"filtered_model",
            {{"lambda", r.options.lambda},

@@ -36,6 +36,7 @@ const std::vector<OptionSpec>& processing_specs() {
       {"g", K::Number, "gravity, m/s^2 (default 9.81)"},
       {"period-tolerance", K::Number, "relative tolerance on a uniform sample period (default 1e-3)"},
       {"keep-edges", K::Flag, "use the windows literally, including the filters' settling at the log's ends"},
+      {"keep-held-samples", K::Flag, "use the pose as logged even where it repeats each sample until the next"},
       {"map", K::List, "column name mapping CANONICAL=NAME, e.g. tau_phi=tau_x"},
   };
   return s;
@@ -350,6 +351,7 @@ Processing read_processing(Reader& r) {
   p.processing.g = r.number("g").value_or(kDefaultGravity);
   p.processing.period_tolerance = r.number("period-tolerance").value_or(1e-3);
   p.processing.exclude_edges = !r.flag("keep-edges");
+  p.processing.interpolate_held = !r.flag("keep-held-samples");
   const auto map = r.list("map");
   p.csv.map = r.with_option("map", [&] { return parse_column_map(map); });
   p.csv.period_tolerance = p.processing.period_tolerance;
