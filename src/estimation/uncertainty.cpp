@@ -107,34 +107,6 @@ void periodogram_bins(const double* x, long n, long K, std::vector<Eigen::Matrix
 // estimate ~18 % noise in the variance (9 % in the standard error), and each
 // frequency costs a pass over the influences.
 constexpr long kMaxFrequencies = 32;
-// One-sided normal quantile of the flatness test (1 %).
-constexpr double kFlatnessZ = 2.326;
-
-// Halves K while the periodogram rises across the band for some parameter:
-// the mean over the lower half of the bins below the upper half's by more than
-// chance allows (log of the ratio of two means of h bins, each ~chi^2_{2h}/2h:
-// standard deviation sqrt(2/h)). A spectrum that vanishes at frequency 0 (a
-// derivative of noise) rises like f^2 from the lowest bins, where a flat one
-// (coloured noise sampled finely) stays level.
-long flat_frequencies(const std::vector<Eigen::MatrixXd>& bins, long K) {
-  const Eigen::Index P = bins.front().rows();
-  while (K >= 4) {
-    const long h = K / 2;
-    bool rises = false;
-    for (Eigen::Index j = 0; j < P && !rises; ++j) {
-      double lo = 0.0, hi = 0.0;
-      for (long k = 0; k < h; ++k) {
-        lo += bins[static_cast<size_t>(k)](j, j);
-        hi += bins[static_cast<size_t>(h + k)](j, j);
-      }
-      if (lo > 0.0 && hi > 0.0) rises = std::log(lo / hi) < -kFlatnessZ * std::sqrt(2.0 / static_cast<double>(h));
-    }
-    if (!rises) break;
-    K = h;
-  }
-  return K;
-}
-
 }  // namespace
 
 void UncertaintyOptions::validate() const {
@@ -242,7 +214,7 @@ LongRunCovariance long_run_covariance(const std::vector<double>& psi, int P, con
   r.correlation_time = m_hat;
   // The frequencies: those below 1 / (band_factor m) cycles per sample, where
   // the influences' spectrum is still that of frequency 0 (docs/uncertainty.md),
-  // at most kMaxFrequencies, then fewer while the periodogram still rises.
+  // at most kMaxFrequencies.
   const long cap = std::max<long>(1, std::min<long>(kMaxFrequencies, (n - 1) / 2));
   long nf = opt.frequencies > 0
                 ? std::min<long>(opt.frequencies, (n - 1) / 2)
@@ -264,7 +236,6 @@ LongRunCovariance long_run_covariance(const std::vector<double>& psi, int P, con
   Eigen::MatrixXd white;
   if (P == 7) periodogram_bins<7>(x.data(), n, nf, bins, white);
   else periodogram_bins<Eigen::Dynamic>(x.data(), n, nf, bins, white, P);
-  if (opt.frequencies == 0) nf = flat_frequencies(bins, nf);
   r.frequencies = nf;
   Eigen::MatrixXd lrv = Eigen::MatrixXd::Zero(P, P);
   for (long k = 0; k < nf; ++k) lrv += bins[static_cast<size_t>(k)];
