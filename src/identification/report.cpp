@@ -139,10 +139,10 @@ std::string format_uncertainty_table(const IdentificationResult& r) {
     const auto& u = s.uncertainty;
     if (!u.computed) continue;
     fmt::format_to(it,
-                   "{}: 95% intervals (HAC: periodogram of the influences at the {} lowest frequencies, below "
-                   "1/{:.3g} s; correlation time {} samples{}; Student t, {:.0f} dof, quantile {:.3f})\n",
-                   name, u.frequencies, r.window_samples > 0 && u.frequencies > 0
-                       ? static_cast<double>(r.window_samples) * r.processing.T / static_cast<double>(u.frequencies)
+                   "{}: 95% intervals (HAC: periodogram of the influences at the {} lowest frequencies, up to "
+                   "{:.3g} Hz; correlation time {} samples{}; Student t, {:.0f} dof, quantile {:.3f})\n",
+                   name, u.frequencies, r.window_samples > 0 && r.processing.T > 0.0
+                       ? static_cast<double>(u.frequencies) / (static_cast<double>(r.window_samples) * r.processing.T)
                        : 0.0,
                    u.correlation_time, u.correlation_time_capped ? " (search capped)" : "", u.dof, u.quantile);
     const bool jk = u.jackknife_blocks > 0;
