@@ -10,7 +10,6 @@
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
-#include <vector>
 
 namespace quadid {
 namespace {
@@ -60,15 +59,15 @@ void autocov_lags(const double* c, long n, long k, double out[kLags]) {
 #endif
 
 // The sums behind the long-run covariance of the n x P influence series x (row
-// i at x + P i): white = sum psi_i psi_i^T, and the periodogram at each of the
-// K lowest non-zero Fourier frequencies, bins[k-1] = Re(D_k D_k^H) with
+// i at x + P i): white = sum psi_i psi_i^T, and the periodogram summed over the
+// K lowest non-zero Fourier frequencies, lrv = sum_k Re(D_k D_k^H) with
 // D_k = sum_i psi_i exp(-2 pi j k i / n). The rotations exp(-2 pi j k i / n) are
 // advanced by one complex multiplication per sample and set afresh from cos
 // and sin every kReseed samples, so their rounding stays below ~1e-13.
 // Fixed-size for the usual P = 7.
 constexpr long kReseed = 1024;
 template <int Rows>
-void periodogram_bins(const double* x, long n, long K, std::vector<Eigen::MatrixXd>& bins, Eigen::MatrixXd& white_out,
+void periodogram_sums(const double* x, long n, long K, Eigen::MatrixXd& lrv_out, Eigen::MatrixXd& white_out,
                       int P = Rows) {
   using Vec = Eigen::Matrix<double, Rows, 1>;
   using Mat = Eigen::Matrix<double, Rows, Rows>;
@@ -78,7 +77,7 @@ void periodogram_bins(const double* x, long n, long K, std::vector<Eigen::Matrix
     white.noalias() += xi * xi.transpose();
   }
   white_out = white;
-  bins.clear();
+  Mat lrv = Mat::Zero(P, P);
   const double two_pi_over_n = 2.0 * std::numbers::pi / static_cast<double>(n);
   for (long k = 1; k <= K; ++k) {
     Vec re = Vec::Zero(P), im = Vec::Zero(P);
@@ -99,8 +98,9 @@ void periodogram_bins(const double* x, long n, long K, std::vector<Eigen::Matrix
     }
     Mat b = re * re.transpose();
     b.noalias() += im * im.transpose();
-    bins.emplace_back(b);
+    lrv += b;
   }
+  lrv_out = lrv;
 }
 
 // The most frequencies averaged: 2 x 32 degrees of freedom leave the variance
@@ -232,13 +232,10 @@ LongRunCovariance long_run_covariance(const std::vector<double>& psi, int P, con
   // window is only the two ends' values, and the lag window, whose spectral
   // window leaks power from the residual's whole band, counts ~n / L times
   // that (29x too wide an interval of m before this).
-  std::vector<Eigen::MatrixXd> bins;
-  Eigen::MatrixXd white;
-  if (P == 7) periodogram_bins<7>(x.data(), n, nf, bins, white);
-  else periodogram_bins<Eigen::Dynamic>(x.data(), n, nf, bins, white, P);
+  Eigen::MatrixXd lrv, white;
+  if (P == 7) periodogram_sums<7>(x.data(), n, nf, lrv, white);
+  else periodogram_sums<Eigen::Dynamic>(x.data(), n, nf, lrv, white, P);
   r.frequencies = nf;
-  Eigen::MatrixXd lrv = Eigen::MatrixXd::Zero(P, P);
-  for (long k = 0; k < nf; ++k) lrv += bins[static_cast<size_t>(k)];
   // theta_hat - theta ~ sum_k psi_k: Cov = n x the spectrum at 0 = the mean of Re(D_k D_k^H).
   r.covariance = lrv / static_cast<double>(nf);
   r.white_covariance = white;
