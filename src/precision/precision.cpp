@@ -365,7 +365,6 @@ PrecisionResult predict_precision(const Trajectory& traj, const PrecisionOptions
   signal::LowpassOptions lp_force = opt.processing.lowpass, lp_moment = opt.processing.lowpass;
   lp_force.cutoff_hz = f_force;
   lp_moment.cutoff_hz = f_moment;
-  signal::ZeroPhaseFilter zf_force(lp_force, opt.rate), zf_moment(lp_moment, opt.rate);
   const bool two_cutoffs = f_force != f_moment;
   PrecisionResult res;
   res.trajectory = traj.describe();
@@ -427,17 +426,23 @@ PrecisionResult predict_precision(const Trajectory& traj, const PrecisionOptions
         for (int i = 0; i < kIn; ++i) Zm.block<1, 7>(k, 7 * i) = Wm.col(i).transpose();
       }
     }
-    for (int col = 0; col < kIn * 7; ++col) {
-      double* z = Z.col(col).data();
-      if (col < 3 * 7) difference_adjoint(z, n, T);  // p_dot = D H x, eq. (33)
-      zf_force.apply(z, n);
-      if (two_cutoffs) {
-        double* zm = Zm.col(col).data();
-        if (col < 3 * 7) difference_adjoint(zm, n, T);
-        zf_moment.apply(zm, n);
+    // Filters of this call's own (their work space is per object: linear_part runs on
+    // several threads), each applied to all its columns at once (same bits as one by one).
+    signal::ZeroPhaseFilter zf_force(lp_force, opt.rate);
+    auto filter_columns = [&](Eigen::MatrixXd& M, signal::ZeroPhaseFilter& zf) {
+      std::vector<double*> cols(static_cast<size_t>(kIn * 7));
+      for (int col = 0; col < kIn * 7; ++col) {
+        cols[static_cast<size_t>(col)] = M.col(col).data();
+        if (col < 3 * 7) difference_adjoint(M.col(col).data(), n, T);  // p_dot = D H x, eq. (33)
       }
+      zf.apply(cols.data(), kIn * 7, n);
+    };
+    filter_columns(Z, zf_force);
+    if (two_cutoffs) {
+      signal::ZeroPhaseFilter zf_moment(lp_moment, opt.rate);
+      filter_columns(Zm, zf_moment);
+      Z += Zm;
     }
-    if (two_cutoffs) Z += Zm;
 
     std::array<Mat7, 5> by{};
     for (auto& m : by) m.setZero();
@@ -501,13 +506,17 @@ PrecisionResult predict_precision(const Trajectory& traj, const PrecisionOptions
       // regression too (for a small vehicle, or an axis the plan barely moves, it adds
       // much of the information). The estimate of a flight uses that flight's
       // information, so the covariances are averaged over the flights.
-      std::vector<RegressorSeries> S;
+      // Per flight on every core; the sums below run in flight order, so the result is
+      // the same bits whatever the thread count.
+      const int nf = static_cast<int>(flown.size());
+      std::vector<RegressorSeries> S(flown.size());
+      detail::parallel_for(nf, 0, [&](int f) {
+        const auto fs = static_cast<size_t>(f);
+        S[fs] = regressor_series(Regression(flown[fs], model, opt.window, opt.lambda, opt.gd_variant), n, theta,
+                                 flown_w2[fs][static_cast<size_t>(m)]);
+      });
       Mat7 A_mean = Mat7::Zero();
-      for (size_t f = 0; f < flown.size(); ++f) {
-        S.push_back(regressor_series(Regression(flown[f], model, opt.window, opt.lambda, opt.gd_variant), n, theta,
-                                     flown_w2[f][static_cast<size_t>(m)]));
-        A_mean += S.back().A / static_cast<double>(flown.size());
-      }
+      for (size_t f = 0; f < S.size(); ++f) A_mean += S[f].A / static_cast<double>(flown.size());
       information_inverse(A_mean, &out.condition, what + " (as flown)");
       // Closed loop: the influence P_f Gamma_f,k^T e_f,k of each flight's residual on its
       // true states, less its mean over the flights at the same sample (which removes
@@ -525,19 +534,25 @@ PrecisionResult predict_precision(const Trajectory& traj, const PrecisionOptions
                            S[f].e.row(k).transpose()).transpose();
         psi_mean += psi[f] / static_cast<double>(S.size());
       }
-      Mat7 C_cl = Mat7::Zero();
-      for (size_t f = 0; f < S.size(); ++f) {
-        const auto by = linear_part(model, S[f], P[f]);
-        for (int src = 0; src < 5; ++src) {
-          const Mat7 C = by[static_cast<size_t>(src)] / static_cast<double>(S.size());
-          cov += C;
-          out.variance_by_source.col(src) += C.diagonal();
-        }
+      std::vector<std::array<Mat7, 5>> by_flight(S.size());
+      std::vector<Mat7> cl_flight(S.size());
+      detail::parallel_for(nf, 0, [&](int fi) {
+        const auto f = static_cast<size_t>(fi);
+        by_flight[f] = linear_part(model, S[f], P[f]);
         std::vector<double> d;
         d.reserve(static_cast<size_t>(7 * (S[f].end - S[f].begin)));
         for (Eigen::Index k = S[f].begin; k < S[f].end; ++k)
           for (int j = 0; j < 7; ++j) d.push_back(psi[f](k, j) - psi_mean(k, j));
-        C_cl += long_run_covariance(d, 7, UncertaintyOptions{}).covariance;
+        cl_flight[f] = long_run_covariance(d, 7, UncertaintyOptions{}).covariance;
+      });
+      Mat7 C_cl = Mat7::Zero();
+      for (size_t f = 0; f < S.size(); ++f) {
+        for (int src = 0; src < 5; ++src) {
+          const Mat7 C = by_flight[f][static_cast<size_t>(src)] / static_cast<double>(S.size());
+          cov += C;
+          out.variance_by_source.col(src) += C.diagonal();
+        }
+        C_cl += cl_flight[f];
       }
       // sum_f (d_f d_f^T) / (F - 1) estimates one flight's covariance (d_f = e_f - mean).
       C_cl /= static_cast<double>(std::max<size_t>(1, S.size() - 1));
