@@ -356,9 +356,15 @@ struct Setup {
 //
 // Stopping is ours: NLopt 2.7's SLSQP may stop on ftol at an infeasible
 // iterate, so its ftol/xtol are off. Every evaluated point whose constraints
-// all hold to half the margin (so that the untightened limits hold with room
-// to spare) is a candidate; the round stops when the best
-// feasible criterion has not improved by ftol_rel for `patience` evaluations.
+// all hold to the margin (the untightened limits hold at every cell's worst
+// instant) is a candidate; the round stops when the best feasible criterion
+// has not improved by ftol_rel for `patience` evaluations. The round's point
+// is then checked on the whole fine grid (worst_violation), and re-polished
+// when a limit fails there. SLSQP's iterates near the optimum sit within the
+// tightening, between half and all of it above the tightened limits: asking
+// for half the margin, as before, left 4 of seed 1's 8 starts with no
+// candidate in their first round, and 3 of them re-polished (1961 of the
+// 3343 evaluations).
 struct Round {
   const Setup& s;
   unsigned m = 0;
@@ -371,7 +377,7 @@ struct Round {
   static constexpr int patience = 40;
 
   // Per constraint: how far above 0 it may be with the true (untightened)
-  // limit still met with room to spare: half the margin at its worst instant.
+  // limit still met: the margin at its worst instant.
   mutable std::vector<double> slack;
   mutable Setup::FineCache cache;  // fine-grid values of the point being evaluated
   mutable std::vector<double> cc;  // c of one limit and sign at the coarse instants
@@ -457,7 +463,7 @@ struct Round {
           }
           c[row] = best_c / fam.scale;
           slack[static_cast<size_t>(row)] =
-              std::max(kFeasTol, 0.5 * s.margin_at(fam, s.fine_t[static_cast<size_t>(best)]) / fam.scale);
+              std::max(kFeasTol, s.margin_at(fam, s.fine_t[static_cast<size_t>(best)]) / fam.scale);
           if (!grad) continue;
           auto Jr = J.row(row);
           if (fam.tilt) {
