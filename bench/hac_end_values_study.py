@@ -19,7 +19,7 @@ The mass-row model: y = m phi_true (an exact wrench), phi = phi_true +
 second derivative of 0.3 mm white position noise at 500 Hz after a 4 Hz
 order-4 zero-phase Butterworth (identify's default), m = 1.8 kg.
 
-Run: /usr/bin/python3 bench/hac_end_values_study.py [replicates]
+Run: /usr/bin/python3 bench/hac_end_values_study.py [replicates]   (Debian python3-numpy, python3-scipy)
 
 Measured (400 replicates, 2026-12-02; K from the correlation time as quadid):
   mass row: ewp 100.0 % (se/sd 1.75, sd(se)/mean 0.23); mt 52.2 %;
