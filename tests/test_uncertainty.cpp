@@ -150,6 +150,7 @@ TEST(Uncertainty, DerivativeOfNoiseIsNotCountedAsPowerAtZero) {
   }
   const int edge = 500;  // the filter's settling, left out as identify does
   Eigen::Matrix<double, 7, Eigen::Dynamic> err(7, reps), se(7, reps);
+  Eigen::VectorXd quantile(reps);
   for (int r = 0; r < reps; ++r) {
     Eigen::VectorXd noise(n);
     for (int k = 0; k < n; ++k) noise(k) = 3e-4 * N(rng);
@@ -172,12 +173,38 @@ TEST(Uncertainty, DerivativeOfNoiseIsNotCountedAsPowerAtZero) {
     ASSERT_TRUE(u.computed);
     err.col(r) = sol.theta - th;
     se.col(r) = u.std_error;
+    quantile(r) = u.quantile;
   }
   for (int j = 0; j < 7; ++j) {
     const double mean = err.row(j).mean();
     const double spread = std::sqrt((err.row(j).array() - mean).square().sum() / (reps - 1));
-    EXPECT_NEAR(se.row(j).mean() / spread, 1.0, 0.25) << kThetaNames[static_cast<size_t>(j)];
+    const double ratio = se.row(j).mean() / spread;
+    if (j == 0) {
+      // m: the sine tapers' band also sees the derivative's spectrum rising
+      // from 0, so its interval is conservative (1.35 here; 1.19-1.25 in the
+      // Monte Carlo of docs/montecarlo.md). The Bartlett window gave 29.
+      EXPECT_GT(ratio, 0.85);
+      EXPECT_LT(ratio, 1.45);
+    } else {
+      EXPECT_NEAR(ratio, 1.0, 0.25) << kThetaNames[static_cast<size_t>(j)];
+    }
   }
+  // The error of m is mostly the filtered noise at the window's two ends, one
+  // draw per run. The standard error must not be that same draw (the lowest
+  // periodogram bins were: correlation 0.8-0.9 with |error|, and an interval
+  // that always held the truth); it comes from the variogram's plateau,
+  // measured over the whole window.
+  const Eigen::ArrayXd e = (err.row(0).array() - err.row(0).mean()).abs().transpose();
+  const Eigen::ArrayXd s0 = se.row(0).array().transpose();
+  const double corr = ((e - e.mean()) * (s0 - s0.mean())).sum() /
+                      std::sqrt((e - e.mean()).square().sum() * (s0 - s0.mean()).square().sum());
+  const double covered =
+      (err.row(0).array().abs().transpose() <= quantile.array() * s0).cast<double>().mean();
+  std::printf("m: mean se / spread %.3f, corr(se, |error|) %.2f, coverage %.3f\n",
+              se.row(0).mean() / std::sqrt((err.row(0).array() - err.row(0).mean()).square().sum() / (reps - 1)),
+              corr, covered);
+  EXPECT_LT(corr, 0.6);  // 0.97 with the lowest periodogram bins alone, 0.47 now
+  EXPECT_GE(covered, 0.90);  // 150 runs: a 95 % coverage is measured to +-1.8 %
 }
 
 TEST(Uncertainty, WhiteNoiseGivesNoInflation) {

@@ -67,7 +67,7 @@ struct LeastSquaresUncertainty {
   bool computed = false;
   long samples = 0;
   /// Cov(theta) = Var(sum_k psi_k), the influence psi_k = (A^T A)^+ Gamma_k^T e_k:
-  /// the mean periodogram of psi over its lowest frequencies (long_run_covariance).
+  /// long_run_covariance of psi (docs/uncertainty.md).
   Mat7 covariance = Mat7::Constant(std::numeric_limits<double>::quiet_NaN());
   Theta std_error = Theta::Constant(std::numeric_limits<double>::quiet_NaN());
   /// The same with lag 0 only (heteroscedasticity-consistent, white residuals):
@@ -81,6 +81,8 @@ struct LeastSquaresUncertainty {
   long correlation_time = 0;
   bool correlation_time_capped = false;  // the search reached max_lag
   long frequencies = 0;                  // K: Fourier frequencies averaged (UncertaintyOptions)
+  /// LongRunCovariance::end_values_separated.
+  bool end_values_separated = false;
   /// Degrees of freedom of the variance estimate, 2 K, and the Student-t
   /// quantile used for the intervals.
   double dof = std::numeric_limits<double>::infinity();
@@ -183,6 +185,12 @@ struct LongRunCovariance {
   long correlation_time = 0;
   bool correlation_time_capped = false;
   long frequencies = 0;
+  /// true: covariance = 2K sine tapers over the same band (the part with a
+  /// spectrum at 0) + the variance of the sum's two end values, from the
+  /// plateau of the variogram of the partial sums at 5-20 correlation times.
+  /// false (a window shorter than ~40 correlation times): the periodogram at
+  /// the K lowest frequencies alone.
+  bool end_values_separated = false;
   double dof = std::numeric_limits<double>::infinity();
   double quantile = 1.959963984540054;  // Student t at opt.confidence, dof
 };

@@ -51,6 +51,7 @@ struct ExtendedEstimate {
   Eigen::VectorXd white_std_error;  // the same ignoring the residuals' correlation
   long correlation_time = 0;  // samples
   long frequencies = 0;       // of the long-run covariance (UncertaintyOptions)
+  bool end_values_separated = false;  // LongRunCovariance::end_values_separated
   bool correlation_time_capped = false;
   double dof = std::numeric_limits<double>::infinity();
   double quantile = 1.959963984540054;  // Student t of the 95 % intervals

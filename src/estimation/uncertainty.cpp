@@ -6,6 +6,8 @@
 
 #include <fmt/format.h>
 
+#include <Eigen/Eigenvalues>
+
 #include <algorithm>
 #include <cmath>
 #include <numbers>
@@ -101,6 +103,68 @@ void periodogram_sums(const double* x, long n, long K, Eigen::MatrixXd& lrv_out,
     lrv += b;
   }
   lrv_out = lrv;
+}
+
+// sum_j y_j y_j^T over the sine tapers j = 1..J, y_j = sum_i h_j(i) psi_i with
+// h_j(i) = sqrt(2 / (n + 1)) sin(pi j (i + 1) / (n + 1)) (Riedel & Sidorenko
+// 1995): orthonormal, zero beyond both ends, so a sum that is only the two end
+// values of the series (a derivative of noise) adds nothing to them. The
+// sines advance by rotation as in periodogram_sums.
+template <int Rows>
+Eigen::MatrixXd sine_taper_sums(const double* x, long n, long J, int P = Rows) {
+  using Vec = Eigen::Matrix<double, Rows, 1>;
+  using Mat = Eigen::Matrix<double, Rows, Rows>;
+  Mat out = Mat::Zero(P, P);
+  const double step = std::numbers::pi / static_cast<double>(n + 1);
+  const double norm = std::sqrt(2.0 / static_cast<double>(n + 1));
+  for (long j = 1; j <= J; ++j) {
+    Vec y = Vec::Zero(P);
+    const double wc = std::cos(step * static_cast<double>(j)), ws = std::sin(step * static_cast<double>(j));
+    double c = 1.0, sn = 0.0;  // cos and sin of pi j (i + 1) / (n + 1), set below
+    for (long i = 0; i < n; ++i) {
+      if (i % kReseed == 0) {
+        const double a = step * static_cast<double>((j * (i + 1)) % (2 * (n + 1)));
+        c = std::cos(a);
+        sn = std::sin(a);
+      }
+      y.noalias() += sn * Eigen::Map<const Vec>(x + P * i, P);
+      const double c1 = c * wc - sn * ws;
+      sn = sn * wc + c * ws;
+      c = c1;
+    }
+    out.noalias() += norm * norm * (y * y.transpose());
+  }
+  return out;
+}
+
+// The variance a sum over the window carries in its two end values: the
+// plateau of the variogram of the partial sums S_t, V(h) = mean_t (S_t+h -
+// S_t)(S_t+h - S_t)^T, over lags h in [h1, h2] well past the correlation
+// time, less the white part's growth rate_per_sample h (1 - h / n) (a centred
+// series' partial sums are a bridge). From every pair (S_t, S_t+h), not from
+// the two ends: for a series that is a derivative of noise u (the force row),
+// V(h) -> 2 var(u) = the variance of u_end - u_start, which the sine tapers
+// do not see. Negative directions (a positively correlated series: V(h) below
+// the line) are set to 0.
+Eigen::MatrixXd end_value_covariance(const std::vector<double>& x, long n, int P, long h1, long h2,
+                                     const Eigen::MatrixXd& rate_per_sample) {
+  using RowMat = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+  const Eigen::Map<const RowMat> X(x.data(), n, P);
+  RowMat S(n, P);
+  Eigen::RowVectorXd acc = Eigen::RowVectorXd::Zero(P);
+  for (long i = 0; i < n; ++i) S.row(i) = acc += X.row(i);
+  constexpr int kPlateauLags = 4;
+  Eigen::MatrixXd A = Eigen::MatrixXd::Zero(P, P);
+  for (int l = 0; l < kPlateauLags; ++l) {
+    const long h = h1 + (h2 - h1) * l / (kPlateauLags - 1);
+    const RowMat D = S.bottomRows(n - h) - S.topRows(n - h);
+    const double hd = static_cast<double>(h);
+    A += (D.transpose() * D) / static_cast<double>(n - h) -
+         rate_per_sample * (hd * (1.0 - hd / static_cast<double>(n)));
+  }
+  A /= static_cast<double>(kPlateauLags);
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(0.5 * (A + A.transpose()));
+  return es.eigenvectors() * es.eigenvalues().cwiseMax(0.0).asDiagonal() * es.eigenvectors().transpose();
 }
 
 // The most frequencies averaged: 2 x 32 degrees of freedom leave the variance
@@ -239,6 +303,21 @@ LongRunCovariance long_run_covariance(const std::vector<double>& psi, int P, con
   // theta_hat - theta ~ sum_k psi_k: Cov = n x the spectrum at 0 = the mean of Re(D_k D_k^H).
   r.covariance = lrv / static_cast<double>(nf);
   r.white_covariance = white;
+  // Every D_k above also holds the sum's end values, one draw per flight: where
+  // they carry most of the variance (the force row), the standard error follows
+  // each flight's own error instead of its spread (docs/uncertainty.md). When
+  // the series is long enough for the variogram's plateau, the covariance is
+  // instead the sine tapers over the same band (2K of them: 2K degrees of
+  // freedom) plus the end values' variance from the plateau.
+  const long mm = std::max<long>(1, m_hat);
+  const long h1 = 5 * mm, h2 = std::min<long>(20 * mm, n / 8);
+  if (h2 - h1 >= 3) {
+    const Eigen::MatrixXd taper =
+        (P == 7 ? sine_taper_sums<7>(x.data(), n, 2 * nf) : sine_taper_sums<Eigen::Dynamic>(x.data(), n, 2 * nf, P)) *
+        (static_cast<double>(n) / static_cast<double>(2 * nf));
+    r.covariance = taper + end_value_covariance(x, n, P, h1, h2, taper / static_cast<double>(n));
+    r.end_values_separated = true;
+  }
   r.dof = 2.0 * static_cast<double>(nf);
   r.quantile = student_t_quantile(0.5 + 0.5 * opt.confidence, r.dof);
   return r;
@@ -254,6 +333,7 @@ LeastSquaresUncertainty InfluenceAccumulator::finish(const UncertaintyOptions& o
   u.correlation_time = r.correlation_time;
   u.correlation_time_capped = r.correlation_time_capped;
   u.frequencies = r.frequencies;
+  u.end_values_separated = r.end_values_separated;
   u.covariance = r.covariance;
   u.white_std_error = r.white_covariance.diagonal().cwiseSqrt();
   u.std_error = u.covariance.diagonal().cwiseSqrt();

@@ -716,6 +716,7 @@ ExtendedResult identify_extended(const FlightLog& log, const ExtendedOptions& op
       e.correlation_time = lr.correlation_time;
       e.correlation_time_capped = lr.correlation_time_capped;
       e.frequencies = lr.frequencies;
+      e.end_values_separated = lr.end_values_separated;
       e.dof = lr.dof;
       e.quantile = lr.quantile;
     }

@@ -283,6 +283,7 @@ IdentificationResult identify(const FlightLog& log, const IdentificationOptions&
       u.correlation_time = x.correlation_time;
       u.correlation_time_capped = x.correlation_time_capped;
       u.frequencies = x.frequencies;
+      u.end_values_separated = x.end_values_separated;
       u.dof = x.dof;
       u.quantile = x.quantile;
       u.ci_low = x.ci_low.head<7>();

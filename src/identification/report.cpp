@@ -59,7 +59,7 @@ json ls_json(const LeastSquaresSolution& s) {
         fmt::join(s.unidentifiable, ", "));
   const auto& u = s.uncertainty;
   if (u.computed)
-    j["hac"] = {{"kernel", "periodogram"},
+    j["hac"] = {{"kernel", u.end_values_separated ? "sine tapers + variogram plateau" : "periodogram"},
                 {"correlation_time_samples", u.correlation_time},
                 {"correlation_time_capped", u.correlation_time_capped},
                 {"frequencies", u.frequencies},
@@ -138,13 +138,20 @@ std::string format_uncertainty_table(const IdentificationResult& r) {
     const LeastSquaresSolution& s = *r.least_squares_of(name);
     const auto& u = s.uncertainty;
     if (!u.computed) continue;
-    fmt::format_to(it,
-                   "{}: 95% intervals (HAC: periodogram of the influences at the {} lowest frequencies, up to "
-                   "{:.3g} Hz; correlation time {} samples{}; Student t, {:.0f} dof, quantile {:.3f})\n",
-                   name, u.frequencies, r.window_samples > 0 && r.processing.T > 0.0
-                       ? static_cast<double>(u.frequencies) / (static_cast<double>(r.window_samples) * r.processing.T)
-                       : 0.0,
-                   u.correlation_time, u.correlation_time_capped ? " (search capped)" : "", u.dof, u.quantile);
+    const double band_hz =
+        r.window_samples > 0 && r.processing.T > 0.0
+            ? static_cast<double>(u.frequencies) / (static_cast<double>(r.window_samples) * r.processing.T)
+            : 0.0;
+    const std::string how =
+        u.end_values_separated
+            ? fmt::format("{} sine tapers of the influences, band up to {:.3g} Hz, plus the variance of the window's "
+                          "end values from the variogram of their partial sums",
+                          2 * u.frequencies, band_hz)
+            : fmt::format("periodogram of the influences at the {} lowest frequencies, up to {:.3g} Hz",
+                          u.frequencies, band_hz);
+    fmt::format_to(it, "{}: 95% intervals (HAC: {}; correlation time {} samples{}; Student t, {:.0f} dof, quantile {:.3f})\n",
+                   name, how, u.correlation_time, u.correlation_time_capped ? " (search capped)" : "", u.dof,
+                   u.quantile);
     const bool jk = u.jackknife_blocks > 0;
     if (jk)
       fmt::format_to(it,
