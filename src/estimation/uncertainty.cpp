@@ -296,27 +296,31 @@ LongRunCovariance long_run_covariance(const std::vector<double>& psi, int P, con
   // window is only the two ends' values, and the lag window, whose spectral
   // window leaks power from the residual's whole band, counts ~n / L times
   // that (29x too wide an interval of m before this).
-  Eigen::MatrixXd lrv, white;
-  if (P == 7) periodogram_sums<7>(x.data(), n, nf, lrv, white);
-  else periodogram_sums<Eigen::Dynamic>(x.data(), n, nf, lrv, white, P);
-  r.frequencies = nf;
-  // theta_hat - theta ~ sum_k psi_k: Cov = n x the spectrum at 0 = the mean of Re(D_k D_k^H).
-  r.covariance = lrv / static_cast<double>(nf);
-  r.white_covariance = white;
-  // Every D_k above also holds the sum's end values, one draw per flight: where
-  // they carry most of the variance (the force row), the standard error follows
-  // each flight's own error instead of its spread (docs/uncertainty.md). When
-  // the series is long enough for the variogram's plateau, the covariance is
-  // instead the sine tapers over the same band (2K of them: 2K degrees of
-  // freedom) plus the end values' variance from the plateau.
+  // The periodogram's D_k all hold the sum's end values, one draw per flight:
+  // where they carry most of the variance (the force row), the standard error
+  // follows each flight's own error instead of its spread (docs/uncertainty.md).
+  // When the window is long enough for the variogram's plateau, the covariance
+  // is instead the sine tapers over the same band (2K of them: 2K degrees of
+  // freedom) plus the end values' variance from the plateau; the periodogram
+  // then gives only the white (lag-0) part.
   const long mm = std::max<long>(1, m_hat);
   const long h1 = 5 * mm, h2 = std::min<long>(20 * mm, n / 8);
-  if (h2 - h1 >= 3) {
+  const bool separated = h2 - h1 >= 3;
+  Eigen::MatrixXd lrv, white;
+  const long bins = separated ? 0 : nf;
+  if (P == 7) periodogram_sums<7>(x.data(), n, bins, lrv, white);
+  else periodogram_sums<Eigen::Dynamic>(x.data(), n, bins, lrv, white, P);
+  r.frequencies = nf;
+  r.white_covariance = white;
+  if (separated) {
     const Eigen::MatrixXd taper =
         (P == 7 ? sine_taper_sums<7>(x.data(), n, 2 * nf) : sine_taper_sums<Eigen::Dynamic>(x.data(), n, 2 * nf, P)) *
         (static_cast<double>(n) / static_cast<double>(2 * nf));
     r.covariance = taper + end_value_covariance(x, n, P, h1, h2, taper / static_cast<double>(n));
     r.end_values_separated = true;
+  } else {
+    // theta_hat - theta ~ sum_k psi_k: Cov = n x the spectrum at 0 = the mean of Re(D_k D_k^H).
+    r.covariance = lrv / static_cast<double>(nf);
   }
   r.dof = 2.0 * static_cast<double>(nf);
   r.quantile = student_t_quantile(0.5 + 0.5 * opt.confidence, r.dof);
