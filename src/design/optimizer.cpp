@@ -449,13 +449,30 @@ struct Round {
             if (!exhaustive && ((j > j0 && ccoarse(j - 1) > cj) || (j + 1 < j1 && ccoarse(j + 1) > cj))) continue;
             const Eigen::Index lo = j > j0 ? s.coarse_k[j - 1] + 1 : s.coarse_k[j];
             const Eigen::Index hi = j + 1 < j1 ? s.coarse_k[j + 1] - 1 : s.coarse_k[j];
-            for (Eigen::Index k = lo; k <= hi; ++k) {
-              const double ck = cval_at(k);
+            auto consider = [&](Eigen::Index k, double ck) {
               if (ck > best_c || (ck == best_c && k < best)) {
                 best = k;
                 best_c = ck;
               }
+            };
+            if (fam.tilt || fam.vehicle || cell == 0 || cell + 1 == s.cells()) {
+              for (Eigen::Index k = lo; k <= hi; ++k) consider(k, cval_at(k));
+              continue;
             }
+            // A position or speed limit is a Fourier sum whose fastest harmonic
+            // is far slower than kCoarseDt, so between its coarse neighbours it
+            // has one maximum and the climb from the coarse instant ends where
+            // the window's scan would: right while rising, else left while not
+            // falling (ties go to the earlier instant, as in the scan). Scanned
+            // instead: the tilts and rotor limits (nonlinear; in wild iterates
+            // they can turn within a window) and the first and last cells (the
+            // start conditions flatten every value there to rounding level).
+            Eigen::Index k = s.coarse_k[j];
+            double ck = cj;
+            for (double next; k < hi && (next = cval_at(k + 1)) > ck; ++k) ck = next;
+            if (k == s.coarse_k[j])
+              for (double prev; k > lo && (prev = cval_at(k - 1)) >= ck; --k) ck = prev;
+            consider(k, ck);
           }
           if ((best == b0 && b0 > 0 && cval_at(b0 - 1) < best_c && b1 - b0 > 2) || !std::isfinite(best_c)) {
             best = (b0 + b1) / 2;
