@@ -17,7 +17,10 @@ speeds) and the blade-flapping moment K (e_z x v_body), v_body from the motion
 capture; the published tensor has none of these. The score is
 the RMS error of each axis over the other flights' samples; "1 Hz high-pass"
 repeats it on the errors above 1 Hz, where the aerodynamic moments of
-translational flight, which neither tensor models, are small.
+translational flight, which neither tensor models, are small. Two more tables
+say why a model wins or loses: each part of it added in turn (tensor alone,
+thrust scale, rotor inertia, flapping), and the yaw row fitted alone per
+flight and high-pass cutoff (how much of the yaw torque the model explains).
 
 usage: bench/crazyflie_cross_prediction.py [QUADID_EXE] [DATA_DIR]
 """
@@ -121,3 +124,30 @@ with tempfile.TemporaryDirectory() as tmp:
             print(f"{f:14} {ident[f][0]:5} {a[0]*1e6:8.2f} {a[1]*1e6:8.2f} {a[2]*1e6:8.2f}   {b[0]*1e6:10.2f} {b[1]*1e6:8.2f} "
                   f"{b[2]*1e6:8.2f}   {'yes' if better else 'no'} ({', '.join(f'{100*(x/y-1):+.0f} %' for x, y in zip(a, b))})")
         print(f"better on every axis: {wins}/{len(flights)}")
+
+    # Which part of each identified model wins or loses: the tensor alone
+    # (thrust scale 1, no rotor inertia, no flapping), then each extra term added.
+    print("\n== what each part contributes: RMS error against the Crazyflie 2.0 tensor's, % (roll, pitch, yaw; to 8 Hz)")
+    for f in flights:
+        I, s, jr, kx, ky = ident[f][1]
+        others = [g for g in flights if g != f]
+        b = score((CF20, 1.0, 0.0, 0.0, 0.0), others, False)
+        parts = [("tensor", (I, 1.0, 0.0, 0.0, 0.0)), ("+ s", (I, s, 0.0, 0.0, 0.0)),
+                 ("+ J_r", (I, s, jr, 0.0, 0.0)), ("+ flapping", (I, s, jr, kx, ky))]
+        print(f"{f:8} " + "  ".join(f"{n}: {', '.join(f'{100*(x/y-1):+.1f}' for x, y in zip(score(m, others, False), b))}"
+                                   for n, m in parts))
+
+    # The yaw row on its own, per flight and band: tau_psi (rotor model) against
+    # Izz r_dot + (Iyy - Ixx) p q + J_r Omega_r_dot, each signal high-passed alike
+    # (0 Hz: mean removed). "unexplained" is the residual's share of tau_psi's power.
+    print("\n== the yaw row alone: Izz (1e-6 kg m^2), J_r (1e-8 kg m^2), unexplained % by high-pass cutoff")
+    for f in flights:
+        T, tau, w, wd, om, omd, vb = sig[f]
+        cells = []
+        for hp in (0.0, 0.5, 1.0, 2.0, 3.0):
+            H = (lambda x: x - x.mean()) if hp == 0 else (lambda x: x - sosfiltfilt(butter(2, hp, fs=1.0 / T, output="sos"), x))
+            A = np.vstack([H(wd[2]), H(w[0] * w[1]), H(omd)]).T
+            y = H(tau[2])
+            x, *_ = np.linalg.lstsq(A, y, rcond=None)
+            cells.append(f"{hp:g} Hz: {x[0]*1e6:5.1f} {x[2]*1e8:5.2f} {100*np.sum((y - A @ x)**2)/np.sum(y**2):3.0f} %")
+        print(f"{f:8} " + " | ".join(cells))
