@@ -2,10 +2,12 @@
 // gradients with respect to the Fourier coefficients of eq. (18).
 //
 // Phi_k depends on the coefficients only through 15 flat derivatives per
-// sample (x, y, z orders 1..4, psi orders 0..2), each linear in the
-// coefficients. A forward-mode dual over those 15 inputs gives dPhi_k/du_k
-// exactly; the criterion's sensitivity to Phi_k is closed form (below), and
-// the chain to the coefficients is a product with the precomputed basis.
+// sample u_k (x, y, z orders 1..4, psi orders 0..2), each linear in the
+// coefficients. The criterion's sensitivity to Phi_k is closed form (below),
+// G_k = dJ/dPhi_k; regressor_vjp gives dPhi_k/du_k^T vec(G_k) exactly without
+// forming the Jacobian (a forward-mode dual over all 15 inputs, which the
+// vehicle limits still use, costs three times as much), and the chain to the
+// coefficients is a product with the precomputed basis.
 #include "design_internal.hpp"
 
 #include "quadid/regressor.hpp"
@@ -14,6 +16,7 @@
 #include <fmt/format.h>
 
 #include <array>
+#include <cmath>
 #include <stdexcept>
 #include <vector>
 
@@ -87,6 +90,121 @@ Eigen::Matrix<double, 4, 7> regressor_sample(const FlatOutput& d, double g,
       out(rr, c) = P(rr, c).v;
       for (int j = 0; j < kInputs; ++j) (*jac)(7 * rr + c, j) = P(rr, c).d[static_cast<size_t>(j)];
     }
+  return out;
+}
+
+Eigen::Matrix<double, kInputs, 1> regressor_vjp(const FlatOutput& d, double g, const Eigen::Matrix<double, 4, 7>& G) {
+  // (1) Roll and pitch (eqs. 26-27) are functions of q = (a_x, a_y, a_z + g, psi)
+  // alone; their time jets are forward-differentiated over q only (4
+  // directions). For f = F(q(t)) the jets' other derivatives follow from
+  // these (differentiate f_dot = F'(q) q_dot and f_ddot = q_dot^T F'' q_dot + F' q_ddot):
+  //   d f_dot / d q_dot = d f / d q,  d f_ddot / d q_dot = 2 d f_dot / d q,  d f_ddot / d q_ddot = d f / d q.
+  using D4 = Dual<4>;
+  const auto ax = time_jet<D4>(D4::seed(d(0, 2), 0), D4(d(0, 3)), D4(d(0, 4)));
+  const auto ay = time_jet<D4>(D4::seed(d(1, 2), 1), D4(d(1, 3)), D4(d(1, 4)));
+  const auto az = time_jet<D4>(D4::seed(d(2, 2) + g, 2), D4(d(2, 3)), D4(d(2, 4)));
+  const auto psi4 = time_jet<D4>(D4::seed(d(3, 0), 3), D4(d(3, 1)), D4(d(3, 2)));
+  const auto [spsi, cpsi] = sin_cos(psi4);
+  const auto tilt = tilt_from_force(ax, ay, az, cpsi, spsi);  // {phi, theta}
+  // jet[f][n]: derivative n (0, 1, 2) of angle f (phi, theta) with its d/dq.
+  std::array<std::array<D4, 3>, 2> jet;
+  for (size_t f = 0; f < 2; ++f) jet[f] = {tilt[f].v.v, tilt[f].d[0].v, tilt[f].d[0].d[0]};
+
+  // (2) The rest backwards, by hand: s = <G, Phi> through the regressor (eq. 12),
+  // the body rates (eq. 4) and velocity (eq. 3), to the attitude jets, p_dot and
+  // p_ddot. Angles f = phi, t = theta, y = psi; 1 and 2 mark their rates and
+  // accelerations.
+  const double f = jet[0][0].v, f1 = jet[0][1].v;  // phi_ddot enters omega_dot linearly: no value needed
+  const double t = jet[1][0].v, t1 = jet[1][1].v, t2 = jet[1][2].v;
+  const double y = d(3, 0), y1 = d(3, 1), y2 = d(3, 2);
+  const double sf = std::sin(f), cf = std::cos(f), st = std::sin(t), ct = std::cos(t), sy = std::sin(y), cy = std::cos(y);
+  const Eigen::Vector3d P(d(0, 1), d(1, 1), d(2, 1)), A(d(0, 2), d(1, 2), d(2, 2));  // p_dot, p_ddot
+  const Eigen::Vector3d R0(ct * cy, ct * sy, -st), R1(st * cy * sf - sy * cf, st * sy * sf + cy * cf, ct * sf),
+      R2(st * cy * cf + sy * sf, st * sy * cf - cy * sf, ct * cf);  // rows of R(eta)^T
+  const double p = f1 - st * y1, q = cf * t1 + ct * sf * y1, r = ct * cf * y1 - sf * t1;  // eq. (4)
+  const double v0 = R0.dot(P), v1 = R1.dot(P);                                             // eq. (3)
+  // Regressor (rows 7-10) backwards: adjoints of p, q, r, their rates, v_x, v_y, v_z_dot, g_bz.
+  const double E = G(0, 0);  // of v_z_dot and g_bz
+  const double gp = E * v1 - G(1, 2) * r + G(1, 3) * q + G(2, 1) * r - 2.0 * G(2, 3) * p - G(2, 5) * q -
+                    G(2, 6) * r - G(3, 1) * q + 2.0 * G(3, 2) * p + G(3, 4) * q + G(3, 5) * r;
+  const double gq = -E * v0 + G(1, 3) * p - G(1, 4) * r + 2.0 * G(1, 5) * q + G(1, 6) * r + G(2, 2) * r -
+                    G(2, 5) * p - G(3, 1) * p - 2.0 * G(3, 2) * q - G(3, 3) * r + G(3, 4) * p;
+  const double gr = -G(1, 2) * p - G(1, 4) * q - 2.0 * G(1, 5) * r + G(1, 6) * q + G(2, 1) * p + G(2, 2) * q +
+                    2.0 * G(2, 3) * r - G(2, 6) * p - G(3, 3) * q + G(3, 5) * p;
+  const double gpd = G(1, 1) + G(2, 2) + G(3, 3), gqd = G(1, 2) + G(2, 4) + G(3, 5), grd = G(1, 3) + G(2, 5) + G(3, 6);
+  double gv0 = -E * q, gv1 = E * p;  // v_x, v_y in Phi(0, 0); v_z_dot's adjoint is E
+  std::array<double, 9> gs{};        // ds / d(f, f1, f2, t, t1, t2, y, y1, y2)
+  enum { F0, F1, F2, T0, T1, T2, Y0, Y1, Y2 };
+  // omega = (p, q, r), eq. (4)
+  gs[F1] += gp;
+  gs[T0] += -gp * ct * y1;
+  gs[Y1] += -gp * st;
+  gs[F0] += gq * (-sf * t1 + ct * cf * y1) + gr * (-ct * sf * y1 - cf * t1);
+  gs[T0] += gq * (-st * sf * y1) + gr * (-st * cf * y1);
+  gs[T1] += gq * cf - gr * sf;
+  gs[Y1] += gq * ct * sf + gr * ct * cf;
+  // omega_dot, the time derivative of eq. (4)
+  gs[F2] += gpd;
+  gs[T0] += gpd * (st * t1 * y1 - ct * y2);
+  gs[T1] += -gpd * ct * y1;
+  gs[Y1] += -gpd * ct * t1;
+  gs[Y2] += -gpd * st;
+  gs[F0] += gqd * (-cf * f1 * t1 - sf * t2 - st * t1 * cf * y1 - ct * sf * f1 * y1 + ct * cf * y2) +
+            grd * (st * t1 * sf * y1 - ct * cf * f1 * y1 - ct * sf * y2 + sf * f1 * t1 - cf * t2);
+  gs[T0] += gqd * (-ct * t1 * sf * y1 - st * cf * f1 * y1 - st * sf * y2) +
+            grd * (-ct * t1 * cf * y1 + st * sf * f1 * y1 - st * cf * y2);
+  gs[F1] += gqd * (-sf * t1 + ct * cf * y1) + grd * (-ct * sf * y1 - cf * t1);
+  gs[T1] += gqd * (-sf * f1 - st * sf * y1) + grd * (-st * cf * y1 - cf * f1);
+  gs[T2] += gqd * cf - grd * sf;
+  gs[Y1] += gqd * (-st * t1 * sf + ct * cf * f1) + grd * (-st * t1 * cf - ct * sf * f1);
+  gs[Y2] += gqd * ct * sf + grd * ct * cf;
+  // g_bz = g cos(theta) cos(phi)
+  gs[F0] += -E * g * ct * sf;
+  gs[T0] += -E * g * st * cf;
+  // v_z_dot = d/dt (R2 . p_dot) = -v_y f1 + cos(phi) v_x t1 + u_y y1 + R2 . p_ddot, with
+  // u_y = d(R2 . p_dot)/dpsi (dR2/dphi = -R1, dR2/dtheta = cos(phi) R0).
+  const Eigen::Vector3d Ry(-st * sy * cf + cy * sf, st * cy * cf + sy * sf, 0.0);  // dR2/dpsi
+  const double uy = Ry.dot(P);
+  gs[F1] += -E * v1;
+  gs[T1] += E * cf * v0;
+  gs[Y1] += E * uy;
+  gv1 += -E * f1;
+  gv0 += E * cf * t1;
+  gs[F0] += -E * sf * v0 * t1;
+  // u_y y1: derivatives of dR2/dpsi . p_dot
+  const Eigen::Vector3d Ryf(st * sy * sf + cy * cf, -st * cy * sf + sy * cf, 0.0), Ryt(-ct * sy * cf, ct * cy * cf, 0.0),
+      Ryy(-st * cy * cf - sy * sf, -st * sy * cf + cy * sf, 0.0);
+  gs[F0] += E * y1 * Ryf.dot(P);
+  gs[T0] += E * y1 * Ryt.dot(P);
+  gs[Y0] += E * y1 * Ryy.dot(P);
+  // R2 . p_ddot
+  gs[F0] += -E * R1.dot(A);
+  gs[T0] += E * cf * R0.dot(A);
+  gs[Y0] += E * Ry.dot(A);
+  // v_x = R0 . p_dot, v_y = R1 . p_dot
+  gs[T0] += gv0 * (-st * cy * P(0) - st * sy * P(1) - ct * P(2)) + gv1 * sf * v0;
+  gs[Y0] += gv0 * (-ct * sy * P(0) + ct * cy * P(1)) + gv1 * ((-st * sy * sf - cy * cf) * P(0) + (st * cy * sf - sy * cf) * P(1));
+  gs[F0] += gv1 * R2.dot(P);
+  const Eigen::Vector3d gP = gv0 * R0 + gv1 * R1 + E * y1 * Ry, gA = E * R2;  // p_dot's and p_ddot's adjoints
+
+  Eigen::Matrix<double, kInputs, 1> out = Eigen::Matrix<double, kInputs, 1>::Zero();
+  // (1) backwards: q = (a, psi) at orders 0, 1, 2 of q (flat orders 2, 3, 4 of x, y, z; 0, 1, 2 of psi).
+  auto at = [](int i, int n) { return i < 3 ? input_index(i, n + 2) : input_index(kPsi, n); };
+  for (size_t a = 0; a < 2; ++a) {
+    const double g0 = gs[3 * a], g1 = gs[3 * a + 1], g2 = gs[3 * a + 2];
+    for (int i = 0; i < 4; ++i) {
+      const auto ii = static_cast<size_t>(i);
+      const double J0 = jet[a][0].d[ii], J1 = jet[a][1].d[ii], J2 = jet[a][2].d[ii];
+      out(at(i, 0)) += g0 * J0 + g1 * J1 + g2 * J2;
+      out(at(i, 1)) += g1 * J0 + 2.0 * g2 * J1;
+      out(at(i, 2)) += g2 * J0;
+    }
+  }
+  for (int n = 0; n < 3; ++n) out(input_index(kPsi, n)) += gs[static_cast<size_t>(Y0 + n)];
+  for (int j = 0; j < 3; ++j) {
+    out(input_index(j, 1)) += gP(j);
+    out(input_index(j, 2)) += gA(j);
+  }
   return out;
 }
 
@@ -273,31 +391,30 @@ double ExcitationProblem::criterion(const Eigen::VectorXd& x, Eigen::VectorXd* g
     for (int o = 0; o < 5; ++o) F.col(5 * i + o) = basis_[static_cast<size_t>(o)] * x.segment(i * n1, n1);
 
   std::vector<Eigen::Matrix<double, 4, 7>> Phi(static_cast<size_t>(K));
-  std::vector<Eigen::Matrix<double, 28, kInputs>> dPhi(grad ? static_cast<size_t>(K) : 0);
-  Mat7 M = Mat7::Zero();
-  for (Eigen::Index k = 0; k < K; ++k) {
+  auto flat_at = [&](Eigen::Index k) {
     FlatOutput d;
     for (int i = 0; i < 4; ++i)
       for (int o = 0; o < 5; ++o) d(i, o) = F(k, 5 * i + o);
+    return d;
+  };
+  Mat7 M = Mat7::Zero();
+  for (Eigen::Index k = 0; k < K; ++k) {
     auto& P = Phi[static_cast<size_t>(k)];
-    P = design_detail::regressor_sample(d, g_, grad ? &dPhi[static_cast<size_t>(k)] : nullptr);
-    if (crit_ == Criterion::Precision) {  // rows weighted by 1 / sigma: the weighted Phi and its Jacobian
-      P = row_w_.asDiagonal() * P;
-      if (grad)
-        for (int rr = 0; rr < 4; ++rr) dPhi[static_cast<size_t>(k)].middleRows(7 * rr, 7) *= row_w_(rr);
-    }
+    P = design_detail::regressor_sample(flat_at(k), g_, nullptr);
+    if (crit_ == Criterion::Precision) P = row_w_.asDiagonal() * P;  // rows weighted by 1 / sigma
     M.noalias() += P.transpose() * P;
   }
   Mat7 H;
   const double J = criterion_of(M, static_cast<int>(K), crit_, scales_, grad ? &H : nullptr, samples_);
   if (!grad) return J;
 
-  // dJ/du_k = dPhi_k^T vec(Phi_k H), then through the linear basis to the coefficients.
+  // dJ/du_k = dPhi_k/du^T vec(Phi_k H) (the rows' weights folded into G), then
+  // through the linear basis to the coefficients.
   Eigen::MatrixXd dJdu(K, kInputs);
   for (Eigen::Index k = 0; k < K; ++k) {
-    const Eigen::Matrix<double, 4, 7, Eigen::RowMajor> G = Phi[static_cast<size_t>(k)] * H;
-    const Eigen::Map<const Eigen::Matrix<double, 28, 1>> g(G.data());
-    dJdu.row(k) = (dPhi[static_cast<size_t>(k)].transpose() * g).transpose();
+    Eigen::Matrix<double, 4, 7> G = Phi[static_cast<size_t>(k)] * H;
+    if (crit_ == Criterion::Precision) G = row_w_.asDiagonal() * G;
+    dJdu.row(k) = design_detail::regressor_vjp(flat_at(k), g_, G).transpose();
   }
   grad->setZero(dimension());
   for (int i = 0; i < 4; ++i)

@@ -110,4 +110,8 @@ inline bool is_input(int axis, int order) { return axis < 3 ? (order >= 1 && ord
 Eigen::Matrix<double, 4, 7> regressor_sample(const FlatOutput& d, double g,
                                              Eigen::Matrix<double, 28, kInputs>* jac);
 
+/// d<G, Phi>/du for the 15 inputs: dPhi/du^T vec(G) without forming dPhi/du
+/// (what the criterion's gradient needs; same value to rounding).
+Eigen::Matrix<double, kInputs, 1> regressor_vjp(const FlatOutput& d, double g, const Eigen::Matrix<double, 4, 7>& G);
+
 }  // namespace quadid::design_detail
