@@ -51,8 +51,9 @@ TEST_F(CliTest, CheckTrajectoryPrintsThePredictedPrecision) {
 }
 
 TEST_F(CliTest, DesignExportsTheFlightItDesigned) {
-  // A small, fast design (as python/tests/test_commands.py's) with its export.
-  auto r = run("design --starts 1 --max-evals 60 --seed 1 --harmonics 3 --quiet --no-precision -o " + path("t.json") +
+  // A small, fast design (as python/tests/test_commands.py's) with its export. One
+  // 60-evaluation start meets every limit for 39 of seeds 1-40 (measured; seed 1 does not).
+  auto r = run("design --starts 1 --max-evals 60 --seed 2 --harmonics 3 --quiet --no-precision -o " + path("t.json") +
                " --export " + path("t.csv") + " --export-rate 10");
   ASSERT_EQ(r.rc, 0) << r.err;
   ASSERT_TRUE(fs::exists(path("t.json")));

@@ -201,7 +201,7 @@ struct DesignOptions {
   double cell_dt = 0.5;                // s, one constraint per limit, sign and cell: the worst check_dt instant in it
 
   double cond_dt = 0.002;              // s, T of eq. (20) for the reported criteria
-  double margin = 1e-5;                // relative tightening of every limit while optimizing
+  double margin = 1e-4;                // relative tightening of every limit while optimizing (docs/design.md)
   int max_evals = 300;                 // SLSQP evaluations per round of one start
   int refine_rounds = 3;               // re-polish rounds for a start that ends infeasible
   double ftol_rel = 1e-8;              // stop when the best feasible criterion improves by less for 40 evaluations

@@ -47,7 +47,8 @@ def drop_times(j):
 
 
 def test_design_equals_the_command_line():
-    args = dict(starts=1, max_evals=60, seed=1, harmonics=3)  # feasible in ~1 s
+    # feasible in ~1 s: one 60-evaluation start meets every limit for 39 of seeds 1-40 (seed 1 is the exception)
+    args = dict(starts=1, max_evals=60, seed=2, harmonics=3)
     cli = cli_json("design", *design_cli_args(args), "--quiet", "--no-precision")
     assert_same(drop_times(quadid.design(**args)), drop_times(cli), 1e-9)
 

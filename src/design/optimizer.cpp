@@ -36,9 +36,9 @@ namespace quadid {
 using design_detail::Family;
 
 // SQP iterates meet active constraints only in the limit: a point counts as
-// feasible for a round when every normalized constraint is below half its
-// margin (1e-5 relative by default, fading to 0 where a limit is pinned) and
-// below this where the margin is smaller.
+// feasible for a round when every normalized constraint is below its margin
+// (1e-4 relative by default, fading to 0 where a limit is pinned) and below
+// this where the margin is smaller.
 constexpr double kFeasTol = 1e-9;
 // Spacing of the coarse search for each cell's worst instant, s. Every limit
 // is a smooth function whose fastest part is the N-th harmonic (period 2 s for
