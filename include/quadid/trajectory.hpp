@@ -115,47 +115,6 @@ struct ReferenceT {
 };
 using Reference = ReferenceT<double>;
 
-/// The body velocity and rates implied by an attitude and a velocity, with
-/// their time derivatives (eqs. 3-4), and R(eta)^T with its derivative.
-template <class S>
-struct BodyKinematicsT {
-  using V3 = Eigen::Matrix<S, 3, 1>;
-  V3 v, v_dot;          // v = R^T p_dot and its derivative
-  V3 omega, omega_dot;  // omega = W^-1 eta_dot and its derivative
-  TimeJet1<S> Rt[3][3];  // R(eta)^T as first-order jets
-};
-
-/// v, omega and their derivatives from the attitude's second-order jets
-/// (phi, theta, psi: angle, rate, acceleration) and the inertial velocity's
-/// first-order jets (p_dot, p_ddot). The second half of reference_from_flat,
-/// apart so that the trajectory design can differentiate it on its own.
-template <class S>
-BodyKinematicsT<S> body_kinematics(const TimeJet2<S>& phi, const TimeJet2<S>& theta, const TimeJet2<S>& psi,
-                                   const std::array<TimeJet1<S>, 3>& pdot) {
-  using J1 = TimeJet1<S>;
-  BodyKinematicsT<S> k;
-  // R(eta)^T and W(eta)^-1 need only first-order jets (same formulas as model.hpp).
-  const auto [sf, cf] = sin_cos(phi.v);
-  const auto [st, ct] = sin_cos(theta.v);
-  const auto [sp, cp] = sin_cos(psi.v);
-  const J1 Rt[3][3] = {{ct * cp, ct * sp, -st},
-                       {st * cp * sf - sp * cf, st * sp * sf + cp * cf, ct * sf},
-                       {st * cp * cf + sp * sf, st * sp * cf - cp * sf, ct * cf}};
-  const J1 &phid = phi.d[0], &thetad = theta.d[0], &psid = psi.d[0];
-  const J1 w[3] = {phid - st * psid,  // omega_d = W^-1 eta_dot   (eq. 4)
-                   cf * thetad + (ct * sf) * psid,
-                   (ct * cf) * psid - sf * thetad};
-  for (int i = 0; i < 3; ++i) {
-    const J1 vi = Rt[i][0] * pdot[0] + Rt[i][1] * pdot[1] + Rt[i][2] * pdot[2];  // v_d = R^T p_dot (eq. 3)
-    k.v(i) = vi.v;
-    k.v_dot(i) = vi.d[0];
-    k.omega(i) = w[i].v;
-    k.omega_dot(i) = w[i].d[0];
-    for (int j = 0; j < 3; ++j) k.Rt[i][j] = Rt[i][j];
-  }
-  return k;
-}
-
 /// Desired roll/pitch of eqs. (26)-(27) and the kinematics below eq. (20),
 /// with their time derivatives propagated exactly by time jets (dual.hpp):
 /// second order for the angles (eta_ddot needs the snap), first order for the
@@ -165,6 +124,7 @@ BodyKinematicsT<S> body_kinematics(const TimeJet2<S>& phi, const TimeJet2<S>& th
 /// Requires z_ddot + g > 0 (the paper's z_ddot >= -9.81 constraint).
 template <class S>
 ReferenceT<S> reference_from_flat(const Eigen::Matrix<S, 4, 5>& d, double g = kDefaultGravity) {
+  using J1 = TimeJet1<S>;
   ReferenceT<S> ref;
   // Force direction (acceleration + g e_z, with jerk and snap) and yaw as second-order jets.
   const auto ax = time_jet<S>(d(0, 2), d(0, 3), d(0, 4));
@@ -184,13 +144,25 @@ ReferenceT<S> reference_from_flat(const Eigen::Matrix<S, 4, 5>& d, double g = kD
     ref.eta_dot(i) = eta_j[i]->d[0].v;
     ref.eta_ddot(i) = eta_j[i]->d[0].d[0];
   }
-  const std::array<TimeJet1<S>, 3> pdot = {time_jet<S>(d(0, 1), d(0, 2)), time_jet<S>(d(1, 1), d(1, 2)),
-                                           time_jet<S>(d(2, 1), d(2, 2))};
-  const BodyKinematicsT<S> k = body_kinematics(phi, theta, psi, pdot);
-  ref.v = k.v;
-  ref.v_dot = k.v_dot;
-  ref.omega = k.omega;
-  ref.omega_dot = k.omega_dot;
+  // R(eta)^T and W(eta)^-1 need only first-order jets (same formulas as model.hpp).
+  const auto [sf, cf] = sin_cos(phi.v);
+  const auto [st, ct] = sin_cos(theta.v);
+  const J1 &cp = cpsi.v, &sp = spsi.v;
+  const J1 Rt[3][3] = {{ct * cp, ct * sp, -st},
+                       {st * cp * sf - sp * cf, st * sp * sf + cp * cf, ct * sf},
+                       {st * cp * cf + sp * sf, st * sp * cf - cp * sf, ct * cf}};
+  const J1 pdot[3] = {time_jet<S>(d(0, 1), d(0, 2)), time_jet<S>(d(1, 1), d(1, 2)), time_jet<S>(d(2, 1), d(2, 2))};
+  const J1 &phid = phi.d[0], &thetad = theta.d[0], &psid = psi.d[0];
+  const J1 w[3] = {phid - st * psid,                 // omega_d = W^-1 eta_dot   (eq. 4)
+                   cf * thetad + (ct * sf) * psid,
+                   (ct * cf) * psid - sf * thetad};
+  for (int i = 0; i < 3; ++i) {
+    const J1 vi = Rt[i][0] * pdot[0] + Rt[i][1] * pdot[1] + Rt[i][2] * pdot[2];  // v_d = R^T p_dot (eq. 3)
+    ref.v(i) = vi.v;
+    ref.v_dot(i) = vi.d[0];
+    ref.omega(i) = w[i].v;
+    ref.omega_dot(i) = w[i].d[0];
+  }
   return ref;
 }
 
