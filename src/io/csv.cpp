@@ -15,6 +15,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <charconv>
 #include <cmath>
@@ -118,34 +119,36 @@ class LineReader {
     return ec ? 0 : static_cast<std::uint64_t>(n);
   }
 
-  // The complete lines now in the buffer (refilling it first when it holds
-  // none), in order; valid until the next call. False at the end of the file.
-  bool next_block(std::vector<std::string_view>& lines) {
-    lines.clear();
+  // The text of the complete lines now in the buffer (refilling it first when
+  // it holds none; at the end of the file the last line need not end in a
+  // newline), valid until the next call; `first_line` is its first line's
+  // number. The caller splits it into lines and reports their count with
+  // lines_taken(). False at the end of the file.
+  bool next_text(std::string_view& text, size_t& first_line) {
     while (true) {
       const char* b = buf_.get() + pos_;
       const char* end = buf_.get() + len_;
-      while (b < end) {
-        const char* nl = static_cast<const char*>(std::memchr(b, '\n', static_cast<size_t>(end - b)));
-        if (!nl) {
-          if (!eof_) break;  // an incomplete line: the next block has it whole
-          nl = end;
-        }
-        std::string_view line(b, static_cast<size_t>(nl - b));
-        if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
-        if (++line_no_ == 1 && line.substr(0, 3) == "\xEF\xBB\xBF") line.remove_prefix(3);  // UTF-8 BOM
-        lines.push_back(line);
-        b = nl < end ? nl + 1 : end;
+      const char* stop = end;
+      if (!eof_) {  // up to the last newline: an incomplete line waits for the next chunk
+        const void* nl = memrchr(b, '\n', static_cast<size_t>(end - b));
+        stop = nl ? static_cast<const char*>(nl) + 1 : b;
       }
-      pos_ = static_cast<size_t>(b - buf_.get());
-      if (!lines.empty()) return true;
+      if (stop > b) {
+        text = std::string_view(b, static_cast<size_t>(stop - b));
+        first_line = line_no_ + 1;
+        pos_ = static_cast<size_t>(stop - buf_.get());
+        return true;
+      }
       if (eof_) return false;
       refill();
     }
   }
+  void lines_taken(size_t n) { line_no_ += n; }
 
  private:
-  static constexpr size_t kChunk = size_t{1} << 20;
+  // 4 MiB: a block of lines large enough to split between two threads
+  // (issue 13); the buffer grows beyond it only for a longer line.
+  static constexpr size_t kChunk = size_t{1} << 22;
 
   void refill() {
     // Keep the incomplete tail line; grow the buffer only for a line longer than it.
@@ -370,33 +373,64 @@ FlightLog read_flight_log(const std::filesystem::path& path, const CsvReadOption
     }
   };
 
-  // The rows, a buffer's worth of lines at a time: the data lines are picked
-  // out (blank and comment lines skipped) and given their rows, then parsed,
-  // the first half on a second thread when allowed. Each half stops at its
-  // first bad line; the first half's error is the earlier one.
+  // The rows, a buffer's worth of text at a time, in two phases each split
+  // between two threads when allowed (the halves cut at a newline): the data
+  // lines are picked out (blank and comment lines skipped), then given their
+  // rows and parsed. Each half stops at its first bad line; the first half's
+  // error is the earlier one.
   ColumnStore store(static_cast<Eigen::Index>(nkeep));
   const bool two = detail::use_second_thread(opt.threads);
-  constexpr size_t kParallelLines = 4096;  // below this a second thread costs more than it saves
+  constexpr size_t kParallelBytes = size_t{1} << 17;  // below this a second thread costs more than it saves
   RowLines row_lines;
-  std::vector<std::string_view> block;
-  std::vector<size_t> data_lines;  // indices into block
+  struct Part {
+    std::string_view text;
+    std::vector<std::string_view> lines;  // the data lines
+    std::vector<size_t> line_no;          // their line numbers, counted from the part's first line (0)
+    size_t count = 0;                     // all lines, data or not
+  };
+  std::array<Part, 2> parts;
+  auto split = [](Part& part) {
+    part.lines.clear();
+    part.line_no.clear();
+    part.count = 0;
+    const char* b = part.text.data();
+    const char* end = b + part.text.size();
+    while (b < end) {
+      const char* nl = static_cast<const char*>(std::memchr(b, '\n', static_cast<size_t>(end - b)));
+      std::string_view line(b, static_cast<size_t>((nl ? nl : end) - b));
+      if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+      if (!trim(line).empty() && line.front() != '#') {
+        part.lines.push_back(line);
+        part.line_no.push_back(part.count);
+      }
+      ++part.count;
+      b = nl ? nl + 1 : end;
+    }
+  };
   // Capacity: after the first block, the rest of the file at the first rows'
   // mean length, with 10% to spare (growing by copies costs time and fresh
   // pages; capacity never written is never touched, so the spare costs little).
   const std::uint64_t data_start = in.consumed(), file_bytes = in.file_size();
   bool estimated = false;
-  while (true) {
-    const size_t first_line_no = in.line_no() + 1;
-    if (!in.next_block(block)) break;
-    data_lines.clear();
-    for (size_t i = 0; i < block.size(); ++i) {
-      const std::string_view l = block[i];
-      if (trim(l).empty() || l.front() == '#') continue;
-      row_lines.add(static_cast<size_t>(store.rows()) + data_lines.size(), first_line_no + i);
-      data_lines.push_back(i);
+  std::string_view text;
+  size_t first_line_no = 0;
+  while (in.next_text(text, first_line_no)) {
+    const bool parallel = two && text.size() >= kParallelBytes;
+    size_t cut = text.size();
+    if (parallel) {  // just after the newline nearest the middle
+      const size_t nl = text.rfind('\n', text.size() / 2);
+      cut = nl == std::string_view::npos ? text.size() : nl + 1;
     }
-    if (data_lines.empty()) continue;
-    const Eigen::Index count = static_cast<Eigen::Index>(data_lines.size());
+    parts[0].text = text.substr(0, cut);
+    parts[1].text = text.substr(cut);
+    detail::run_both(parallel, [&] { split(parts[0]); }, [&] { split(parts[1]); });
+    in.lines_taken(parts[0].count + parts[1].count);
+    const size_t line1 = first_line_no + parts[0].count;  // the second part's first line
+    const size_t n0 = parts[0].lines.size(), n1 = parts[1].lines.size();
+    if (n0 + n1 == 0) continue;
+    for (size_t r = 0; r < n0; ++r) row_lines.add(static_cast<size_t>(store.rows()) + r, first_line_no + parts[0].line_no[r]);
+    for (size_t r = 0; r < n1; ++r) row_lines.add(static_cast<size_t>(store.rows()) + n0 + r, line1 + parts[1].line_no[r]);
+    const Eigen::Index count = static_cast<Eigen::Index>(n0 + n1);
     if (!estimated) {
       estimated = true;
       const std::uint64_t used = in.consumed() - data_start;
@@ -408,18 +442,12 @@ FlightLog read_flight_log(const std::filesystem::path& path, const CsvReadOption
     }
     double* base = store.add_rows(count);
     const Eigen::Index stride = store.capacity();
-    auto parse_range = [&](size_t a, size_t b) {
-      for (size_t r = a; r < b; ++r) {
-        const size_t i = data_lines[r];
-        parse_row(block[i], first_line_no + i, base + static_cast<Eigen::Index>(r), stride);
-      }
+    auto parse_part = [&](const Part& part, size_t first_row, size_t first_line) {
+      for (size_t r = 0; r < part.lines.size(); ++r)
+        parse_row(part.lines[r], first_line + part.line_no[r], base + static_cast<Eigen::Index>(first_row + r), stride);
     };
-    if (two && data_lines.size() >= kParallelLines) {
-      const size_t half = data_lines.size() / 2;
-      detail::run_both(true, [&] { parse_range(0, half); }, [&] { parse_range(half, data_lines.size()); });
-    } else {
-      parse_range(0, data_lines.size());
-    }
+    detail::run_both(parallel && n0 > 0 && n1 > 0, [&] { parse_part(parts[0], 0, first_line_no); },
+                     [&] { parse_part(parts[1], n0, line1); });
   }
   const auto nrow = store.rows();
   if (nrow < 2)
