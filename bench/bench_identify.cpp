@@ -80,6 +80,17 @@ void BM_ReadCsv50s(benchmark::State& state) {
   }
 }
 
+// The same on one thread: the second thread's gain.
+void BM_ReadCsv50s_OneThread(benchmark::State& state) {
+  const auto& f = fixture();
+  quadid::CsvReadOptions o = csv_options();
+  o.threads = 1;
+  for (auto _ : state) {
+    const quadid::FlightLog log = quadid::read_flight_log(f.csv, o);
+    benchmark::DoNotOptimize(log.data.data());
+  }
+}
+
 void BM_Identify50s_InMemory(benchmark::State& state) {
   const auto& f = fixture();
   for (auto _ : state) {
@@ -118,6 +129,7 @@ void BM_GradientDescentStep(benchmark::State& state) {
 BENCHMARK(BM_Identify50s_FromCsv)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_IdentifyProcess50s)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_ReadCsv50s)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_ReadCsv50s_OneThread)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_Identify50s_InMemory)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_ProcessLog50s)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_GradientDescentStep);
