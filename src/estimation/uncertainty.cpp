@@ -117,21 +117,33 @@ Eigen::MatrixXd sine_taper_sums(const double* x, long n, long J, int P = Rows) {
   Mat out = Mat::Zero(P, P);
   const double step = std::numbers::pi / static_cast<double>(n + 1);
   const double norm = std::sqrt(2.0 / static_cast<double>(n + 1));
-  for (long j = 1; j <= J; ++j) {
-    Vec y = Vec::Zero(P);
-    const double wc = std::cos(step * static_cast<double>(j)), ws = std::sin(step * static_cast<double>(j));
-    double c = 1.0, sn = 0.0;  // cos and sin of pi j (i + 1) / (n + 1), set below
-    for (long i = 0; i < n; ++i) {
-      if (i % kReseed == 0) {
-        const double a = step * static_cast<double>((j * (i + 1)) % (2 * (n + 1)));
-        c = std::cos(a);
-        sn = std::sin(a);
+  // All J tapers in one pass over the series: one taper's rotation is a chain
+  // of dependent multiplications, J of them overlap. Each taper sees the
+  // operations, in the order, of a pass of its own: the same sums to the bit.
+  const size_t nj = static_cast<size_t>(J);
+  std::vector<double> wc(nj), ws(nj), c(nj), sn(nj);
+  for (size_t j = 0; j < nj; ++j) {
+    wc[j] = std::cos(step * static_cast<double>(j + 1));
+    ws[j] = std::sin(step * static_cast<double>(j + 1));
+  }
+  Eigen::Matrix<double, Rows, Eigen::Dynamic> Y = Eigen::Matrix<double, Rows, Eigen::Dynamic>::Zero(P, J);
+  for (long i = 0; i < n; ++i) {
+    if (i % kReseed == 0)  // cos and sin of pi j (i + 1) / (n + 1) afresh
+      for (size_t j = 0; j < nj; ++j) {
+        const double a = step * static_cast<double>((static_cast<long>(j + 1) * (i + 1)) % (2 * (n + 1)));
+        c[j] = std::cos(a);
+        sn[j] = std::sin(a);
       }
-      y.noalias() += sn * Eigen::Map<const Vec>(x + P * i, P);
-      const double c1 = c * wc - sn * ws;
-      sn = sn * wc + c * ws;
-      c = c1;
+    const Eigen::Map<const Vec> xi(x + P * i, P);
+    for (size_t j = 0; j < nj; ++j) Y.col(static_cast<Eigen::Index>(j)).noalias() += sn[j] * xi;
+    for (size_t j = 0; j < nj; ++j) {
+      const double c1 = c[j] * wc[j] - sn[j] * ws[j];
+      sn[j] = sn[j] * wc[j] + c[j] * ws[j];
+      c[j] = c1;
     }
+  }
+  for (Eigen::Index j = 0; j < J; ++j) {
+    const Vec y = Y.col(j);
     out.noalias() += norm * norm * (y * y.transpose());
   }
   return out;
@@ -146,24 +158,33 @@ Eigen::MatrixXd sine_taper_sums(const double* x, long n, long J, int P = Rows) {
 // V(h) -> 2 var(u) = the variance of u_end - u_start, which the sine tapers
 // do not see. Negative directions (a positively correlated series: V(h) below
 // the line) are set to 0.
-Eigen::MatrixXd end_value_covariance(const std::vector<double>& x, long n, int P, long h1, long h2,
-                                     const Eigen::MatrixXd& rate_per_sample) {
-  using RowMat = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
-  const Eigen::Map<const RowMat> X(x.data(), n, P);
-  RowMat S(n, P);
-  Eigen::RowVectorXd acc = Eigen::RowVectorXd::Zero(P);
-  for (long i = 0; i < n; ++i) S.row(i) = acc += X.row(i);
+template <int Rows>
+Eigen::MatrixXd end_value_covariance(const double* x, long n, long h1, long h2, const Eigen::MatrixXd& rate_per_sample,
+                                     int P = Rows) {
+  using Vec = Eigen::Matrix<double, Rows, 1>;
+  using Mat = Eigen::Matrix<double, Rows, Rows>;
+  // The partial sums, row i at S + P i; each lag's sum of (S_t+h - S_t)(S_t+h - S_t)^T
+  // taken pair by pair (no n x P difference matrix: that cost 4x the time).
+  std::vector<double> S(static_cast<size_t>(n) * static_cast<size_t>(P));
+  Vec acc = Vec::Zero(P);
+  for (long i = 0; i < n; ++i) {
+    acc += Eigen::Map<const Vec>(x + P * i, P);
+    Eigen::Map<Vec>(S.data() + P * i, P) = acc;
+  }
   constexpr int kPlateauLags = 4;
-  Eigen::MatrixXd A = Eigen::MatrixXd::Zero(P, P);
+  Mat A = Mat::Zero(P, P);
   for (int l = 0; l < kPlateauLags; ++l) {
     const long h = h1 + (h2 - h1) * l / (kPlateauLags - 1);
-    const RowMat D = S.bottomRows(n - h) - S.topRows(n - h);
+    Mat V = Mat::Zero(P, P);
+    for (long i = 0; i + h < n; ++i) {
+      const Vec d = Eigen::Map<const Vec>(S.data() + P * (i + h), P) - Eigen::Map<const Vec>(S.data() + P * i, P);
+      V.noalias() += d * d.transpose();
+    }
     const double hd = static_cast<double>(h);
-    A += (D.transpose() * D) / static_cast<double>(n - h) -
-         rate_per_sample * (hd * (1.0 - hd / static_cast<double>(n)));
+    A += V / static_cast<double>(n - h) - rate_per_sample * (hd * (1.0 - hd / static_cast<double>(n)));
   }
   A /= static_cast<double>(kPlateauLags);
-  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(0.5 * (A + A.transpose()));
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(Eigen::MatrixXd(0.5 * (A + A.transpose())));
   return es.eigenvectors() * es.eigenvalues().cwiseMax(0.0).asDiagonal() * es.eigenvectors().transpose();
 }
 
@@ -316,7 +337,8 @@ LongRunCovariance long_run_covariance(const std::vector<double>& psi, int P, con
     const Eigen::MatrixXd taper =
         (P == 7 ? sine_taper_sums<7>(x.data(), n, 2 * nf) : sine_taper_sums<Eigen::Dynamic>(x.data(), n, 2 * nf, P)) *
         (static_cast<double>(n) / static_cast<double>(2 * nf));
-    r.covariance = taper + end_value_covariance(x, n, P, h1, h2, taper / static_cast<double>(n));
+    r.covariance = taper + (P == 7 ? end_value_covariance<7>(x.data(), n, h1, h2, taper / static_cast<double>(n))
+                  : end_value_covariance<Eigen::Dynamic>(x.data(), n, h1, h2, taper / static_cast<double>(n), P));
     r.end_values_separated = true;
   } else {
     // theta_hat - theta ~ sum_k psi_k: Cov = n x the spectrum at 0 = the mean of Re(D_k D_k^H).
