@@ -2,6 +2,7 @@
 // gradient (the SLSQP inner loop), the constraint check of a trajectory, and a
 // whole `quadid design` run with the paper's problem and 8 starts.
 #include "quadid/design.hpp"
+#include "quadid/precision.hpp"
 
 #include <benchmark/benchmark.h>
 
@@ -30,6 +31,16 @@ static void BM_CheckTrajectory(benchmark::State& st) {
   for (auto _ : st) benchmark::DoNotOptimize(check_trajectory(tr));
 }
 BENCHMARK(BM_CheckTrajectory)->Unit(benchmark::kMillisecond);
+
+// The predicted precision `quadid design` prints after the search (the
+// paper's flight of the virtual QBall 2 with its default noise: four simulated
+// closed-loop flights and the adjoint of the processing for both regressions).
+static void BM_PredictPrecision(benchmark::State& st) {
+  const auto tr = FourierTrajectory::table2();
+  const PrecisionOptions o;
+  for (auto _ : st) benchmark::DoNotOptimize(predict_precision(tr, o).sets[0].std_error(0));
+}
+BENCHMARK(BM_PredictPrecision)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 // The whole design (--seed 1, 8 starts, all cores); the argument is cell_dt in
 // ms (250: the default, one constraint per limit, sign and 0.25 s cell; 500
