@@ -7,10 +7,14 @@
 
 #include <fmt/format.h>
 
+#include <csignal>
 #include <filesystem>
 #include <fstream>
 #include <random>
+#include <stdexcept>
 #include <string>
+#include <sys/stat.h>
+#include <thread>
 #include <unistd.h>
 
 namespace fs = std::filesystem;
@@ -41,6 +45,23 @@ class Csv : public ::testing::Test {
       return e.what();
     }
     return "";
+  }
+  // Reads `text` through a named pipe (the reader's chunked path, not the mapped one).
+  FlightLog read_through_pipe(const std::string& text) const {
+    const std::string fifo = (dir_ / "pipe.fifo").string();
+    fs::remove(fifo);
+    if (::mkfifo(fifo.c_str(), 0600) != 0) throw std::runtime_error("mkfifo failed");
+    std::signal(SIGPIPE, SIG_IGN);  // should the reader stop early, the writer fails instead of killing the test
+    std::thread writer([&] { std::ofstream(fifo, std::ios::binary) << text; });  // a pipe holds ~64 KiB at once
+    FlightLog log;
+    try {
+      log = read_flight_log(fifo);
+    } catch (...) {
+      writer.join();
+      throw;
+    }
+    writer.join();
+    return log;
   }
   fs::path dir_;
 };
@@ -240,11 +261,39 @@ TEST_F(Csv, LongFilesCrossChunksAndCapacityGuesses) {
   }
 }
 
+// A regular file is mapped and handed out 4 MiB at a time; anything else (a
+// pipe) is read in chunks through a buffer. Both cut the text at line ends
+// only: on a ~6 MB log (two blocks either way, lines crossing the boundary,
+// CRLF ends and a comment among the rows) they read the same numbers, bit for
+// bit, as the text that wrote them.
+TEST_F(Csv, APipeReadsTheSameNumbersAsTheMappedFile) {
+  const int n = 60000;
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> U(-1.0, 1.0);
+  Eigen::MatrixXd ref(n, 14);
+  std::string text = std::string(kHeader) + "\r\n";
+  for (int k = 0; k < n; ++k) {
+    ref(k, 0) = k * 0.002;
+    for (int c = 1; c < 14; ++c) ref(k, c) = U(rng);
+    text += fmt::format("{}", ref(k, 0));
+    for (int c = 1; c < 14; ++c) text += fmt::format(",{}", ref(k, c));
+    text += k == n / 2 ? "\r\n# half way\r\n" : "\r\n";
+  }
+  ASSERT_GT(text.size(), size_t{5} << 20);
+  const FlightLog mapped = read_flight_log(write("big.csv", text));
+  ASSERT_EQ(mapped.rows(), n);
+  EXPECT_EQ(mapped.data, ref);
+
+  const FlightLog piped = read_through_pipe(text);
+  ASSERT_EQ(piped.rows(), n);
+  EXPECT_EQ(piped.data, ref);
+}
+
 // Issue 13: a chunk's lines are parsed in two halves on two threads. The
 // numbers are the same as on one thread, and an error is the first bad line's
 // (the serial reader's), whichever half holds it and whatever the other half holds.
 TEST_F(Csv, TwoThreadsReadTheSameNumbersAndReportTheFirstBadLine) {
-  const int n = 20000;  // one chunk: far more than the 4096 lines a second thread needs
+  const int n = 20000;  // one block, far more than the 128 KiB that a second thread needs
   std::string body = standard_rows(n / 2);
   body += "# a comment in the middle\n\n";  // lines n/2 + 2 and n/2 + 3
   body += standard_rows(n / 2, 0.002, n / 2);
@@ -289,6 +338,16 @@ TEST_F(Csv, LinesLongerThanTheReadChunk) {
   EXPECT_EQ(log.comments.front().size(), 600000u);
   EXPECT_EQ(log.columns.size(), 30014u);
   EXPECT_EQ(log.data(1, 30013), 2.5);
+
+  // A line longer than the mapped reader's 4 MiB blocks and than the pipe
+  // reader's buffer (blanks before a value are allowed): whole either way.
+  const std::string huge = std::string(kHeader) + "\n" + standard_rows(2) + "0.004,1,2,3,4,5,6,7,8,9,10,11,12," +
+                           std::string(size_t{5} << 20, ' ') + "13\n" + standard_rows(2, 0.002, 3);
+  for (const FlightLog& l : {read_flight_log(write("huge.csv", huge)), read_through_pipe(huge)}) {
+    ASSERT_EQ(l.rows(), 5);
+    EXPECT_EQ(l.data(2, 13), 13.0);
+    EXPECT_EQ(l.data(4, 0), 0.008);
+  }
 }
 
 TEST_F(Csv, WriteThenReadIsExactAndAtomic) {
