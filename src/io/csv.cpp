@@ -422,6 +422,7 @@ FlightLog read_flight_log(const std::filesystem::path& path, const CsvReadOption
     std::vector<std::string_view> lines;  // the data lines
     std::vector<size_t> line_no;          // their line numbers, counted from the part's first line (0)
     size_t count = 0;                     // all lines, data or not
+    size_t first_line = 0, first_row = 0;  // of the part's first line and first data line (block-relative row)
   };
   std::array<Part, 2> parts;
   auto split = [](Part& part) {
@@ -460,11 +461,14 @@ FlightLog read_flight_log(const std::filesystem::path& path, const CsvReadOption
     parts[1].text = text.substr(cut);
     detail::run_both(parallel, [&] { split(parts[0]); }, [&] { split(parts[1]); });
     in.lines_taken(parts[0].count + parts[1].count);
-    const size_t line1 = first_line_no + parts[0].count;  // the second part's first line
+    parts[0].first_line = first_line_no;
+    parts[1].first_line = first_line_no + parts[0].count;
+    parts[1].first_row = parts[0].lines.size();
     const size_t n0 = parts[0].lines.size(), n1 = parts[1].lines.size();
     if (n0 + n1 == 0) continue;
-    for (size_t r = 0; r < n0; ++r) row_lines.add(static_cast<size_t>(store.rows()) + r, first_line_no + parts[0].line_no[r]);
-    for (size_t r = 0; r < n1; ++r) row_lines.add(static_cast<size_t>(store.rows()) + n0 + r, line1 + parts[1].line_no[r]);
+    for (const Part& part : parts)
+      for (size_t r = 0; r < part.lines.size(); ++r)
+        row_lines.add(static_cast<size_t>(store.rows()) + part.first_row + r, part.first_line + part.line_no[r]);
     const Eigen::Index count = static_cast<Eigen::Index>(n0 + n1);
     if (!estimated) {
       estimated = true;
@@ -477,12 +481,12 @@ FlightLog read_flight_log(const std::filesystem::path& path, const CsvReadOption
     }
     double* base = store.add_rows(count);
     const Eigen::Index stride = store.capacity();
-    auto parse_part = [&](const Part& part, size_t first_row, size_t first_line) {
+    auto parse_part = [&](const Part& part) {
       for (size_t r = 0; r < part.lines.size(); ++r)
-        parse_row(part.lines[r], first_line + part.line_no[r], base + static_cast<Eigen::Index>(first_row + r), stride);
+        parse_row(part.lines[r], part.first_line + part.line_no[r],
+                  base + static_cast<Eigen::Index>(part.first_row + r), stride);
     };
-    detail::run_both(parallel && n0 > 0 && n1 > 0, [&] { parse_part(parts[0], 0, first_line_no); },
-                     [&] { parse_part(parts[1], n0, line1); });
+    detail::run_both(parallel && n0 > 0 && n1 > 0, [&] { parse_part(parts[0]); }, [&] { parse_part(parts[1]); });
   }
   const auto nrow = store.rows();
   if (nrow < 2)
