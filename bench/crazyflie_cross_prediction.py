@@ -14,7 +14,8 @@ offset is not part of a tensor, and the same for both). quadid's model adds
 what it identified besides the tensor: the thrust scale s, the rotors' inertia
 (J_r (Omega_r_dot e_z + w x e_z Omega_r), Omega_r the signed sum of the rotor
 speeds) and the blade-flapping moment K (e_z x v_body), v_body from the motion
-capture; the published tensor has none of these. The score is
+capture (the set's own terms: PC and FMPC carry theirs, moved with the body);
+the published tensor has none of these. The score is
 the RMS error of each axis over the other flights' samples; "1 Hz high-pass"
 repeats it on the errors above 1 Hz, where the aerodynamic moments of
 translational flight, which neither tensor models, are small. Two more tables
@@ -98,7 +99,7 @@ with tempfile.TemporaryDirectory() as tmp:
                               str(MASS), "--ignore-input-errors", "--json"], check=True, capture_output=True, text=True)
         j = json.loads(out.stdout)
         rec = j["recommended"]["set"]
-        x = j["estimates"][{"PC": "LS", "FMPC": "FMLS"}.get(rec, rec)].get("extra", {})
+        x = j["estimates"][rec].get("extra") or j["estimates"][{"PC": "LS", "FMPC": "FMLS"}.get(rec, rec)].get("extra", {})
         ident[f] = (rec, (tensor(j["estimates"][rec]), x.get("thrust_scale", 1.0), x.get("rotor_inertia", 0.0),
                           x.get("flapping_x", 0.0), x.get("flapping_y", 0.0)))
 

@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include <cmath>
+#include <filesystem>
 #include <string>
 
 namespace {
@@ -94,6 +95,40 @@ TEST_F(CliVehicle, Heavy2kgFliesAndIdentifiesFromRotorSpeeds) {
 TEST_F(CliVehicle, CommandVehicleIdentifiesThroughTheMotorLag) {
   // jmavsim-quad logs commands (before the 5 ms lag): identify must apply the lag itself.
   fly_and_identify("jmavsim-quad");
+}
+
+// Issue 11: on every real flight the recommended set is physically consistent,
+// its terms included (a flapping moment toward the velocity, a negative rotor
+// inertia or damping would be as unphysical as a negative moment), and a set
+// whose terms break their signs is reported as such.
+TEST_F(CliVehicle, RealCrazyflieFlightsRecommendASetPhysicalInBodyAndTerms) {
+#ifdef QUADID_SHARED_DATA
+  const std::filesystem::path dir = std::filesystem::path(QUADID_SHARED_DATA) / "crazyflie-usd";
+#else
+  const std::filesystem::path dir = "/nonexistent";
+#endif
+  if (!std::filesystem::exists(dir / "jana00")) GTEST_SKIP() << dir << " absent";
+  for (const char* flight : {"jana00", "jana01", "jana04", "jana06"}) {
+    SCOPED_TRACE(flight);
+    const CliRun id = run("identify " + (dir / flight).string() +
+                          " --vehicle crazyflie21 --known-mass 0.0347 --ignore-input-errors --json");
+    ASSERT_EQ(id.rc, 0) << id.err;
+    const nlohmann::json j = nlohmann::json::parse(id.out);
+    const std::string rec = j.at("recommended").at("set");
+    EXPECT_TRUE(j.at("consistency").at(rec).at("physical").get<bool>()) << j.at("consistency").at(rec).dump();
+    for (const char* set : {"LS", "FMLS", "PC", "FMPC"}) {
+      const auto& x = j.at("estimates").at(set).at("extra");
+      bool signs = true;
+      for (const char* term : {"flapping_x", "flapping_y", "rotor_inertia"})
+        signs = signs && x.at(term).get<double>() >= 0.0;
+      if (std::string(set).ends_with("PC") || set == rec) {
+        EXPECT_TRUE(signs) << set << " " << x.dump();
+      }
+      if (!signs) {
+        EXPECT_FALSE(j.at("consistency").at(set).at("physical").get<bool>()) << set;
+      }
+    }
+  }
 }
 
 TEST_F(CliVehicle, IdentifyWithoutTheRotorColumnsNamesThem) {

@@ -193,6 +193,11 @@ void register_identify(CLI::App& app) {
                   "high-pass of the roll and pitch rows (real-flight regression): auto (with --vehicle the lowest "
                   "cutoff, 0-3 Hz, above which Ixx and Iyy stop moving; else off), off, or Hz (docs/real-flights.md)")
       ->capture_default_str();
+  sub->add_option("--term-signs", a->real.term_signs,
+                  "real-flight terms whose sign physics fixes (damping, drag, rotor inertia, blade flapping: >= 0): "
+                  "enforce (a set breaking one is not physical, and PC/FMPC hold it at 0) or free (for rotors well "
+                  "below the centre of mass, where the flapping moment may change sign) (docs/uncertainty.md)")
+      ->capture_default_str();
   sub->add_option("--time-offsets", a->real.time_offsets,
                   "with a rotor model: estimate (the gyro's and the rotor signals' time offsets against the pose, "
                   "estimated and applied) or none (docs/real-flights.md)")

@@ -253,6 +253,11 @@ struct PhysicalProjectionOptions {
   /// Stopping tolerance of NLopt (relative, on the parameters).
   double xtol_rel = 1e-12;
   int max_evaluations = 5000;
+  /// Real-flight regression (closest_physical_with_terms): also hold the
+  /// terms whose sign physics fixes (damping, drag, rotor inertia, blade
+  /// flapping) at >= 0. Turn it off for a vehicle whose rotors sit well below
+  /// its centre of mass, where the flapping moment may change sign.
+  bool term_signs = true;
   void validate() const;
 };
 

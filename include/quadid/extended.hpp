@@ -22,6 +22,8 @@
 
 #include <optional>
 #include <string>
+#include <string_view>
+#include <utility>
 #include <vector>
 
 namespace quadid {
@@ -169,6 +171,43 @@ ExtendedResult identify_extended(const FlightLog& log, const ExtendedOptions& op
 /// them for LS and FMLS when opt.extended()): its processing, the two cutoffs
 /// (default the processing's), window, lambda, terms, reference and LS options.
 ExtendedOptions extended_options(const IdentificationOptions& opt);
+
+/// Whether physics fixes the sign of an extra term (it must be >= 0): the
+/// rate damping D and the vertical drag k_w (they take energy out), the rotor
+/// inertia J_r, and the blade-flapping coefficients K (the flapped rotor
+/// tilts the vehicle away from its velocity: the hub's stiffness always, and
+/// the tilted thrust too when the rotors are at or above the centre of mass,
+/// as on common multirotors). Offsets, the thrust scale and the wind terms
+/// have no fixed sign.
+bool term_is_nonnegative(std::string_view name);
+
+/// The extra terms' signs: physical = false, and why, at the first term of
+/// `extra` that term_is_nonnegative and is below 0.
+PhysicalConsistency check_term_signs(const std::vector<std::pair<std::string, double>>& extra);
+
+/// The physically consistent set of a real-flight estimate: the rigid body
+/// and the extra terms together.
+struct TermsProjection {
+  PhysicalProjection body;  // the rigid body (closest_physical)
+  /// x.extra's names; the estimated values moved with the body (the
+  /// conditional mean given it), the pinned ones at 0, the given ones as given.
+  std::vector<std::pair<std::string, double>> extra;
+  std::vector<std::string> pinned;  // sign-definite terms held at 0, in pinning order
+};
+
+/// The set closest to x (in the metric of x.covariance, over every estimated
+/// parameter) whose rigid body is consistent (closest_physical) and, when
+/// opt.term_signs, whose sign-definite terms (term_is_nonnegative) are >= 0.
+/// With no bound on the terms, the rigid body is the closest one in the
+/// marginal metric and each term moves to its conditional mean given it: a
+/// term correlated with a moved moment moves with it (J_r shares the yaw row
+/// with Izz). A term that then breaks its sign is held at 0 and the
+/// projection repeated, conditional on it, until none does (one round adds
+/// every term that breaks its sign; at most one round per term). With the
+/// mass known (entry 0 of x.value is then the thrust scale), m is held at
+/// `known_mass`. `scale` is closest_physical's.
+TermsProjection closest_physical_with_terms(const ExtendedEstimate& x, std::optional<double> known_mass,
+                                            const Theta& scale, const PhysicalProjectionOptions& opt = {});
 
 /// {"sets": {"LS": {"parameters": {name: {value, std_error}}, row_weight, residual_rms, ...}}, "window", ...}
 nlohmann::json to_json(const ExtendedResult& x);

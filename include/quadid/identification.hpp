@@ -358,6 +358,11 @@ struct IdentificationResult {
 /// names the figures behind the choice and what the data determine poorly.
 Recommendation recommend_set(const IdentificationResult& r);
 
+/// A set's physical consistency: its rigid body (check_physical_consistency),
+/// then, when `term_signs`, the signs of its real-flight terms
+/// (check_term_signs, extended.hpp). `why` names the first violation.
+PhysicalConsistency check_set_consistency(const SetEstimate& e, bool term_signs = true);
+
 /// The paper's whole procedure on one log. Throws InputError on bad data
 /// (missing columns, short log, window outside the log, rank-deficient data
 /// unless allowed) and std::invalid_argument on bad options.

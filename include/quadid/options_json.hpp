@@ -64,6 +64,7 @@ struct RealFlightArgs {
   std::string time_offsets = "estimate";     // --time-offsets estimate|none
   std::string rotor_inertia = "auto";        // --rotor-inertia auto|estimate|KG_M2
   std::string moment_highpass = "auto";      // --moment-highpass auto|off|HZ
+  std::string term_signs = "enforce";        // --term-signs enforce|free
 };
 
 /// Everything `quadid identify` needs besides the log: the identification and

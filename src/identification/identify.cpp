@@ -304,27 +304,18 @@ IdentificationResult identify(const FlightLog& log, const IdentificationOptions&
               : "real-flight regression: HAC (low-frequency periodogram) covariance of each sample's influence on the "
                 "weighted fit";
       // The physically consistent set closest to it, in the metric of its
-      // covariance (m held at the known mass when given).
-      Mat7 info = Mat7::Zero();
-      const Theta sd = sol.std_error.cwiseMax(1e-12 * x.theta.cwiseAbs().maxCoeff());
-      const Eigen::LDLT<Mat7> ldlt(cov + Mat7(sd.cwiseAbs2().asDiagonal()) * 1e-9);
-      info = ldlt.solve(Mat7::Identity());
-      if (opt.terms.known_mass) {
-        // Pin m: a million times the inertia entries' weight in the problem's
-        // own scaling (m / |m|, I / mean principal moment). Not more: the
-        // projection's ridge is relative to the metric's size, and a larger
-        // pin would make that ridge, not the covariance, decide how the
-        // inertia moves.
-        const double ms = std::abs(x.theta(0)), sI = (std::abs(x.theta(1)) + std::abs(x.theta(4)) + std::abs(x.theta(6))) / 3.0;
-        if (ms > 0.0 && sI > 0.0) info(0, 0) = 1e6 * info.diagonal().tail<6>().maxCoeff() * (sI * sI) / (ms * ms);
-      }
-      const Eigen::LLT<Mat7> llt(0.5 * (info + info.transpose()));
-      const Mat7 F = llt.matrixU();
-      PhysicalProjection pr = closest_physical(F, x.theta, prior, opt.physical);
+      // covariance (m held at the known mass when given), with its terms.
+      TermsProjection tp = closest_physical_with_terms(x, opt.terms.known_mass, prior, opt.physical);
+      PhysicalProjection pr = std::move(tp.body);
       SetEstimate& pc = res.physical_sets[static_cast<size_t>(i)];
       pc.theta = pr.theta;
       pc.valid = pr.theta.allFinite();
       pc.note = pc.valid ? "" : fmt::format("{}: no consistent set ({})", pc.name, pr.status);
+      if (pc.valid) pc.extra = std::move(tp.extra);
+      if (pc.valid && !tp.pinned.empty()) {
+        pr.changed = true;
+        pr.status += fmt::format("; {} held at 0 (sign)", fmt::join(tp.pinned, ", "));
+      }
       res.projections[static_cast<size_t>(i)] = std::move(pr);
     }
     for (const auto& w : xr->warnings) res.warnings.push_back(w);

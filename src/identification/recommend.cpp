@@ -68,15 +68,15 @@ Recommendation recommend_set(const IdentificationResult& r) {
   else
     why = fmt::format("{} is the only least-squares set", best->set->name);
 
-  const PhysicalConsistency pcheck = check_physical_consistency(best->set->theta);
+  const PhysicalConsistency pcheck = check_set_consistency(*best->set, r.options.physical.term_signs);
   rec.set = best->set->name;
   if (!pcheck.physical) {
     if (best->physical && best->physical->valid) {
       rec.set = best->physical->name;
-      why += fmt::format("; it is not a physical body ({}), so its closest consistent set {} is recommended",
+      why += fmt::format("; it is not physically consistent ({}), so its closest consistent set {} is recommended",
                          pcheck.why, best->physical->name);
     } else {
-      why += fmt::format("; it is not a physical body ({}) and no consistent set could be found: treat it with care",
+      why += fmt::format("; it is not physically consistent ({}) and no consistent set could be found: treat it with care",
                          pcheck.why);
     }
   } else {

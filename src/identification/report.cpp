@@ -120,8 +120,9 @@ std::string format_estimates_table(const IdentificationResult& r) {
   std::vector<std::string> notes;
   for (const auto* e : sets) {
     if (!e->valid) continue;
-    const PhysicalConsistency c = check_physical_consistency(e->theta);
-    if (!c.physical) notes.push_back(fmt::format("{} is not a physical body ({}): shown for comparison only", e->name, c.why));
+    const PhysicalConsistency c = check_set_consistency(*e, r.options.physical.term_signs);
+    if (!c.physical)
+      notes.push_back(fmt::format("{} is not physically consistent ({}): shown for comparison only", e->name, c.why));
   }
   if (r.extended)
     notes.push_back("GD and FMGD follow the paper's gradient law on the paper's model, without the real-flight terms: "
@@ -187,13 +188,15 @@ std::string format_uncertainty_table(const IdentificationResult& r) {
 std::string format_consistency(const IdentificationResult& r) {
   fmt::memory_buffer out;
   auto it = std::back_inserter(out);
-  fmt::format_to(it, "Physical consistency (m > 0, I positive definite, triangle inequalities):\n");
+  const bool terms = r.extended && r.options.physical.term_signs;
+  fmt::format_to(it, "Physical consistency (m > 0, I positive definite, triangle inequalities{}):\n",
+                 terms ? "; damping, drag, rotor inertia and blade flapping >= 0" : "");
   for (const auto* e : r.all_sets()) {
     if (!e->valid) {
       fmt::format_to(it, "  {:<6} -    {}\n", e->name, e->note);
       continue;
     }
-    const PhysicalConsistency c = check_physical_consistency(e->theta);
+    const PhysicalConsistency c = check_set_consistency(*e, r.options.physical.term_signs);
     fmt::format_to(it, "  {:<6} {:<4} {}\n", e->name, c.physical ? "yes" : "NO", c.why);
   }
   for (size_t i = 0; i < r.physical_sets.size() && i < r.projections.size(); ++i) {
@@ -202,6 +205,12 @@ std::string format_consistency(const IdentificationResult& r) {
       fmt::format_to(it, "  {} moved from {} to be consistent: least-squares cost +{:.3g} ({}, {} evaluations)\n",
                      r.physical_sets[i].name, r.physical_sets[i].name == "PC" ? "LS" : "FMLS", p.cost, p.status,
                      p.evaluations);
+    // Its terms moved with its rigid body (closest_physical_with_terms).
+    if (p.changed && !r.physical_sets[i].extra.empty()) {
+      std::vector<std::string> v;
+      for (const auto& [n, x] : r.physical_sets[i].extra) v.push_back(fmt::format("{} {:.4g}", n, x));
+      fmt::format_to(it, "    its terms: {}\n", fmt::join(v, ", "));
+    }
     else
       fmt::format_to(it, "  {} = {} (already consistent)\n", r.physical_sets[i].name,
                      r.physical_sets[i].name == "PC" ? "LS" : "FMLS");
@@ -289,11 +298,18 @@ json to_json(const IdentificationResult& r) {
   json consistency = json::object();
   for (const auto* e : r.all_sets()) {
     if (!e->valid) continue;
-    const PhysicalConsistency c = check_physical_consistency(e->theta);
+    const PhysicalConsistency c = check_set_consistency(*e, r.options.physical.term_signs);
     consistency[e->name] = {{"physical", c.physical}, {"why", c.why}};
   }
-  for (const auto& e : r.physical_sets)
-    if (e.valid) est[e.name] = to_json(e.params());
+  for (const auto& e : r.physical_sets) {
+    if (!e.valid) continue;
+    est[e.name] = to_json(e.params());
+    if (!e.extra.empty()) {
+      json x = json::object();
+      for (const auto& [n, v] : e.extra) x[n] = v;
+      est[e.name]["extra"] = x;
+    }
+  }
   for (const auto& e : r.estimates) {
     if (e.valid) {
       est[e.name] = to_json(e.params());

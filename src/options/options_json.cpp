@@ -82,6 +82,7 @@ const std::vector<OptionSpec>& identify_specs() {
           {"time-offsets", K::String, "estimate (gyro and rotor groups against the pose, with a rotor model) or none"},
           {"rotor-inertia", K::String, "auto (the vehicle file's when given, else estimated), estimate, or kg m^2"},
           {"moment-highpass", K::String, "auto (with a vehicle chosen from the data, else off), off, or Hz"},
+          {"term-signs", K::String, "enforce (damping, drag, rotor inertia, flapping >= 0 in PC and FMPC) or free"},
           {"jackknife-blocks", K::Integer, "time blocks of the jackknife under the HAC errors, 0 = off (default 8)"},
       },
       processing_specs());
@@ -444,6 +445,7 @@ IdentifyRequest identify_options_from_json(const nlohmann::json& j) {
   rf.time_offsets = r.string("time-offsets").value_or("estimate");
   rf.rotor_inertia = r.string("rotor-inertia").value_or("auto");
   rf.moment_highpass = r.string("moment-highpass").value_or("auto");
+  rf.term_signs = r.string("term-signs").value_or("enforce");
   rf.window_given = j.contains("window");
   rf.nominal_given = j.contains("nominal");
   r.finish();
@@ -511,6 +513,9 @@ void apply_real_flight(IdentifyRequest& req, const RealFlightArgs& a) {
   opt.moment_cutoff_hz = a.cutoff_moment;
   // The roll and pitch rows' high-pass: chosen from the data on a real
   // vehicle's log (docs/real-flights.md), off on the paper's model.
+  if (a.term_signs == "enforce") opt.physical.term_signs = true;
+  else if (a.term_signs == "free") opt.physical.term_signs = false;
+  else throw std::invalid_argument(fmt::format("--term-signs {}: expected enforce or free", a.term_signs));
   if (a.moment_highpass == "auto") {
     opt.moment_highpass_hz = vehicle ? std::nullopt : std::optional<double>(0.0);
   } else if (a.moment_highpass == "off") {
@@ -619,8 +624,11 @@ IdentificationInput prepare_identification(const std::string& path, const Identi
 
 IdentificationResult identify_prepared(const IdentificationInput& in) {
   IdentificationResult res = identify(in.log, in.options);
-  if (in.timing)
+  if (in.timing) {
     for (int i : {0, 2}) add_timing_extras(res.estimates[static_cast<std::size_t>(i)].extra, *in.timing);
+    for (auto& pc : res.physical_sets)
+      if (!pc.extra.empty()) add_timing_extras(pc.extra, *in.timing);
+  }
   return res;
 }
 
