@@ -109,12 +109,18 @@ TermsProjection closest_physical_with_terms(const ExtendedEstimate& x, std::opti
   for (Index j = 0; j < P; ++j) ((j == 0 && known_mass) || j >= 7 ? terms : rigid).push_back(j);
   auto name_of = [&](Index j) { return j == 0 ? std::string("thrust_scale") : x.names[static_cast<size_t>(j)]; };
 
+  Indices all(static_cast<size_t>(P));
+  for (Index j = 0; j < P; ++j) all[static_cast<size_t>(j)] = j;
   Indices pinned;  // held at 0
+  auto unpinned = [&](const Indices& idx) {
+    Indices v;
+    for (Index j : idx)
+      if (std::find(pinned.begin(), pinned.end(), j) == pinned.end()) v.push_back(j);
+    return v;
+  };
   for (size_t round = 0; round <= terms.size(); ++round) {
     // The distribution conditional on the pinned terms being 0.
-    Indices free;
-    for (Index j = 0; j < P; ++j)
-      if (std::find(pinned.begin(), pinned.end(), j) == pinned.end()) free.push_back(j);
+    const Indices free = unpinned(all);
     Eigen::VectorXd mu = x.value;
     Eigen::MatrixXd C = x.covariance;
     if (!pinned.empty()) {
@@ -139,15 +145,9 @@ TermsProjection closest_physical_with_terms(const ExtendedEstimate& x, std::opti
       sd(0) = 0.0;
     }
     out.body = project_body(mean, cov, sd, known_mass.has_value(), scale, opt);
-    if (!out.body.theta.allFinite()) {
-      out.extra = x.extra;
-      out.pinned.clear();
-      return out;
-    }
+    if (!out.body.theta.allFinite()) return out;  // no consistent body: x's terms, nothing pinned
     // The free terms given the body: mu_t + C_tr C_rr^-1 (theta_r - mu_r).
-    Indices free_terms;
-    for (Index j : terms)
-      if (std::find(pinned.begin(), pinned.end(), j) == pinned.end()) free_terms.push_back(j);
+    const Indices free_terms = unpinned(terms);
     Eigen::VectorXd d(static_cast<Index>(rigid.size()));
     for (size_t a = 0; a < rigid.size(); ++a) d(static_cast<Index>(a)) = out.body.theta(rigid[a]) - mu(rigid[a]);
     Eigen::VectorXd value = mu;
