@@ -13,6 +13,8 @@
 #include <Eigen/Eigenvalues>
 #include <cmath>
 #include <exception>
+#include <future>
+#include <optional>
 #include <numbers>
 #include <stdexcept>
 #include <tuple>
@@ -145,34 +147,84 @@ IdentificationResult identify(const FlightLog& log, const IdentificationOptions&
   opt.validate();
   IdentificationResult res;
   std::vector<std::string> input_warnings;  // listed after the estimation's own warnings
-  // The input checks and the processing read the log independently: at once
-  // when two threads are allowed. A failed check is reported first, as if the
-  // processing had not started.
+  // The input checks read the log independently of the estimation: on a
+  // thread of their own, from the start, when two threads are allowed (they
+  // cost a fifth of the work and would otherwise hold up the processing or the
+  // two regressions). A failed check is still reported first, as if the
+  // estimation had not started; what it computed meanwhile is dropped.
   const bool two = detail::use_second_thread(opt.processing.threads);
+  auto run_checks = [&] {
+    InputCheckOptions ic;
+    ic.g = opt.processing.g;
+    ic.reference_mass = opt.reference.params.m;
+    return check_input(log, ic);
+  };
+  std::future<std::vector<InputFinding>> checks;
+  if (opt.input_checks) {
+    if (two) checks = std::async(std::launch::async, run_checks);
+    else res.input_findings = run_checks();
+  }
   std::shared_ptr<const RegressionSignals> sig;
-  std::exception_ptr processing_error;
-  detail::run_both(
-      two,
-      [&] {
-        if (!opt.input_checks) return;
-        InputCheckOptions ic;
-        ic.g = opt.processing.g;
-        ic.reference_mass = opt.reference.params.m;
-        res.input_findings = check_input(log, ic);
-      },
-      [&] {
-        try {
-          sig = process_log(log, opt.processing, &res.processing);
-        } catch (...) {
-          processing_error = std::current_exception();
-        }
-      });
+  std::optional<Regression> std_reg_opt, filt_reg_opt;
+  Recorder rec{0, 1, 1, false};
+  RunOutput s, f;
+  PhysicalProjection pc_std, pc_filt;
+  const Theta prior = opt.reference.params.theta();
+  std::exception_ptr estimation_error;
+  try {
+    sig = process_log(log, opt.processing, &res.processing);
+    std_reg_opt.emplace(sig, RegressionModel::Standard, opt.window);
+    filt_reg_opt.emplace(sig, RegressionModel::Filtered, opt.window, opt.lambda, opt.gd_variant);
+    const Regression& std_reg = *std_reg_opt;
+    const Regression& filt_reg = *filt_reg_opt;
+    res.window = std_reg.window();
+    res.window_samples = std_reg.size();
+    res.reference = opt.reference;
+    res.options = opt;
+    res.gd_initial = opt.gd_initial ? opt.gd_initial->theta() : prior;
+
+    // Evolution: t, then LS, GD, FMLS, FMGD (7 each).
+    const double T = sig->T;
+    const Eigen::Index stride =
+        opt.evolution_interval <= 0.0 ? 1 : std::max<Eigen::Index>(1, std::llround(opt.evolution_interval / T));
+    rec = Recorder{std_reg.begin(), std_reg.end(), stride, opt.record_evolution};
+    if (opt.record_evolution) {
+      res.evolution.columns.push_back("t");
+      for (const char* set : {"LS", "GD", "FMLS", "FMGD"})
+        for (const char* p : kThetaNames) res.evolution.columns.push_back(fmt::format("{}_{}", set, p));
+      res.evolution.data.setConstant(rec.rows(), 29, kNaN);
+    }
+
+    // The two regressions are independent until the tables: each runs LS and GD,
+    // solves, computes its HAC intervals and its physically consistent set, on
+    // its own thread when two are allowed.
+    const double fs = res.processing.fs, f3 = res.processing.filter_f3db;
+    auto chain = [&](const Regression& reg, RunOutput& out, LeastSquaresSolution& sol, PhysicalProjection& pc,
+                     Eigen::Index ls_col, Eigen::Index gd_col, bool filtered) {
+      out = run(reg, res.gd_initial, opt.gd, rec, res.evolution.data, ls_col, gd_col, !filtered);
+      sol = solve_least_squares(out.acc, prior, opt.ls, correlation_length(fs, f3, opt.lambda, filtered));
+      // Second pass: the influence of each sample on the estimate, for the HAC
+      // covariance (docs/uncertainty.md).
+      InfluenceAccumulator infl(sol);
+      infl.reserve(static_cast<long>(reg.size()));
+      reg.for_each([&](Eigen::Index, const Regressor4x7& G, const Vec4& Y) { infl.add(G, Y); });
+      attach_uncertainty(sol, infl.finish(opt.uncertainty), prior, opt.ls);
+      // The physically consistent set: the closest consistent Theta in the LS metric.
+      pc = closest_physical(sol, prior, opt.physical);
+    };
+    detail::run_both(
+        two, [&] { chain(std_reg, s, res.ls_standard, pc_std, 1, 8, false); },
+        [&] { chain(filt_reg, f, res.ls_filtered, pc_filt, 15, 22, true); });
+  } catch (...) {
+    estimation_error = std::current_exception();
+  }
+  if (checks.valid()) res.input_findings = checks.get();
   if (opt.input_checks) {
     std::vector<std::string> errors;
-    for (const auto& f : res.input_findings) {
-      if (f.severity == Severity::Error) errors.push_back(fmt::format("{}: {} ({})", f.check, f.saw, f.action));
-      else if (f.severity == Severity::Warning)
-        input_warnings.push_back(fmt::format("input check {}: {} ({})", f.check, f.saw, f.action));
+    for (const auto& fd : res.input_findings) {
+      if (fd.severity == Severity::Error) errors.push_back(fmt::format("{}: {} ({})", fd.check, fd.saw, fd.action));
+      else if (fd.severity == Severity::Warning)
+        input_warnings.push_back(fmt::format("input check {}: {} ({})", fd.check, fd.saw, fd.action));
     }
     if (!errors.empty()) {
       if (!opt.ignore_input_errors)
@@ -182,50 +234,9 @@ IdentificationResult identify(const FlightLog& log, const IdentificationOptions&
       for (const auto& e : errors) input_warnings.push_back("input check " + e + " (ignored)");
     }
   }
-  if (processing_error) std::rethrow_exception(processing_error);
-  const Regression std_reg(sig, RegressionModel::Standard, opt.window);
-  const Regression filt_reg(sig, RegressionModel::Filtered, opt.window, opt.lambda, opt.gd_variant);
-  res.window = std_reg.window();
-  res.window_samples = std_reg.size();
-  res.reference = opt.reference;
-  res.options = opt;
-  const Theta prior = opt.reference.params.theta();
-  res.gd_initial = opt.gd_initial ? opt.gd_initial->theta() : prior;
-
-  // Evolution: t, then LS, GD, FMLS, FMGD (7 each).
-  const double T = sig->T;
-  const Eigen::Index stride =
-      opt.evolution_interval <= 0.0 ? 1 : std::max<Eigen::Index>(1, std::llround(opt.evolution_interval / T));
-  const Recorder rec{std_reg.begin(), std_reg.end(), stride, opt.record_evolution};
-  if (opt.record_evolution) {
-    res.evolution.columns.push_back("t");
-    for (const char* set : {"LS", "GD", "FMLS", "FMGD"})
-      for (const char* p : kThetaNames) res.evolution.columns.push_back(fmt::format("{}_{}", set, p));
-    res.evolution.data.setConstant(rec.rows(), 29, kNaN);
-  }
-
-  // The two regressions are independent until the tables: each runs LS and GD,
-  // solves, computes its HAC intervals and its physically consistent set, on
-  // its own thread when two are allowed.
-  const double fs = res.processing.fs, f3 = res.processing.filter_f3db;
-  RunOutput s, f;
-  PhysicalProjection pc_std, pc_filt;
-  auto chain = [&](const Regression& reg, RunOutput& out, LeastSquaresSolution& sol, PhysicalProjection& pc,
-                   Eigen::Index ls_col, Eigen::Index gd_col, bool filtered) {
-    out = run(reg, res.gd_initial, opt.gd, rec, res.evolution.data, ls_col, gd_col, !filtered);
-    sol = solve_least_squares(out.acc, prior, opt.ls, correlation_length(fs, f3, opt.lambda, filtered));
-    // Second pass: the influence of each sample on the estimate, for the HAC
-    // covariance (docs/uncertainty.md).
-    InfluenceAccumulator infl(sol);
-    infl.reserve(static_cast<long>(reg.size()));
-    reg.for_each([&](Eigen::Index, const Regressor4x7& G, const Vec4& Y) { infl.add(G, Y); });
-    attach_uncertainty(sol, infl.finish(opt.uncertainty), prior, opt.ls);
-    // The physically consistent set: the closest consistent Theta in the LS metric.
-    pc = closest_physical(sol, prior, opt.physical);
-  };
-  detail::run_both(
-      two, [&] { chain(std_reg, s, res.ls_standard, pc_std, 1, 8, false); },
-      [&] { chain(filt_reg, f, res.ls_filtered, pc_filt, 15, 22, true); });
+  if (estimation_error) std::rethrow_exception(estimation_error);
+  const Regression& std_reg = *std_reg_opt;
+  const Regression& filt_reg = *filt_reg_opt;
   res.gd_step_gain_standard = s.gd->max_step_gain();
   res.gd_step_gain_filtered = f.gd->max_step_gain();
 
