@@ -804,6 +804,13 @@ TEST_F(LogsCli, LogInfoAndImport) {
   r = run("identify " + path("f.ulg"));
   EXPECT_EQ(r.rc, 1);
   EXPECT_NE(r.err.find("the imported log has no column Fz"), std::string::npos) << r.err;
+  // A vehicle whose rotor columns the log lacks: the log's rotor-like columns are listed.
+  r = run("identify " + path("f.ulg") + " --vehicle qball2");
+  EXPECT_EQ(r.rc, 1);
+  EXPECT_NE(r.err.find("look like rotor signals: actuator_motors.control[0], actuator_motors.control[1]"),
+            std::string::npos)
+      << r.err;
+  EXPECT_NE(r.err.find("[rotors] columns"), std::string::npos) << r.err;
   const std::string good = px4_flight({});
   write("bad.ulg", good.substr(0, good.size() - 5));
   r = run("log-info " + path("bad.ulg"));

@@ -501,7 +501,8 @@ FlightLog load_any_log(const std::filesystem::path& path, const LoadOptions& opt
     if (!missing.empty())
       throw InputError(fmt::format(
           "{}: the imported log has no column {} (an autopilot log holds rotor signals, not the wrench: it is "
-          "computed by a vehicle's rotor model; `quadid import` shows the columns there are)",
+          "computed by a vehicle's rotor model: pass the vehicle with --vehicle, a vehicle file or a built-in "
+          "(qball2, crazyflie21, jmavsim-quad, x500; docs/vehicles.md); `quadid import` shows the columns there are)",
           path.string(), fmt::join(missing, ", ")));
   }
   return log;

@@ -7,7 +7,11 @@
 
 #include <Eigen/SVD>
 
+#include <algorithm>
+#include <array>
+#include <cctype>
 #include <cmath>
+#include <string_view>
 #include <numbers>
 #include <stdexcept>
 
@@ -131,13 +135,45 @@ WrenchSeries RotorModel::wrench_from_speeds(const Eigen::MatrixXd& w) const {
   return thrusts * allocation().transpose();
 }
 
+namespace {
+
+// Columns a user may have meant as the rotor signals, for the error message.
+std::vector<std::string> rotor_like_columns(const FlightLog& log) {
+  static constexpr std::array<std::string_view, 8> kHints = {"rpm", "motor", "actuator", "output", "esc", "pwm",
+                                                             "rotor", "omega"};
+  std::vector<std::string> out;
+  for (const auto& c : log.columns) {
+    std::string lower(c);
+    std::transform(lower.begin(), lower.end(), lower.begin(), [](unsigned char ch) { return std::tolower(ch); });
+    const bool hinted = std::any_of(kHints.begin(), kHints.end(),
+                                    [&](std::string_view h) { return lower.find(h) != std::string::npos; });
+    // w1.., m1..: the names quadid's own logs and many scripts use.
+    const bool short_name = lower.size() >= 2 && lower.size() <= 3 && (lower[0] == 'w' || lower[0] == 'm') &&
+                            std::all_of(lower.begin() + 1, lower.end(), [](unsigned char ch) { return std::isdigit(ch); });
+    if (hinted || short_name) out.push_back(c);
+  }
+  return out;
+}
+
+}  // namespace
+
 Eigen::MatrixXd rotor_inputs(const FlightLog& log, const RotorModel& rotors) {
   Eigen::MatrixXd in(log.rows(), rotors.count());
   for (int i = 0; i < rotors.count(); ++i) {
     const std::string& c = rotors.columns[static_cast<size_t>(i)];
-    if (!log.has(c))
-      throw InputError(fmt::format("the log has no rotor column '{}' (the vehicle's rotors.columns: {})", c,
-                                   fmt::join(rotors.columns, ", ")));
+    if (!log.has(c)) {
+      const std::vector<std::string> like = rotor_like_columns(log);
+      throw InputError(fmt::format(
+          "the log has no rotor column '{}' (the vehicle's rotors.columns: {}); {}", c, fmt::join(rotors.columns, ", "),
+          like.empty()
+              ? fmt::format("none of the log's columns looks like a rotor signal ({}): log rotor speeds or motor "
+                            "commands, or give the wrench columns Fz, tau_phi, tau_theta, tau_psi",
+                            fmt::join(log.columns, ", "))
+              : fmt::format("the log's columns that look like rotor signals: {}; name them, in the vehicle's motor "
+                            "order, in a vehicle file's [rotors] columns with the matching input (speed, rpm or "
+                            "command) and pass it with --vehicle (docs/vehicles.md)",
+                            fmt::join(like, ", "))));
+    }
     in.col(i) = log.column(c);
   }
   return in;
