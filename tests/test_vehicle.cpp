@@ -143,6 +143,40 @@ TEST(Vehicle, BadRotorInputsAreNamed) {
   }
 }
 
+TEST(Vehicle, CommandRangeMapsLoggedUnitsToCommands) {
+  // PWM in microseconds, [1000, 2000] us = command 0..1; 900 us (disarmed) is a stopped motor.
+  RotorModel r = load_vehicle("jmavsim-quad").rotors;
+  r.time_constant = 0.0;  // w = sqrt(command) at once
+  r.command_range = {1000.0, 2000.0};
+  r.validate();
+  const Eigen::MatrixXd w = r.speeds(row({900, 1000, 1250, 2000}), 0.002);
+  EXPECT_EQ(w, row({0.0, 0.0, 0.5, 1.0}));  // sqrt(0), sqrt(0), sqrt(0.25), sqrt(1): exact
+  EXPECT_EQ(r.input_for_thrust(0.25 * r.thrust_max), 1250.0);
+  EXPECT_EQ(r.logged_of_command(r.command_of_logged(1490.5)), 1490.5);
+  for (double bad : {2000.5, -1.0}) {
+    try {
+      r.speeds(row({1500, 1500, bad, 1500}), 0.002);
+      FAIL() << bad << " us was accepted";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("actuator_motors.control[2]"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("command_range = [1000, 2000]"), std::string::npos) << e.what();
+    }
+  }
+  // A range that is no range, or one on logged speeds, is refused by name.
+  r.command_range = {2000.0, 1000.0};
+  EXPECT_THROW(r.validate(), std::invalid_argument);
+  RotorModel s = parse_vehicle(kGood, "good.toml").rotors;
+  s.command_range = {1000.0, 2000.0};
+  try {
+    s.validate();
+    FAIL() << "command_range accepted on speeds";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("rotors.command_range applies to rotors.input = \"command\""),
+              std::string::npos)
+        << e.what();
+  }
+}
+
 TEST(Vehicle, WithRotorWrenchAppendsOrReplacesTheWrench) {
   FlightLog log;
   log.columns = {"t", "w1", "w2", "w3", "w4"};

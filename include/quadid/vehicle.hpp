@@ -15,6 +15,8 @@
 //   input = "command" : w_i = speed / speed at command 1,  T_i = thrust_max w_i^2,
 //                       w_i -> sqrt(command) with the first-order lag time_constant
 //                       (steady state: T_i = thrust_max * command).
+//   A command logged in other units (PWM microseconds, DShot steps) is mapped
+//   to 0..1 through command_range = [lo, hi] (command = (v - lo) / (hi - lo)).
 #pragma once
 
 #include "quadid/control.hpp"
@@ -24,6 +26,7 @@
 #include <Eigen/Core>
 #include <nlohmann/json.hpp>
 
+#include <array>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -60,6 +63,10 @@ struct RotorModel {
   double torque_ratio = 0.0;   // m, Q_i = torque_ratio * T_i
   double time_constant = 0.0;  // s, first-order lag of the rotor speed behind the command (0 = none)
   double rotor_inertia = 0.0;  // kg m^2 per rotor about its axis (not used by the rotor model itself)
+  /// input = "command" only: the logged values that mean command 0 and command 1, e.g.
+  /// {1000, 2000} for PWM in microseconds or {48, 2047} for DShot. A logged value from 0 up to
+  /// the low end is a stopped motor (command 0: a PWM output's disarmed value).
+  std::array<double, 2> command_range = {0.0, 1.0};
 
   int count() const { return static_cast<int>(columns.size()); }
   /// Throws std::invalid_argument naming the bad key (rotors.<key>).
@@ -71,8 +78,13 @@ struct RotorModel {
   double thrust(double w) const { return thrust_coefficient() * w * w; }
   /// Steady-state rotor speed for thrust T >= 0 (inverse of thrust()).
   double speed_for_thrust(double T) const;
-  /// The logged value that holds thrust T in steady state: the speed (speed, rpm) or the command T / thrust_max.
+  /// The logged value that holds thrust T in steady state: the speed (speed, rpm) or the command
+  /// T / thrust_max (in the units of command_range).
   double input_for_thrust(double T) const;
+  /// command_range's unit conversion (input = "command"), the one place it is done:
+  /// the command 0..1 of a logged value (0 from 0 up to the range's low end), and back.
+  double command_of_logged(double v) const;
+  double logged_of_command(double c) const;
   /// Largest thrust of one rotor (N), the saturation used by the mixer: thrust_max (0 = not given).
   double max_thrust() const { return thrust_max; }
 
@@ -85,10 +97,10 @@ struct RotorModel {
   Input wrench(const Eigen::VectorXd& thrusts) const;
 
   /// Rotor speeds w (samples x N) from the logged inputs (samples x N) at sample period T (s):
-  /// speed, rpm: the inputs themselves; command: w_0 = sqrt(c_0) (steady state at the first
+  /// speed, rpm: the inputs themselves; command (c = command_of_logged(input)): w_0 = sqrt(c_0) (steady state at the first
   /// sample), then the exact discretization of tau w' = sqrt(c) - w with c held between samples,
   ///   w_{k+1} = sqrt(c_k) + (w_k - sqrt(c_k)) exp(-T / tau)   (w_k = sqrt(c_k) when tau = 0).
-  /// Throws InputError on a negative input, or a command above 1.
+  /// Throws InputError on a negative input, or a command above 1 (above command_range's high end).
   Eigen::MatrixXd speeds(const Eigen::MatrixXd& inputs, double T) const;
   /// Per-sample wrench from rotor speeds (samples x N).
   WrenchSeries wrench_from_speeds(const Eigen::MatrixXd& speeds) const;

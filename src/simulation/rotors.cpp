@@ -60,7 +60,8 @@ void RotorActuators::step(double dt, Input& u0, Input& uh, Input& u1) {
 
 Eigen::VectorXd RotorActuators::logged() const {
   if (m_.input != RotorInput::kCommand) return w_;
-  return thrust_cmd_ / m_.thrust_max;  // the command the motors were given (0..1)
+  // The command the motors were given, in the log's units (command_range).
+  return (thrust_cmd_ / m_.thrust_max).unaryExpr([this](double c) { return m_.logged_of_command(c); });
 }
 
 void configure_for_vehicle(SimulationOptions& o, const Vehicle& v) {

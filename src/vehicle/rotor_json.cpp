@@ -17,7 +17,7 @@ nlohmann::json to_json(const RotorModel& m) {
           {"kf", m.kf},                    {"thrust_max", m.thrust_max},
           {"torque_ratio", m.torque_ratio}, {"time_constant", m.time_constant},
           {"rotor_inertia", m.rotor_inertia}, {"positions", pos},
-          {"spin", spin}};
+          {"spin", spin},                  {"command_range", m.command_range}};
 }
 
 RotorModel rotor_model_from_json(const nlohmann::json& j, const std::string& source) {
@@ -26,7 +26,7 @@ RotorModel rotor_model_from_json(const nlohmann::json& j, const std::string& sou
     for (const auto& [k, v] : j.items()) {
       (void)v;
       static const char* kKeys[] = {"input", "columns", "kf", "thrust_max", "torque_ratio",
-                                    "time_constant", "rotor_inertia", "positions", "spin"};
+                                    "time_constant", "rotor_inertia", "positions", "spin", "command_range"};
       if (std::find(std::begin(kKeys), std::end(kKeys), k) == std::end(kKeys))
         throw std::invalid_argument(fmt::format("rotors.{}: unknown key", k));
     }
@@ -38,6 +38,7 @@ RotorModel rotor_model_from_json(const nlohmann::json& j, const std::string& sou
     m.torque_ratio = j.at("torque_ratio").get<double>();
     m.time_constant = j.value("time_constant", 0.0);
     m.rotor_inertia = j.value("rotor_inertia", 0.0);
+    if (j.contains("command_range")) m.command_range = j.at("command_range").get<std::array<double, 2>>();
     for (const auto& p : j.at("positions")) {
       const auto v = p.get<std::vector<double>>();
       if (v.size() != 3) throw std::invalid_argument("rotors.positions: each must be [x, y, z]");

@@ -61,6 +61,14 @@ void RotorModel::validate() const {
   nonneg("rotor_inertia", rotor_inertia);
   if (input == RotorInput::kCommand && !(thrust_max > 0.0))
     throw std::invalid_argument("rotors.thrust_max must be > 0 when rotors.input = \"command\"");
+  const auto [lo, hi] = command_range;
+  if (!std::isfinite(lo) || !std::isfinite(hi) || lo < 0.0 || !(hi > lo))
+    throw std::invalid_argument(
+        fmt::format("rotors.command_range = [{}, {}] must be two finite numbers with 0 <= low < high", lo, hi));
+  if (input != RotorInput::kCommand && (lo != 0.0 || hi != 1.0))
+    throw std::invalid_argument(fmt::format(
+        "rotors.command_range applies to rotors.input = \"command\" only (this vehicle's input is \"{}\")",
+        to_string(input)));
   if (input != RotorInput::kCommand && !(kf > 0.0))
     throw std::invalid_argument(fmt::format("rotors.kf must be > 0 when rotors.input = \"{}\"", to_string(input)));
 }
@@ -68,8 +76,19 @@ void RotorModel::validate() const {
 double RotorModel::speed_for_thrust(double T) const { return std::sqrt(std::max(T, 0.0) / thrust_coefficient()); }
 
 double RotorModel::input_for_thrust(double T) const {
-  if (input == RotorInput::kCommand) return std::max(T, 0.0) / thrust_max;
+  if (input == RotorInput::kCommand) return logged_of_command(std::max(T, 0.0) / thrust_max);
   return speed_for_thrust(T);
+}
+
+double RotorModel::command_of_logged(double v) const {
+  const auto [lo, hi] = command_range;
+  if (v >= 0.0 && v < lo) return 0.0;  // a stopped motor (PWM disarmed, DShot 0)
+  return (v - lo) / (hi - lo);
+}
+
+double RotorModel::logged_of_command(double c) const {
+  const auto [lo, hi] = command_range;
+  return lo + c * (hi - lo);
 }
 
 Eigen::Matrix<double, 4, Eigen::Dynamic> RotorModel::allocation() const {
@@ -107,17 +126,26 @@ Input RotorModel::wrench(const Eigen::VectorXd& thrusts) const {
 Eigen::MatrixXd RotorModel::speeds(const Eigen::MatrixXd& in, double T) const {
   if (in.cols() != count())
     throw std::invalid_argument(fmt::format("rotor inputs: {} columns for {} rotors", in.cols(), count()));
+  const bool command = input == RotorInput::kCommand;
+  Eigen::MatrixXd c = in;  // command: 0..1
   for (Eigen::Index i = 0; i < in.cols(); ++i)
     for (Eigen::Index k = 0; k < in.rows(); ++k) {
       const double v = in(k, i);
-      if (!(v >= 0.0) || (input == RotorInput::kCommand && v > 1.0 + 1e-9))
-        throw InputError(fmt::format("rotor column '{}', sample {}: {} is not a {} ({})",
-                                     columns[static_cast<size_t>(i)], k, v, to_string(input),
-                                     input == RotorInput::kCommand ? "expected 0..1" : "expected >= 0"));
+      if (command) c(k, i) = command_of_logged(v);
+      if (!(v >= 0.0) || (command && c(k, i) > 1.0 + 1e-9))
+        throw InputError(fmt::format(
+            "rotor column '{}', sample {}: {} is not a {} ({})", columns[static_cast<size_t>(i)], k, v,
+            to_string(input),
+            !command ? std::string("expected >= 0")
+            : command_range == std::array<double, 2>{0.0, 1.0}
+                ? std::string("expected 0..1; a command logged in other units, e.g. PWM in microseconds, needs "
+                              "rotors.command_range in the vehicle file")
+                : fmt::format("expected 0..{:g}, rotors.command_range = [{:g}, {:g}]", command_range[1],
+                              command_range[0], command_range[1])));
     }
-  if (input != RotorInput::kCommand) return in;
+  if (!command) return in;
   // Normalized speed: w = sqrt(c) in steady state (T = thrust_max c); first-order lag on w.
-  const Eigen::MatrixXd target = in.cwiseMin(1.0).cwiseSqrt();
+  const Eigen::MatrixXd target = c.cwiseMin(1.0).cwiseSqrt();
   if (!(time_constant > 0.0)) return target;
   if (!(T > 0.0)) throw std::invalid_argument("rotor speeds: the sample period must be > 0");
   const double a = std::exp(-T / time_constant);  // exact over one sample with the command held

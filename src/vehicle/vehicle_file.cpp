@@ -132,7 +132,7 @@ Params read_nominal(const Reader& r, const toml::table& t) {
 RotorModel read_rotors(const Reader& r, const toml::table& t) {
   r.only(t, "rotors.",
          {"input", "columns", "kf", "thrust_max", "torque_ratio", "time_constant", "rotor_inertia", "positions",
-          "spin"});
+          "spin", "command_range"});
   RotorModel m;
   const std::string input = *r.string(t, "rotors.", "input", true);
   try {
@@ -154,6 +154,21 @@ RotorModel read_rotors(const Reader& r, const toml::table& t) {
   m.torque_ratio = *r.number(t, "rotors.", "torque_ratio", true, true);
   m.time_constant = r.number(t, "rotors.", "time_constant", false, true).value_or(0.0);
   m.rotor_inertia = r.number(t, "rotors.", "rotor_inertia", false, true).value_or(0.0);
+  if (const toml::node* cr = t.get("command_range")) {
+    const toml::array* a = cr->as_array();
+    bool ok = a && a->size() == 2;
+    for (size_t i = 0; ok && i < 2; ++i) {
+      m.command_range[i] = Reader::number_of(*a->get(i), ok);
+      ok = ok && std::isfinite(m.command_range[i]);
+    }
+    if (!ok)
+      r.fail(cr->source(), "rotors.command_range",
+             "must be [low, high]: the logged values that mean command 0 and command 1 (e.g. [1000, 2000] for PWM "
+             "in microseconds)");
+    if (!command)
+      r.fail(cr->source(), "rotors.command_range",
+             fmt::format("applies to input = \"command\" only (this vehicle's input is \"{}\")", input));
+  }
 
   const toml::array& pos = r.array(t, "rotors.", "positions");
   if (pos.size() != m.columns.size())
