@@ -90,6 +90,18 @@ TEST(InputChecks, ThrustInKgfIsNamed) {
   EXPECT_NE(f[0].action.find("kgf"), std::string::npos) << f[0].action;
 }
 
+TEST(InputChecks, NoThrustAtAllIsAnErrorAndNothingElseAboutTheThrust) {
+  // A log from the ground: every rotor stopped (a PWM log at its disarmed value).
+  FlightLog log = clean_log();
+  scale_column(log, "Fz", 0.0);
+  const auto all = check_input(log, options());
+  const auto f = findings(all, "thrust-units");
+  ASSERT_EQ(f.size(), 1u) << dump(all);
+  EXPECT_EQ(f[0].severity, Severity::Error);
+  EXPECT_NE(f[0].saw.find("0 N throughout"), std::string::npos) << f[0].saw;
+  EXPECT_NE(f[0].action.find("did not fly"), std::string::npos) << f[0].action;
+}
+
 TEST(InputChecks, DecimationWithoutAntiAliasingIsNamed) {
   // Every 10th sample (500 -> 50 Hz) with no filter: the 178 Hz vibration
   // folds to 22 Hz, near the new Nyquist frequency.

@@ -186,6 +186,13 @@ std::vector<InputFinding> check_input(const FlightLog& log, const InputCheckOpti
       u(k - e0) = f(k, 7) * std::cos(f(k, 1)) * std::cos(f(k, 2));  // eq. (1), vertical: m z'' = Fz c(phi) c(theta) - m g
     }
     const double mean_fz = raw.col(7).mean();
+    // No thrust at all: a log from the ground (motors stopped or disarmed), where
+    // every other finding would only be a consequence.
+    const bool no_thrust = raw.col(7).cwiseAbs().maxCoeff() == 0.0;
+    if (no_thrust)
+      add("thrust-units", Severity::Error, "the thrust Fz is 0 N throughout the log",
+          "the vehicle did not fly (motors stopped or disarmed, e.g. PWM at its disarmed value below the vehicle's "
+          "command_range): identify the log of a flight");
     if (mean_fz < 0.0)
       add("z-down", Severity::Error, fmt::format("the mean thrust Fz is {:.4g} N, negative", mean_fz),
           "Fz must be the thrust along +z body (up): a z-down (NED/FRD) log needs its frames converted (z -> -z, "
@@ -211,7 +218,7 @@ std::vector<InputFinding> check_input(const FlightLog& log, const InputCheckOpti
             "check that z is the altitude in m (z up) and Fz the total thrust in N");
       }
     }
-    if (opt.reference_mass) {
+    if (opt.reference_mass && !no_thrust) {
       // u = m (z'' + g) in the least-squares sense (with z'' as logged, times the sign found above).
       const Eigen::VectorXd acc = (zsign * a).array() + opt.g;
       const double m_est = u.dot(acc) / acc.squaredNorm();
