@@ -70,6 +70,15 @@ BatchSummary identify_batch(const std::vector<std::string>& paths, const Identif
   const unsigned hw = std::max(1u, std::thread::hardware_concurrency());
   const std::size_t want = opt.threads > 0 ? static_cast<std::size_t>(opt.threads) : hw;
   summary.threads = static_cast<int>(std::max<std::size_t>(1, std::min(want, n)));
+  // With several logs at once the workers keep the cores busy: each log is
+  // identified on its own worker's thread alone (the same results: the
+  // threads never change what is computed), instead of two or three threads
+  // per log fighting over the cores.
+  IdentifyRequest per_log = req;
+  if (summary.threads > 1) {
+    per_log.options.processing.threads = 1;
+    per_log.csv.threads = 1;
+  }
 
   // Records finished out of order wait here until every earlier one is emitted.
   std::vector<std::optional<BatchRecord>> pending(n);
@@ -84,7 +93,7 @@ BatchSummary identify_batch(const std::vector<std::string>& paths, const Identif
     rec.path = paths[i];
     const auto s0 = Clock::now();
     try {
-      rec.result = identify_log_file(paths[i], req);
+      rec.result = identify_log_file(paths[i], per_log);
       rec.ok = true;
     } catch (const std::bad_alloc&) {
       rec.error = fmt::format("{}: out of memory", paths[i]);
