@@ -3,6 +3,7 @@
 // --vehicle` on the log with its wrench columns dropped (rotor columns only)
 // recovers the vehicle the simulator flew.
 #include "heavy_vehicle.hpp"
+#include "../src/vehicle/builtin_vehicles.hpp"
 #include "cli_fixture.hpp"
 #include "quadid/io.hpp"
 #include "quadid/vehicle.hpp"
@@ -99,37 +100,24 @@ TEST_F(CliVehicle, CommandVehicleIdentifiesThroughTheMotorLag) {
 
 TEST_F(CliVehicle, PwmCommandsThroughTheCommandRange) {
   // jmavsim-quad with its commands logged as PWM in microseconds: command_range maps them back.
-  const std::string pwm = R"toml(name = "jmavsim-quad-pwm"
-[nominal]
-m = 0.8
-Ixx = 0.005
-Iyy = 0.005
-Izz = 0.009
-[rotors]
-input = "command"
-command_range = [1000, 2000]
-columns = ["pwm1", "pwm2", "pwm3", "pwm4"]
-thrust_max = 4.0
-torque_ratio = 0.0125
-time_constant = 0.005
-positions = [[0.11667261889578034, -0.11667261889578034, 0.0], [-0.11667261889578034, 0.11667261889578034, 0.0],
-             [0.11667261889578034, 0.11667261889578034, 0.0], [-0.11667261889578034, -0.11667261889578034, 0.0]]
-spin = ["ccw", "ccw", "cw", "cw"]
-)toml";
+  std::string pwm;
+  for (const auto& b : quadid::detail::builtin_vehicles())
+    if (b.name == "jmavsim-quad") pwm = b.text;
+  const std::string input = "input = \"command\"\n";
+  ASSERT_NE(pwm.find(input), std::string::npos);
+  pwm.insert(pwm.find(input) + input.size(), "command_range = [1000, 2000]\n");
   write("pwm.toml", pwm);
   fly_and_identify(path("pwm.toml"));
   quadid::CsvReadOptions csv;
-  csv.required = {"t", "pwm1"};
+  const std::string m1 = "actuator_motors.control[0]";
+  csv.required = {"t", m1};
   const quadid::FlightLog log = quadid::read_flight_log(path("log.csv"), csv);
   // Hover: each rotor carries m g / 4 = 1.962 N of its 4.0 N, a command of 0.4905: 1490.5 us.
-  EXPECT_GT(log.column("pwm1").minCoeff(), 1000.0);
-  EXPECT_LT(log.column("pwm1").maxCoeff(), 2000.0);
-  EXPECT_NEAR(log.column("pwm1").mean(), 1000.0 + 1000.0 * 0.8 * 9.81 / 4.0 / 4.0, 30.0);
-  // A PWM log read as commands 0..1 is refused with the way out named.
-  std::string text = pwm;
-  text.replace(text.find("command_range = [1000, 2000]\n"), 29, "");
-  write("plain.toml", text);
-  const CliRun r = run("identify " + path("rotors_only.csv") + " --vehicle " + path("plain.toml"));
+  EXPECT_GT(log.column(m1).minCoeff(), 1000.0);
+  EXPECT_LT(log.column(m1).maxCoeff(), 2000.0);
+  EXPECT_NEAR(log.column(m1).mean(), 1000.0 + 1000.0 * 0.8 * 9.81 / 4.0 / 4.0, 30.0);
+  // The same PWM log read as commands 0..1 (the built-in itself) is refused with the way out named.
+  const CliRun r = run("identify " + path("rotors_only.csv") + " --vehicle jmavsim-quad");
   EXPECT_NE(r.rc, 0);
   EXPECT_NE(r.err.find("needs rotors.command_range"), std::string::npos) << r.err;
   // command_range on a vehicle that logs speeds is named with its line.
@@ -138,6 +126,7 @@ spin = ["ccw", "ccw", "cw", "cw"]
   write("bad.toml", bad);
   const CliRun b = run("identify " + path("rotors_only.csv") + " --vehicle " + path("bad.toml"));
   EXPECT_NE(b.rc, 0);
+  EXPECT_NE(b.err.find("bad.toml:11:"), std::string::npos) << b.err;
   EXPECT_NE(b.err.find("rotors.command_range"), std::string::npos) << b.err;
   EXPECT_NE(b.err.find("applies to input = \"command\" only"), std::string::npos) << b.err;
 }
