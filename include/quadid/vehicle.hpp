@@ -85,6 +85,8 @@ struct RotorModel {
   /// the command 0..1 of a logged value (0 from 0 up to the range's low end), and back.
   double command_of_logged(double v) const;
   double logged_of_command(double c) const;
+  /// Whether command_range is other than [0, 1] (commands logged in other units).
+  bool has_command_range() const { return command_range != std::array<double, 2>{0.0, 1.0}; }
   /// Largest thrust of one rotor (N), the saturation used by the mixer: thrust_max (0 = not given).
   double max_thrust() const { return thrust_max; }
 

@@ -5,8 +5,6 @@
 
 #include <fmt/format.h>
 
-#include <array>
-
 #include <algorithm>
 #include <cmath>
 #include <numbers>
@@ -58,7 +56,7 @@ logs::RotorGeometry px4_geometry(const RotorModel& m) {
     throw InputError(fmt::format("a PX4 ULog holds normalised motor commands (actuator_motors); the rotor model takes "
                                  "'{}': give a vehicle whose rotors.input is \"command\"",
                                  to_string(m.input)));
-  if (m.command_range != std::array<double, 2>{0.0, 1.0})
+  if (m.has_command_range())
     throw InputError(fmt::format("a PX4 ULog holds motor commands normalised to 0..1 (actuator_motors); this rotor "
                                  "model logs them in [{:g}, {:g}] (rotors.command_range): remove command_range to "
                                  "write a ULog",

@@ -11,9 +11,9 @@
 #include <array>
 #include <cctype>
 #include <cmath>
-#include <string_view>
 #include <numbers>
 #include <stdexcept>
+#include <string_view>
 
 namespace quadid {
 
@@ -65,7 +65,7 @@ void RotorModel::validate() const {
   if (!std::isfinite(lo) || !std::isfinite(hi) || lo < 0.0 || !(hi > lo))
     throw std::invalid_argument(
         fmt::format("rotors.command_range = [{}, {}] must be two finite numbers with 0 <= low < high", lo, hi));
-  if (input != RotorInput::kCommand && (lo != 0.0 || hi != 1.0))
+  if (input != RotorInput::kCommand && has_command_range())
     throw std::invalid_argument(fmt::format(
         "rotors.command_range applies to rotors.input = \"command\" only (this vehicle's input is \"{}\")",
         to_string(input)));
@@ -137,7 +137,7 @@ Eigen::MatrixXd RotorModel::speeds(const Eigen::MatrixXd& in, double T) const {
             "rotor column '{}', sample {}: {} is not a {} ({})", columns[static_cast<size_t>(i)], k, v,
             to_string(input),
             !command ? std::string("expected >= 0")
-            : command_range == std::array<double, 2>{0.0, 1.0}
+            : !has_command_range()
                 ? std::string("expected 0..1; a command logged in other units, e.g. PWM in microseconds, needs "
                               "rotors.command_range in the vehicle file")
                 : fmt::format("expected 0..{:g}, rotors.command_range = [{:g}, {:g}]", command_range[1],

@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 #include <toml++/toml.h>
 
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <set>
@@ -91,21 +92,31 @@ class Reader {
     return *n->as_array();
   }
 
-  std::optional<Vec3> vec3(const toml::table& t, std::string_view prefix, const char* key, bool nonnegative) const {
+  /// An optional array of exactly N finite numbers; `size_message` says what a wrong
+  /// length should have been (default: "must hold N numbers").
+  template <size_t N>
+  std::optional<std::array<double, N>> numbers(const toml::table& t, std::string_view prefix, const char* key,
+                                               bool nonnegative, std::string_view size_message = {}) const {
     if (!t.get(key)) return std::nullopt;
     const toml::array& a = array(t, prefix, key);
     const std::string name = fmt::format("{}{}", prefix, key);
-    if (a.size() != 3) fail(a.source(), name, fmt::format("must hold 3 numbers (got {})", a.size()));
-    Vec3 v;
-    for (size_t i = 0; i < 3; ++i) {
+    if (a.size() != N)
+      fail(a.source(), name,
+           size_message.empty() ? fmt::format("must hold {} numbers (got {})", N, a.size()) : std::string(size_message));
+    std::array<double, N> v{};
+    for (size_t i = 0; i < N; ++i) {
       bool ok = false;
-      v(static_cast<Eigen::Index>(i)) = number_of(*a.get(i), ok);
-      if (!ok || !std::isfinite(v(static_cast<Eigen::Index>(i))))
-        fail(a.get(i)->source(), fmt::format("{}[{}]", name, i), "must be a finite number");
-      if (nonnegative && v(static_cast<Eigen::Index>(i)) < 0.0)
-        fail(a.get(i)->source(), fmt::format("{}[{}]", name, i), "must be >= 0");
+      v[i] = number_of(*a.get(i), ok);
+      if (!ok || !std::isfinite(v[i])) fail(a.get(i)->source(), fmt::format("{}[{}]", name, i), "must be a finite number");
+      if (nonnegative && v[i] < 0.0) fail(a.get(i)->source(), fmt::format("{}[{}]", name, i), "must be >= 0");
     }
     return v;
+  }
+
+  std::optional<Vec3> vec3(const toml::table& t, std::string_view prefix, const char* key, bool nonnegative) const {
+    const auto v = numbers<3>(t, prefix, key, nonnegative);
+    if (!v) return std::nullopt;
+    return Vec3((*v)[0], (*v)[1], (*v)[2]);
   }
 
  private:
@@ -154,19 +165,12 @@ RotorModel read_rotors(const Reader& r, const toml::table& t) {
   m.torque_ratio = *r.number(t, "rotors.", "torque_ratio", true, true);
   m.time_constant = r.number(t, "rotors.", "time_constant", false, true).value_or(0.0);
   m.rotor_inertia = r.number(t, "rotors.", "rotor_inertia", false, true).value_or(0.0);
-  if (const toml::node* cr = t.get("command_range")) {
-    const toml::array* a = cr->as_array();
-    bool ok = a && a->size() == 2;
-    for (size_t i = 0; ok && i < 2; ++i) {
-      m.command_range[i] = Reader::number_of(*a->get(i), ok);
-      ok = ok && std::isfinite(m.command_range[i]);
-    }
-    if (!ok)
-      r.fail(cr->source(), "rotors.command_range",
-             "must be [low, high]: the logged values that mean command 0 and command 1 (e.g. [1000, 2000] for PWM "
-             "in microseconds)");
+  if (const auto range = r.numbers<2>(t, "rotors.", "command_range", false,
+                                      "must be [low, high]: the logged values that mean command 0 and command 1 (e.g. "
+                                      "[1000, 2000] for PWM in microseconds)")) {
+    m.command_range = *range;
     if (!command)
-      r.fail(cr->source(), "rotors.command_range",
+      r.fail(t.get("command_range")->source(), "rotors.command_range",
              fmt::format("applies to input = \"command\" only (this vehicle's input is \"{}\")", input));
   }
 
