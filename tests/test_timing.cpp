@@ -220,6 +220,62 @@ TEST_F(Px4Identify, SmallQuadWithoutVehicleFileTextSaysWhereTheModelCameFrom) {
   EXPECT_NE(r.out.find("motor time constant"), std::string::npos) << r.out;
 }
 
+TEST_F(Px4Identify, GazeboLogNeedsTheSimulatedVehicleAndGetsItsColumns) {
+  // PX4's Gazebo x500: the CA_ROTOR* parameters are not the simulated rotors
+  // (positions 0.13/0.22 against 0.174 m, KM 0.05 against 0.016 m, thrust
+  // affine in speed rather than linear in u): without --vehicle, an error
+  // naming the way out; with --vehicle x500-gz, its columns are
+  // actuator_outputs.output[i], which the import then takes instead of
+  // actuator_motors.
+  const std::string f = path("gz.ulg");
+  std::ofstream(f, std::ios::binary) << gz_x500_ulog();
+  CliRun r = run("identify " + f);
+  EXPECT_NE(r.rc, 0);
+  EXPECT_NE(r.err.find("SIM_GZ_EN = 1"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("--vehicle x500-gz"), std::string::npos) << r.err;
+  r = run("identify " + f + " --vehicle x500-gz --json");
+  ASSERT_EQ(r.rc, 0) << r.err;
+  const nlohmann::json j = nlohmann::json::parse(r.out);
+  const Params P = load_vehicle("x500").nominal;
+  const auto& e = j.at("estimates").at(j.at("recommended").at("set").get<std::string>());
+  // Issue 11's tolerances for a clean simulated flight (0.5 % on m, 2 % on
+  // the moments, 2 % of Ixx on the products, which are 0 here).
+  EXPECT_NEAR(e.at("m").get<double>(), P.m, 0.005 * P.m);
+  for (auto [k, i] : {std::pair{"Ixx", 0}, std::pair{"Iyy", 1}, std::pair{"Izz", 2}})
+    EXPECT_NEAR(e.at(k).get<double>(), P.I(i, i), 0.02 * P.I(i, i)) << k;
+  for (const char* k : {"Ixy", "Ixz", "Iyz"}) EXPECT_NEAR(e.at(k).get<double>(), 0.0, 0.02 * P.I(0, 0)) << k;
+  EXPECT_EQ(j.at("rotors").at("columns").at(0).get<std::string>(), "actuator_outputs.output[0]");
+}
+
+TEST_F(Px4Identify, DefaultThrustAndMomentCoefficientsAreWarned) {
+  // CT = 6.5 and KM = 0.05 are PX4's defaults: the estimate is only as right as they are.
+  Vehicle v = small_vehicle();
+  v.rotors.thrust_max = 6.5;
+  v.rotors.torque_ratio = 0.05;
+  Px4SimOptions o;
+  o.duration = 10.0;
+  const std::string f = path("default.ulg");
+  std::ofstream(f, std::ios::binary) << px4_sim_ulog(v, o);
+  const CliRun r = run("identify " + f);
+  ASSERT_EQ(r.rc, 0) << r.err;
+  EXPECT_NE(r.err.find("CA_ROTOR*_CT = 6.5 N is PX4's default"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("--known-mass"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("CA_ROTOR*_KM = 0.05 m is PX4's default"), std::string::npos) << r.err;
+  // A vehicle's own coefficients are not warned about.
+  std::ofstream(path("own.ulg"), std::ios::binary) << px4_sim_ulog(small_vehicle(), o);
+  const CliRun own = run("identify " + path("own.ulg"));
+  ASSERT_EQ(own.rc, 0) << own.err;
+  EXPECT_EQ(own.err.find("PX4's default"), std::string::npos) << own.err;
+}
+
+TEST(Px4Logs, MotorTopicNamedByTheRotorColumns) {
+  EXPECT_EQ(logs::motors_topic_named({"t", "x", "w1"}), "auto");
+  EXPECT_EQ(logs::motors_topic_named({"t", "esc_status.esc[0].esc_rpm", "esc_status.esc[1].esc_rpm"}), "esc_status");
+  EXPECT_EQ(logs::motors_topic_named({"actuator_outputs.output[3]"}), "actuator_outputs");
+  EXPECT_EQ(logs::motors_topic_named({"vehicle_status.arming_state"}), "auto");  // not a motor topic
+  EXPECT_THROW(logs::motors_topic_named({"actuator_outputs.output[0]", "actuator_motors.control[1]"}), InputError);
+}
+
 TEST_F(Px4Identify, SimulateUlogNeedsAVehicleThatTakesCommands) {
   // A ULog holds normalised commands in actuator_motors: a vehicle logging rpm cannot be written as one.
   CliRun r = run("simulate --vehicle crazyflie21 --trajectory table2 --duration 1 --ulog " + path("cf.ulg"));

@@ -200,7 +200,7 @@ TEST(Vehicle, WithRotorWrenchAppendsOrReplacesTheWrench) {
 
 TEST(Vehicle, BuiltinsCarryTheirSources) {
   const std::vector<std::string> names = builtin_vehicle_names();
-  EXPECT_EQ(names, (std::vector<std::string>{"qball2", "crazyflie21", "jmavsim-quad", "x500"}));
+  EXPECT_EQ(names, (std::vector<std::string>{"qball2", "crazyflie21", "jmavsim-quad", "x500", "x500-gz"}));
   const Vehicle cf = load_vehicle("crazyflie21");
   EXPECT_EQ(cf.nominal.m, 0.0347);
   EXPECT_EQ(cf.rotors.kf, 2.2164e-10);

@@ -159,7 +159,8 @@ void register_identify(CLI::App& app) {
                   "value kept for unidentifiable parameters (default with --vehicle: the vehicle's [nominal])")
       ->capture_default_str();
   sub->add_option("--vehicle", a->real.vehicle,
-                  "vehicle file or built-in (qball2, crazyflie21, jmavsim-quad, x500): compute Fz and the torques from the "
+                  "vehicle file or built-in (" + fmt::format("{}", fmt::join(builtin_vehicle_names(), ", ")) +
+                      "): compute Fz and the torques from the "
                   "log's rotor columns with its rotor model, take its [nominal] as the reference set, and use the "
                   "real-flight regression (docs/vehicles.md, docs/real-flights.md). Without it, a PX4 ULog's "
                   "CA_ROTOR* parameters give the rotor model (docs/import.md)");

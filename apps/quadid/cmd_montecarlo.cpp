@@ -132,8 +132,8 @@ void register_montecarlo(CLI::App& app) {
                                    "[nominal])")
                        ->capture_default_str();
   sub->add_option("--vehicle", a->vehicle,
-                  "fly a vehicle with its rotors (built-in: qball2, crazyflie21, jmavsim-quad, x500, or a vehicle "
-                  "file): plant, gains and sensors from it, the wrench of each run from its noisy rotor columns, "
+                  "fly a vehicle with its rotors (built-in: " + fmt::format("{}", fmt::join(builtin_vehicle_names(), ", ")) +
+                      ", or a vehicle file): plant, gains and sensors from it, the wrench of each run from its noisy rotor columns, "
                   "gradient descent with the normalized gain (docs/vehicles.md)");
   sub->add_option("--rotor-noise", a->rotor_noise,
                   "with --vehicle: std of the white noise on the logged rotor speeds, rad/s or rpm (default: the "

@@ -248,8 +248,9 @@ void register_simulate(CLI::App& app) {
   sub->add_option("--sigma-rotor", args->sigma_rotor,
                   "with --vehicle: noise std on the logged rotor speeds, rad/s or rpm (overrides [sensors] rotor_noise)");
   sub->add_option("--vehicle", args->vehicle,
-                  "fly a vehicle with rotor-level actuation: a vehicle file or built-in (qball2, crazyflie21, "
-                  "jmavsim-quad, x500); plant and controller model = its [nominal], gains scaled to it (docs/vehicles.md); "
+                  "fly a vehicle with rotor-level actuation: a vehicle file or built-in (" +
+                      fmt::format("{}", fmt::join(builtin_vehicle_names(), ", ")) +
+                      "); plant and controller model = its [nominal], gains scaled to it (docs/vehicles.md); "
                   "the log gains its rotor columns");
   sub->add_flag("--json", args->json, "print the summary as JSON on stdout (nothing else there)");
   args->app = sub;

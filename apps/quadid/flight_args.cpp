@@ -9,8 +9,8 @@ namespace quadid::cli {
 
 void PrecisionArgs::add_to(CLI::App* sub) {
   sub->add_option("--vehicle", vehicle,
-                  "vehicle flown: built-in (qball2, crazyflie21, jmavsim-quad, x500) or vehicle "
-                  "file; its [nominal], rates, [sensors] noise and rotors for the predicted precision, and for design and "
+                  "vehicle flown: built-in (" + fmt::format("{}", fmt::join(builtin_vehicle_names(), ", ")) +
+                      ") or vehicle file; its [nominal], rates, [sensors] noise and rotors for the predicted precision, and for design and "
                   "check-trajectory its [limits] and per-rotor thrust limits (default: the paper's virtual QBall 2)");
   sub->add_option("--flight-duration", flight_duration, "length of the identification flight's log, s")
       ->capture_default_str();

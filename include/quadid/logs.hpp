@@ -229,11 +229,16 @@ RotorGeometry px4_rotor_geometry(const ULog& log);
 /// (quaternion FRD->NED: q0, q1, -q2, -q3 of the ZYX Euler angles),
 /// vehicle_angular_velocity (FRD: p, -q, -r) and, when `motor_columns` are
 /// given, actuator_motors.control[i] (unused entries NaN, as PX4 writes them),
-/// all at the log's samples; `geometry` (FLU) becomes the CA_ROTOR*
+/// and actuator_outputs.output[i] when `output_columns` are, all at the log's samples; `geometry` (FLU) becomes the CA_ROTOR*
 /// parameters. For simulated PX4 flights and tests of the import.
 struct Px4UlogWriteOptions {
   std::vector<std::string> motor_columns;  // log columns, in PX4's motor order
+  /// Log columns written as actuator_outputs.output[i] (at most 16), e.g. PWM
+  /// pulse widths, or the rotor speed commands of PX4's Gazebo bridge (rad/s).
+  std::vector<std::string> output_columns;
   RotorGeometry geometry;                  // count 0: no CA_ROTOR* parameters
+  /// Further int32 parameters, e.g. {"SIM_GZ_EN", 1} for a Gazebo simulation.
+  std::vector<std::pair<std::string, std::int32_t>> int_parameters;
   std::uint64_t start_timestamp_us = 1'000'000;  // log clock of the first row
 };
 std::string px4_ulog_from_flight_log(const FlightLog& log, const Px4UlogWriteOptions& opt = {});
@@ -370,8 +375,14 @@ struct LoadOptions {
   /// (an import has no wrench columns; a rotor model adds them).
   bool check_required = true;
 };
+/// The ULog motor topic (actuator_motors, esc_status or actuator_outputs) that
+/// column names such as "esc_status.esc[0].esc_rpm" name, or "auto" when none
+/// does; InputError when they name two.
+std::string motors_topic_named(const std::vector<std::string>& names);
 /// Any flight log: ULog and uSD are imported (ImportReport in *report), CSV is
-/// read with read_flight_log. The kind is recognised by the first bytes.
+/// read with read_flight_log. The kind is recognised by the first bytes. A ULog's
+/// rotor topic, when ImportOptions::motors_topic is "auto", is the one that
+/// `csv.required` or the targets of `csv.map` name (motors_topic_named).
 FlightLog load_any_log(const std::filesystem::path& path, const LoadOptions& opt = {},
                        ImportReport* report = nullptr);
 

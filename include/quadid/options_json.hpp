@@ -116,6 +116,9 @@ struct IdentificationInput {
   /// "the CA_ROTOR* parameters of FILE".
   std::string wrench_source = "the log's Fz and torque columns";
   std::optional<TimingEstimate> timing;
+  /// What the preparation found worth saying (e.g. a PX4 log's CA_ROTOR*_CT at
+  /// PX4's default); identify_prepared adds them to the result's warnings.
+  std::vector<std::string> warnings;
 };
 /// InputError names the file.
 IdentificationInput prepare_identification(const std::string& path, const IdentifyRequest& req);

@@ -477,9 +477,37 @@ LogKind detect_log_kind(const std::filesystem::path& path) {
   return LogKind::Csv;
 }
 
-FlightLog load_any_log(const std::filesystem::path& path, const LoadOptions& opt, ImportReport* report) {
+std::string motors_topic_named(const std::vector<std::string>& names) {
+  std::string topic;
+  for (const auto& n : names) {
+    const auto dot = n.find('.');
+    if (dot == std::string::npos) continue;
+    const std::string t = n.substr(0, dot);
+    if (t != "actuator_motors" && t != "esc_status" && t != "actuator_outputs") continue;
+    if (!topic.empty() && t != topic)
+      throw InputError(fmt::format("the rotor columns name two ULog topics, {} and {}: a rotor model reads one", topic, t));
+    topic = t;
+  }
+  return topic.empty() ? "auto" : topic;
+}
+
+FlightLog load_any_log(const std::filesystem::path& path, const LoadOptions& opt_in, ImportReport* report) {
   const LogKind kind = detect_log_kind(path);
-  if (kind == LogKind::Csv) return read_flight_log(path, opt.csv);
+  if (kind == LogKind::Csv) return read_flight_log(path, opt_in.csv);
+  LoadOptions opt = opt_in;
+  if (kind == LogKind::Ulog && opt.import.motors_topic == "auto") {
+    // The rotor columns a vehicle names (directly or through --map) choose
+    // the topic: a vehicle file on esc_status.esc[i].esc_rpm (ESC telemetry)
+    // or actuator_outputs.output[i] (PWM, or a simulator's speed commands)
+    // must not get actuator_motors, which import's automatic choice prefers.
+    std::vector<std::string> names = opt.csv.required;
+    for (const auto& kv : opt.csv.map) names.push_back(kv.second);
+    try {
+      opt.import.motors_topic = motors_topic_named(names);
+    } catch (const InputError& e) {
+      throw InputError(fmt::format("{}: {}", path.string(), e.what()));
+    }
+  }
   FlightLog log;
   try {
     log = kind == LogKind::Ulog ? import_ulog(read_ulog(path, opt.ulog), opt.import, report)
@@ -502,7 +530,7 @@ FlightLog load_any_log(const std::filesystem::path& path, const LoadOptions& opt
       throw InputError(fmt::format(
           "{}: the imported log has no column {} (an autopilot log holds rotor signals, not the wrench: it is "
           "computed by a vehicle's rotor model: pass the vehicle with --vehicle, a vehicle file or a built-in "
-          "(qball2, crazyflie21, jmavsim-quad, x500; docs/vehicles.md); `quadid import` shows the columns there are)",
+          "(listed by `quadid identify --help` and docs/vehicles.md); `quadid import` shows the columns there are)",
           path.string(), fmt::join(missing, ", ")));
   }
   return log;

@@ -136,6 +136,8 @@ std::string px4_ulog_from_flight_log(const FlightLog& log, const Px4UlogWriteOpt
     if (!log.has(c)) throw InputError(fmt::format("px4_ulog_from_flight_log: the flight log has no column '{}'", c));
   if (opt.motor_columns.size() > 12)
     throw std::invalid_argument(fmt::format("{} motor columns: actuator_motors holds at most 12", opt.motor_columns.size()));
+  if (opt.output_columns.size() > 16)
+    throw std::invalid_argument(fmt::format("{} output columns: actuator_outputs holds at most 16", opt.output_columns.size()));
   ULogWriter w(opt.start_timestamp_us);
   w.info("sys_name", "PX4");
   w.info("ver_hw", "QUADID_SIM");
@@ -143,6 +145,8 @@ std::string px4_ulog_from_flight_log(const FlightLog& log, const Px4UlogWriteOpt
   w.format("vehicle_attitude:uint64_t timestamp;float[4] q;");
   w.format("vehicle_angular_velocity:uint64_t timestamp;float[3] xyz;uint8_t[4] _padding0;");
   w.format("actuator_motors:uint64_t timestamp;float[12] control;");
+  w.format("actuator_outputs:uint64_t timestamp;uint32_t noutputs;float[16] output;");
+  for (const auto& [name, value] : opt.int_parameters) w.parameter(name, value);
   const RotorGeometry& g = opt.geometry;
   if (g.count > 0) {
     w.parameter("CA_ROTOR_COUNT", std::int32_t{g.count});
@@ -161,11 +165,14 @@ std::string px4_ulog_from_flight_log(const FlightLog& log, const Px4UlogWriteOpt
   const auto att = w.subscribe("vehicle_attitude");
   const auto rat = w.subscribe("vehicle_angular_velocity");
   const std::uint16_t mot = opt.motor_columns.empty() ? 0 : w.subscribe("actuator_motors");
+  const std::uint16_t outs = opt.output_columns.empty() ? 0 : w.subscribe("actuator_outputs");
   const auto col = [&log](std::string_view c) { return log.column(c); };
   const Eigen::VectorXd t = col("t"), x = col("x"), y = col("y"), z = col("z"), phi = col("phi"),
                         theta = col("theta"), psi = col("psi"), p = col("p"), q = col("q"), r = col("r");
   std::vector<Eigen::VectorXd> motors;
   for (const auto& c : opt.motor_columns) motors.push_back(col(c));
+  std::vector<Eigen::VectorXd> outputs;
+  for (const auto& c : opt.output_columns) outputs.push_back(col(c));
   for (Eigen::Index i = 0; i < t.size(); ++i) {
     const auto ts = opt.start_timestamp_us + static_cast<std::uint64_t>(std::llround((t[i] - t[0]) * 1e6));
     w.data(pos, ULogPayload().put(ts).put(float(x[i])).put(float(-y[i])).put(float(-z[i])).str());
@@ -181,6 +188,12 @@ std::string px4_ulog_from_flight_log(const FlightLog& log, const Px4UlogWriteOpt
       m.put(ts);
       for (std::size_t k = 0; k < 12; ++k) m.put(k < motors.size() ? float(motors[k][i]) : NAN);
       w.data(mot, m.str());
+    }
+    if (!outputs.empty()) {
+      ULogPayload o;
+      o.put(ts).put(static_cast<std::uint32_t>(outputs.size()));
+      for (std::size_t k = 0; k < 16; ++k) o.put(k < outputs.size() ? float(outputs[k][i]) : 0.0f);
+      w.data(outs, o.str());
     }
   }
   return w.bytes();

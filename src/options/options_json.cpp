@@ -558,6 +558,39 @@ FlightLog load_identification_log(const std::string& path, const IdentifyRequest
   }
 }
 
+namespace {
+
+// A PX4 log whose rotor model would come from its CA_ROTOR* parameters: a
+// Gazebo simulation cannot be described by them (InputError), and PX4's
+// default CT and KM, which its allocation uses only relative to each other,
+// leave the mass and moments in unknown units (warnings).
+std::vector<std::string> check_px4_rotor_parameters(const logs::ULog& u, const logs::RotorGeometry& g) {
+  if (const auto gz = u.parameter("SIM_GZ_EN"); gz && *gz == 1.0)
+    throw InputError(
+        "the log has no column Fz (nor the torques), and it is a Gazebo simulation (SIM_GZ_EN = 1): its rotors are the simulated model's, commanded in rad/s on "
+        "actuator_outputs.output[i] (SIM_GZ_EC_MIN..MAX), not the CA_ROTOR* parameters' (the allocation's rough "
+        "positions, CT and KM), which would give the mass and moments in error by tens of percent; give the "
+        "simulated vehicle: --vehicle x500-gz for PX4's x500 models, or a vehicle file with the model's rotors, "
+        "input \"speed\" on those columns (docs/vehicles.md)");
+  // PX4's defaults (float parameters: compared to float precision).
+  constexpr double kDefaultCt = 6.5, kDefaultKm = 0.05, kTol = 1e-6;
+  bool ct_default = !g.ct.empty(), km_default = !g.km.empty();
+  for (double c : g.ct) ct_default = ct_default && std::abs(c - kDefaultCt) < kTol * kDefaultCt;
+  for (double k : g.km) km_default = km_default && std::abs(k - kDefaultKm) < kTol * kDefaultKm;
+  std::vector<std::string> w;
+  if (ct_default)
+    w.push_back(
+        "CA_ROTOR*_CT = 6.5 N is PX4's default, which its allocation needs only relative to KM: unless it was "
+        "measured for this vehicle, the thrust, and with it m and the moments, is in error by CT's; give the weighed "
+        "mass (--known-mass KG) to have the thrust scale estimated, or a vehicle file (docs/vehicles.md)");
+  if (km_default)
+    w.push_back("CA_ROTOR*_KM = 0.05 m is PX4's default: unless it was measured for this vehicle, the yaw torque, "
+                "and with it Izz, is in error by KM's; a vehicle file with the measured torque_ratio fixes it");
+  return w;
+}
+
+}  // namespace
+
 IdentificationInput prepare_identification(const std::string& path, const IdentifyRequest& req_in) {
   IdentifyRequest req = req_in;
   IdentificationInput in;
@@ -574,6 +607,7 @@ IdentificationInput prepare_identification(const std::string& path, const Identi
                                        "parameters do not give a rotor model: {}; give a vehicle file with --vehicle",
                                        e.what()));
         }
+        in.warnings = check_px4_rotor_parameters(u, logs::px4_rotor_geometry(u));
         from_log = true;
       }
     } catch (const InputError& e) {
@@ -624,6 +658,7 @@ IdentificationInput prepare_identification(const std::string& path, const Identi
 
 IdentificationResult identify_prepared(const IdentificationInput& in) {
   IdentificationResult res = identify(in.log, in.options);
+  res.warnings.insert(res.warnings.begin(), in.warnings.begin(), in.warnings.end());
   if (in.timing) {
     for (int i : {0, 2}) add_timing_extras(res.estimates[static_cast<std::size_t>(i)].extra, *in.timing);
     for (auto& pc : res.physical_sets)

@@ -3,6 +3,9 @@
 // of every figure are in the comments. docs/vehicles.md lists them.
 #include "builtin_vehicles.hpp"
 
+#include <stdexcept>
+#include <string>
+
 namespace quadid::detail {
 namespace {
 
@@ -148,11 +151,42 @@ tilt_max = 45.0
 rate_max = 220.0
 )toml";
 
+// The same vehicle as PX4's Gazebo SITL logs it: x500's text, renamed, with
+// the rotor columns of a ULog (one definition of the x500, not two).
+constexpr std::string_view kX500GzHeader = R"toml(# PX4's Gazebo x500 in a SITL flight log (ULog): airframe 4001_gz_x500 and the
+# x500_* variants built on x500_base. The gz bridge (GZMixingInterfaceESC) sends
+# output channel i as rotor i's speed command in rad/s (SIM_GZ_EC_MIN..MAX =
+# 150..1000), logged in actuator_outputs.output[i]; the rotor model is the
+# simulated one below, not the airframe's CA_ROTOR* parameters (their
+# positions, CT and KM are the allocation's rough values). The rotors follow
+# the command with the motor model's lag, which the timing estimate's rotor
+# offset stands in for (the input is a speed, so quadid adds no lag of its own).
+)toml";
+
+std::string x500_gz_text() {
+  std::string t(kX500GzHeader);
+  t += kX500;
+  auto replace = [&t](std::string_view from, std::string_view to) {
+    const auto at = t.find(from);
+    if (at == std::string::npos) throw std::logic_error("builtin x500-gz: x500's text changed");
+    t.replace(at, from.size(), to);
+  };
+  replace("name = \"x500\"", "name = \"x500-gz\"");
+  replace("columns = [\"w1\", \"w2\", \"w3\", \"w4\"]",
+          "columns = [\"actuator_outputs.output[0]\", \"actuator_outputs.output[1]\", \"actuator_outputs.output[2]\", "
+          "\"actuator_outputs.output[3]\"]");
+  return t;
+}
+
 }  // namespace
 
 const std::vector<BuiltinVehicle>& builtin_vehicles() {
-  static const std::vector<BuiltinVehicle> v = {
-      {"qball2", kQball2}, {"crazyflie21", kCrazyflie21}, {"jmavsim-quad", kJmavsimQuad}, {"x500", kX500}};
+  static const std::string x500_gz = x500_gz_text();
+  static const std::vector<BuiltinVehicle> v = {{"qball2", kQball2},
+                                                {"crazyflie21", kCrazyflie21},
+                                                {"jmavsim-quad", kJmavsimQuad},
+                                                {"x500", kX500},
+                                                {"x500-gz", x500_gz}};
   return v;
 }
 
