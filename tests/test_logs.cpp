@@ -4,6 +4,7 @@
 // struct + zlib) for the real Crazyflie logs, CRC-32's published check value,
 // and closed-form signals written with our writer.
 #include "quadid/logs.hpp"
+#include "quadid/options_json.hpp"
 
 #include "cli_fixture.hpp"
 
@@ -312,6 +313,54 @@ TEST(ULogSamples, ImportOfTheSitlFlightClimbsUp) {
     const FlightLog g = import_ulog(read_ulog(kShared / "px4-ulog" / name));
     EXPECT_GT(g.rows(), 1000) << name;
   }
+}
+
+TEST(ULogSamples, SitlFlightAtDefaultLogRatesIsRefusedForIdentification) {
+  // sample_px4_events was logged with PX4's default profile: pyulog's listing
+  // (sample_px4_events_info.txt) counts 313 actuator_motors and 313
+  // vehicle_local_position messages in 31 s (10 Hz) and 1558
+  // vehicle_angular_velocity (50 Hz). Linear interpolation keeps ~2.5 Hz of a
+  // 10 Hz topic; the moment rows use 8 Hz, the force row 4 Hz: both topics
+  // are named, the gyro (50 Hz >= 4 x 8 Hz) is not.
+  const fs::path f = kShared / "px4-ulog" / "sample_px4_events.ulg";
+  if (!fs::exists(f)) GTEST_SKIP() << f << " absent";
+  ImportReport rep;
+  (void)import_ulog(read_ulog(f), {}, &rep);
+  EXPECT_NEAR(rep.column_sources.at("actuator_motors.control[0]").rate_hz, 313.0 / 31.0, 0.5);
+  EXPECT_EQ(rep.column_sources.at("x").topic, "vehicle_local_position");
+  EXPECT_NEAR(rep.column_sources.at("p").rate_hz, 1558.0 / 31.0, 1.0);
+  quadid::IdentifyRequest req;
+  try {
+    (void)quadid::prepare_identification(f.string(), req);
+    FAIL() << "expected the sample-rate check to refuse the log";
+  } catch (const quadid::InputError& e) {
+    const std::string w = e.what();
+    EXPECT_NE(w.find("actuator_motors (actuator_motors.control[0]) was logged at 10.0 Hz"), std::string::npos) << w;
+    EXPECT_NE(w.find("vehicle_local_position (x) was logged at 10."), std::string::npos) << w;
+    EXPECT_EQ(w.find("vehicle_angular_velocity"), std::string::npos) << w;
+    EXPECT_NE(w.find("--ignore-input-errors"), std::string::npos) << w;
+  }
+  req.options.ignore_input_errors = true;
+  const quadid::IdentificationInput in = quadid::prepare_identification(f.string(), req);
+  ASSERT_FALSE(in.warnings.empty());
+  bool named = false;
+  for (const auto& w : in.warnings) named = named || w.find("input check sample rate: actuator_motors") == 0;
+  EXPECT_TRUE(named);
+}
+
+TEST(ULogSamples, SourceRateFindingsAgainstTheCutoffs) {
+  ImportReport rep;
+  rep.column_sources["m1"] = {"esc_status", 10.0};
+  rep.column_sources["p"] = {"vehicle_angular_velocity", 400.0};
+  rep.column_sources["x"] = {"vehicle_local_position", 10.0};
+  quadid::IdentificationOptions opt;  // cutoffs 4 Hz
+  auto f = quadid::source_rate_findings(rep, {"m1"}, opt);
+  ASSERT_EQ(f.size(), 2u);  // 10 Hz < 4 x 4 Hz for the rotors and the position
+  EXPECT_EQ(f[0].rfind("esc_status (m1) was logged at 10.0 Hz", 0), 0u) << f[0];
+  opt.moment_cutoff_hz = 2.5;  // 10 Hz >= 4 x 2.5 Hz: the rotors pass
+  opt.force_cutoff_hz = 2.5;
+  EXPECT_TRUE(quadid::source_rate_findings(rep, {"m1"}, opt).empty());
+  EXPECT_TRUE(quadid::source_rate_findings(ImportReport{}, {"m1"}, opt).empty());  // a CSV: nothing known
 }
 
 // --- Rotor geometry from CA_ROTOR* ---------------------------------------------

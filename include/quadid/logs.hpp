@@ -357,6 +357,14 @@ struct ImportReport {
   };
   std::vector<Gap> gaps;
   std::vector<std::string> warnings;
+  /// Each imported column's source: its topic (or event) and that topic's
+  /// median sample rate, Hz, before resampling (a topic logged at 10 Hz holds
+  /// nothing above 5 Hz, whatever the grid's rate).
+  struct Source {
+    std::string topic;
+    double rate_hz = 0.0;
+  };
+  std::map<std::string, Source> column_sources;
   std::string summary() const;  // human-readable, one line per item
 };
 

@@ -16,6 +16,7 @@
 
 #include "quadid/design.hpp"
 #include "quadid/identification.hpp"
+#include "quadid/logs.hpp"
 #include "quadid/vehicle.hpp"
 #include "quadid/simulation.hpp"
 #include "quadid/timing.hpp"
@@ -120,6 +121,13 @@ struct IdentificationInput {
   /// PX4's default); identify_prepared adds them to the result's warnings.
   std::vector<std::string> warnings;
 };
+/// An imported log's topics too slow for the rows they feed: the rotor columns
+/// and p q r for the moment rows, x y z and the angles for the force row, each
+/// topic's rate (ImportReport::column_sources) against kMinRatePerCutoff times
+/// the rows' cutoff. One message per topic, naming it, its rate and the way out.
+inline constexpr double kMinRatePerCutoff = 4.0;  // linear interpolation keeps ~81 % of the amplitude at rate / 4
+std::vector<std::string> source_rate_findings(const logs::ImportReport& report, const std::vector<std::string>& rotor_columns,
+                                              const IdentificationOptions& opt);
 /// InputError names the file.
 IdentificationInput prepare_identification(const std::string& path, const IdentifyRequest& req);
 /// identify() on a prepared log; the estimated timing joins the LS and FMLS extras.

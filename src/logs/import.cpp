@@ -244,9 +244,11 @@ FlightLog assemble(std::vector<Series> series, const ImportOptions& opt, ImportR
       }
       y = e;
       out.columns.insert(out.columns.end(), {"phi", "theta", "psi"});
+      for (const char* c : {"phi", "theta", "psi"}) rep.column_sources[c] = {s.source, 1.0 / median_period(s.t)};
       rep.sources.push_back(fmt::format("phi theta psi <- {} ({})", s.source, how));
     } else {
       out.columns.insert(out.columns.end(), s.names.begin(), s.names.end());
+      for (const auto& c : s.names) rep.column_sources[c] = {s.source, 1.0 / median_period(s.t)};
       rep.sources.push_back(fmt::format("{} <- {} ({})", fmt::join(s.names, " "), s.source, how));
     }
     blocks.push_back(std::move(y));

@@ -591,6 +591,39 @@ std::vector<std::string> check_px4_rotor_parameters(const logs::ULog& u, const l
 
 }  // namespace
 
+std::vector<std::string> source_rate_findings(const logs::ImportReport& report, const std::vector<std::string>& rotor_columns,
+                                              const IdentificationOptions& opt) {
+  const double force = opt.force_cutoff_hz.value_or(opt.processing.lowpass.cutoff_hz);
+  const double moment = opt.moment_cutoff_hz.value_or(opt.processing.lowpass.cutoff_hz);
+  struct Group {
+    std::vector<std::string> columns;
+    double cutoff;
+    const char* option;
+  };
+  const std::vector<Group> groups = {{rotor_columns, moment, "--cutoff-moment"},
+                                     {{"p", "q", "r"}, moment, "--cutoff-moment"},
+                                     {{"x", "y", "z"}, force, "--cutoff-force"},
+                                     {{"phi", "theta", "psi"}, force, "--cutoff-force"}};
+  std::vector<std::string> out;
+  std::vector<std::string> seen;  // topics already named
+  for (const Group& g : groups)
+    for (const auto& c : g.columns) {
+      const auto it = report.column_sources.find(c);
+      if (it == report.column_sources.end()) continue;
+      const auto& [topic, rate] = it->second;
+      if (rate >= kMinRatePerCutoff * g.cutoff ||
+          std::find(seen.begin(), seen.end(), topic) != seen.end())
+        continue;
+      seen.push_back(topic);
+      out.push_back(fmt::format(
+          "{} ({}) was logged at {:.1f} Hz: linear interpolation keeps its content up to about a quarter of that "
+          "({:.1f} Hz), but the rows it feeds use it up to {:g} Hz ({}); log it faster (PX4: the high-rate bit of "
+          "SDLOG_PROFILE, or the logger's topics file) or lower {} to {:.2g} Hz",
+          topic, c, rate, rate / kMinRatePerCutoff, g.cutoff, g.option, g.option, rate / kMinRatePerCutoff));
+    }
+  return out;
+}
+
 IdentificationInput prepare_identification(const std::string& path, const IdentifyRequest& req_in) {
   IdentifyRequest req = req_in;
   IdentificationInput in;
@@ -630,7 +663,8 @@ IdentificationInput prepare_identification(const std::string& path, const Identi
   load.csv.required.assign(std_cols.begin(), std_cols.begin() + 10);
   load.csv.required.insert(load.csv.required.end(), rotors.columns.begin(), rotors.columns.end());
   load.check_required = false;  // an imported autopilot log has no wrench: the rotor model adds it
-  const FlightLog raw = logs::load_any_log(path, load);
+  logs::ImportReport report;
+  const FlightLog raw = logs::load_any_log(path, load, &report);
   try {
     if (from_log) {
       // The reference set from the log itself (rough_nominal), then the defaults a --vehicle gets.
@@ -638,6 +672,16 @@ IdentificationInput prepare_identification(const std::string& path, const Identi
       apply_real_flight(req, req.real);
     }
     in.options = req.options;
+    // An autopilot log's topics at their own rates: one too slow for the
+    // rows' cutoffs is an input error (the checks' rule: --ignore-input-errors
+    // makes it a warning).
+    if (const auto slow = source_rate_findings(report, rotors.columns, in.options); !slow.empty()) {
+      if (!in.options.ignore_input_errors)
+        throw InputError(fmt::format("the log fails the input checks: sample rate: {}; if the log is right, ignore "
+                                     "the checks (--ignore-input-errors)",
+                                     fmt::join(slow, "; ")));
+      for (const auto& s : slow) in.warnings.push_back("input check sample rate: " + s + " (ignored)");
+    }
     TimingOptions topt = req.timing;
     topt.estimate_time_constant = !req.motor_time_constant && rotors.input == RotorInput::kCommand &&
                                   rotors.time_constant == 0.0;
