@@ -69,16 +69,16 @@ inline std::string px4_sim_ulog(const Vehicle& v, const Px4SimOptions& o = {}) {
   return logs::px4_ulog_from_flight_log(log, wo);
 }
 
-/// A flight of PX4's Gazebo x500 as its SITL log holds it: the built-in x500
-/// flown by quadid's simulator, written with the gz bridge's signals: rotor
-/// i's speed command in rad/s in actuator_outputs.output[i] (here the rotor
-/// speed itself), the normalised command u = (w - 150) / 850 in
+/// A flight of PX4's Gazebo x500 as its SITL log holds it: the built-in
+/// x500-gz flown by quadid's simulator (rotor speeds lagging their commands
+/// by 12.5 ms), written with the gz bridge's signals: rotor i's speed command
+/// in rad/s in actuator_outputs.output[i], the normalised command u = (w - 150) / 850 in
 /// actuator_motors.control[i] (SIM_GZ_EC_MIN/MAX = 150/1000), and the
 /// airframe 4001_gz_x500's parameters: SIM_GZ_EN = 1 and its CA_ROTOR*
 /// geometry (PX +-0.13, PY +-0.22/0.20 FRD, KM +-0.05, CT absent: PX4's 6.5),
 /// which are not the simulated rotors (+-0.174 m, 0.016 m).
 inline std::string gz_x500_ulog(double duration = 20.0, std::uint64_t seed = 1) {
-  const Vehicle v = load_vehicle("x500");
+  const Vehicle v = load_vehicle("x500-gz");
   SimulationOptions so;
   so.duration = duration;
   so.sensors.seed = seed;
@@ -91,7 +91,7 @@ inline std::string gz_x500_ulog(double duration = 20.0, std::uint64_t seed = 1) 
     log.data.conservativeResize(Eigen::NoChange, log.data.cols() + 1);
     log.data.col(log.data.cols() - 1) = ((log.column(w).array() - 150.0) / 850.0).cwiseMax(0.0).cwiseMin(1.0);
     wo.motor_columns.push_back(u);
-    wo.output_columns.push_back(w);
+    wo.output_columns.push_back(w);  // the simulator's own column: actuator_outputs.output[i]
   }
   logs::RotorGeometry& g = wo.geometry;  // FLU here (the writer converts to FRD)
   g.count = 4;

@@ -226,7 +226,8 @@ TEST_F(Px4Identify, GazeboLogNeedsTheSimulatedVehicleAndGetsItsColumns) {
   // affine in speed rather than linear in u): without --vehicle, an error
   // naming the way out; with --vehicle x500-gz, its columns are
   // actuator_outputs.output[i], which the import then takes instead of
-  // actuator_motors.
+  // actuator_motors, and the 12.5 ms motor lag behind those speed commands
+  // is applied (as a delay instead: Ixx, Iyy 15 % high).
   const std::string f = path("gz.ulg");
   std::ofstream(f, std::ios::binary) << gz_x500_ulog();
   CliRun r = run("identify " + f);
@@ -245,6 +246,8 @@ TEST_F(Px4Identify, GazeboLogNeedsTheSimulatedVehicleAndGetsItsColumns) {
     EXPECT_NEAR(e.at(k).get<double>(), P.I(i, i), 0.02 * P.I(i, i)) << k;
   for (const char* k : {"Ixy", "Ixz", "Iyz"}) EXPECT_NEAR(e.at(k).get<double>(), 0.0, 0.02 * P.I(0, 0)) << k;
   EXPECT_EQ(j.at("rotors").at("columns").at(0).get<std::string>(), "actuator_outputs.output[0]");
+  EXPECT_TRUE(j.at("timing").at("motor_time_constant").at("applies").get<bool>());
+  EXPECT_EQ(j.at("timing").at("motor_time_constant").at("value").get<double>(), 0.0125);
 }
 
 TEST_F(Px4Identify, DefaultThrustAndMomentCoefficientsAreWarned) {

@@ -133,6 +133,28 @@ TEST(Vehicle, MotorLagActsOnTheRotorSpeedExactly) {
   EXPECT_EQ(s.speeds(row({1, 2, 3, 4}), T), row({1, 2, 3, 4}));
 }
 
+TEST(Vehicle, SpeedCommandLagsLikeACommandButInRadPerSecond) {
+  // x500-gz: commanded speeds (rad/s) from 500 to 800 at sample 1, held:
+  // w_k = 800 - 300 exp(-(k - 1) T / tau) for k >= 1 (the same exact step
+  // response as a command's, on the speed itself), T_k = kf w_k^2.
+  const RotorModel r = load_vehicle("x500-gz").rotors;
+  ASSERT_EQ(r.input, RotorInput::kSpeedCommand);
+  ASSERT_TRUE(r.input_leads_rotor());
+  const double T = 0.002, tau = r.time_constant;
+  Eigen::MatrixXd c = Eigen::MatrixXd::Constant(20, 4, 800.0);
+  c.row(0).setConstant(500.0);
+  const Eigen::MatrixXd w = r.speeds(c, T);
+  EXPECT_EQ(w(0, 1), 500.0);
+  for (Eigen::Index k = 1; k < 20; ++k)  // 1e-12 rad/s: a few ulps of 800 after k recursions
+    EXPECT_NEAR(w(k, 1), 800.0 - 300.0 * std::exp(-static_cast<double>(k - 1) * T / tau), 1e-12) << k;
+  EXPECT_EQ(rotor_input_from_string("speed-command"), RotorInput::kSpeedCommand);
+  EXPECT_EQ(to_string(RotorInput::kSpeedCommand), "speed-command");
+  // Without a time constant the command is the speed.
+  RotorModel instant = r;
+  instant.time_constant = 0.0;
+  EXPECT_EQ(instant.speeds(c, T), c);
+}
+
 TEST(Vehicle, BadRotorInputsAreNamed) {
   const RotorModel r = load_vehicle("jmavsim-quad").rotors;
   try {

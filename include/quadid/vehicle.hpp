@@ -44,8 +44,9 @@ enum class RotorInput {
   kSpeed,    // rotor speed, rad/s
   kRpm,      // rotor speed, rev/min
   kCommand,  // normalized motor command 0..1 (before the motor lag)
+  kSpeedCommand,  // commanded rotor speed, rad/s (before the motor lag), e.g. PX4's Gazebo bridge
 };
-std::string to_string(RotorInput k);  // "speed" | "rpm" | "command"
+std::string to_string(RotorInput k);  // "speed" | "rpm" | "command" | "speed-command"
 /// Throws std::invalid_argument listing the choices.
 RotorInput rotor_input_from_string(std::string_view s);
 
@@ -71,6 +72,10 @@ struct RotorModel {
   int count() const { return static_cast<int>(columns.size()); }
   /// Throws std::invalid_argument naming the bad key (rotors.<key>).
   void validate() const;
+  /// The logged signal leads the rotor by the motor lag (command, speed-command):
+  /// time_constant applies, and is estimated when 0 (timing.hpp). Measured
+  /// speeds (speed, rpm) already lag.
+  bool input_leads_rotor() const { return input == RotorInput::kCommand || input == RotorInput::kSpeedCommand; }
 
   /// k of T = k w^2: kf (speed, rpm) or thrust_max (command).
   double thrust_coefficient() const { return input == RotorInput::kCommand ? thrust_max : kf; }

@@ -200,7 +200,7 @@ TimingEstimate estimate_timing(const FlightLog& log, const RotorModel& rotors, c
   rotors.validate();
   TimingEstimate est;
   est.time_constant = rotors.time_constant;
-  est.lag_applies = rotors.input == RotorInput::kCommand;
+  est.lag_applies = rotors.input_leads_rotor();
   ExtendedOptions xo = xo_in;
   xo.auto_cutoffs = false;
   // The rows do not share a parameter but the products of inertia, so their
@@ -219,7 +219,7 @@ TimingEstimate estimate_timing(const FlightLog& log, const RotorModel& rotors, c
       base = shift_columns(log, {"p", "q", "r"}, *d);
     }
   }
-  const bool want_tau = opt.estimate_time_constant && rotors.input == RotorInput::kCommand && rotors.time_constant == 0.0;
+  const bool want_tau = opt.estimate_time_constant && rotors.input_leads_rotor() && rotors.time_constant == 0.0;
   const bool want_d = opt.estimate_offsets;
   if (!want_tau && !want_d) return est;
 

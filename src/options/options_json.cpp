@@ -683,11 +683,11 @@ IdentificationInput prepare_identification(const std::string& path, const Identi
       for (const auto& s : slow) in.warnings.push_back("input check sample rate: " + s + " (ignored)");
     }
     TimingOptions topt = req.timing;
-    topt.estimate_time_constant = !req.motor_time_constant && rotors.input == RotorInput::kCommand &&
+    topt.estimate_time_constant = !req.motor_time_constant && rotors.input_leads_rotor() &&
                                   rotors.time_constant == 0.0;
     TimingEstimate t;
     t.time_constant = rotors.time_constant;
-    t.lag_applies = rotors.input == RotorInput::kCommand;
+    t.lag_applies = rotors.input_leads_rotor();
     if (topt.estimate_time_constant || topt.estimate_offsets)
       t = estimate_timing(raw, rotors, extended_options(in.options), topt);
     in.log = apply_timing(raw, rotors, t);

@@ -195,7 +195,7 @@ void PrecisionOptions::validate() const {
   sensors.validate(rate);
   if (!std::isfinite(rotor_noise) || rotor_noise < 0.0)
     throw std::invalid_argument(fmt::format("--sigma-rotor = {} must be finite and >= 0", rotor_noise));
-  if (rotor_noise > 0.0 && (!rotors || rotors->input == RotorInput::kCommand))
+  if (rotor_noise > 0.0 && (!rotors || rotors->input_leads_rotor()))
     throw std::invalid_argument("--sigma-rotor applies to logged rotor speeds (a vehicle with rotors.input = speed or rpm)");
   if (rotors) rotors->validate();
   for (int i = 0; i < 4; ++i)

@@ -59,6 +59,7 @@ void RotorActuators::step(double dt, Input& u0, Input& uh, Input& u1) {
 }
 
 Eigen::VectorXd RotorActuators::logged() const {
+  if (m_.input == RotorInput::kSpeedCommand) return target_;  // the speed the motors were told, before their lag
   if (m_.input != RotorInput::kCommand) return w_;
   // The command the motors were given, in the log's units (command_range).
   return (thrust_cmd_ / m_.thrust_max).unaryExpr([this](double c) { return m_.logged_of_command(c); });

@@ -72,7 +72,7 @@ void SimulationOptions::validate() const {
   }
   if (!std::isfinite(rotor_noise) || rotor_noise < 0.0)
     throw std::invalid_argument(fmt::format("--sigma-rotor = {} must be finite and >= 0", rotor_noise));
-  if (rotor_noise > 0.0 && (!rotors || rotors->input == RotorInput::kCommand))
+  if (rotor_noise > 0.0 && (!rotors || rotors->input_leads_rotor()))
     throw std::invalid_argument(
         "rotor_noise applies to logged rotor speeds (a vehicle with rotors.input = speed or rpm), not to commands");
   if (!std::isfinite(g) || g <= 0.0) throw std::invalid_argument(fmt::format("--g = {} m/s^2 must be finite and > 0", g));

@@ -22,6 +22,7 @@ std::string to_string(RotorInput k) {
     case RotorInput::kSpeed: return "speed";
     case RotorInput::kRpm: return "rpm";
     case RotorInput::kCommand: return "command";
+    case RotorInput::kSpeedCommand: return "speed-command";
   }
   return "?";
 }
@@ -30,7 +31,8 @@ RotorInput rotor_input_from_string(std::string_view s) {
   if (s == "speed") return RotorInput::kSpeed;
   if (s == "rpm") return RotorInput::kRpm;
   if (s == "command") return RotorInput::kCommand;
-  throw std::invalid_argument(fmt::format("'{}' is not a rotor input kind (speed, rpm or command)", s));
+  if (s == "speed-command") return RotorInput::kSpeedCommand;
+  throw std::invalid_argument(fmt::format("'{}' is not a rotor input kind (speed, rpm, command or speed-command)", s));
 }
 
 void RotorModel::validate() const {
@@ -143,9 +145,11 @@ Eigen::MatrixXd RotorModel::speeds(const Eigen::MatrixXd& in, double T) const {
                 : fmt::format("expected 0..{:g}, rotors.command_range = [{:g}, {:g}]", command_range[1],
                               command_range[0], command_range[1])));
     }
-  if (!command) return in;
-  // Normalized speed: w = sqrt(c) in steady state (T = thrust_max c); first-order lag on w.
-  const Eigen::MatrixXd target = c.cwiseMin(1.0).cwiseSqrt();
+  if (!input_leads_rotor()) return in;
+  // The speed the rotor tends to: the commanded speed itself, or for a
+  // normalized command w = sqrt(c) (T = thrust_max c in steady state); then
+  // the first-order lag on w.
+  const Eigen::MatrixXd target = command ? Eigen::MatrixXd(c.cwiseMin(1.0).cwiseSqrt()) : in;
   if (!(time_constant > 0.0)) return target;
   if (!(T > 0.0)) throw std::invalid_argument("rotor speeds: the sample period must be > 0");
   const double a = std::exp(-T / time_constant);  // exact over one sample with the command held
@@ -215,7 +219,7 @@ double log_sample_period(const FlightLog& log) {
 
 FlightLog with_rotor_wrench(const FlightLog& log, const RotorModel& rotors) {
   const Eigen::MatrixXd in = rotor_inputs(log, rotors);
-  const double T = rotors.input == RotorInput::kCommand && rotors.time_constant > 0.0 ? log_sample_period(log) : 0.0;
+  const double T = rotors.input_leads_rotor() && rotors.time_constant > 0.0 ? log_sample_period(log) : 0.0;
   const Eigen::MatrixXd w = rotors.speeds(in, T);
   const WrenchSeries F = rotors.wrench_from_speeds(w);
   // Omega_r = sum_i d_i Omega_i, d_i = +1 counter-clockwise (angular momentum
