@@ -837,6 +837,20 @@ TEST(Robustness, MutatedUsdFilesEndInInputErrorOrSuccess) {
 
 class LogsCli : public quadid::testing::CliTest {};
 
+TEST_F(LogsCli, ImportWarnsOfTopicsTooSlowForIdentify) {
+  // The same finding as identify's (ULogSamples.SitlFlightAtDefaultLogRates...),
+  // said at import time: the CSV no longer knows the topics' own rates.
+  const fs::path f = kShared / "px4-ulog" / "sample_px4_events.ulg";
+  if (!fs::exists(f)) GTEST_SKIP() << f << " absent";
+  const auto r = run("import " + f.string() + " -o " + path("s.csv") + " --json");
+  ASSERT_EQ(r.rc, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  int slow = 0;
+  for (const auto& w : j.at("warnings"))
+    if (w.get<std::string>().rfind("too slow for identify's default cutoffs: ", 0) == 0) ++slow;
+  EXPECT_EQ(slow, 2) << j.at("warnings").dump();  // actuator_motors and vehicle_local_position, 10 Hz
+}
+
 TEST_F(LogsCli, LogInfoAndImport) {
   write("f.ulg", px4_flight({}));
   auto r = run("log-info " + path("f.ulg") + " --json");

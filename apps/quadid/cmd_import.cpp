@@ -2,9 +2,11 @@
 // -> flight log CSV (docs/import.md).
 #include "commands.hpp"
 #include "quadid/logs.hpp"
+#include "quadid/options_json.hpp"
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <memory>
 #include <string>
@@ -35,6 +37,18 @@ void run(ImportArgs a) {
   logs::ImportReport rep;
   const FlightLog log = logs::load_any_log(a.file, lo, &rep);
   write_flight_log(log, a.out);
+  {
+    // What `identify` will refuse, said now: topics too slow for its default
+    // cutoffs (4 Hz force rows, 8 Hz moment rows with a rotor model).
+    IdentificationOptions io;
+    io.moment_cutoff_hz = 2.0 * io.processing.lowpass.cutoff_hz;
+    std::vector<std::string> rotor_like;
+    const auto& standard = standard_log_columns();
+    for (const auto& c : log.columns)
+      if (std::find(standard.begin(), standard.end(), c) == standard.end()) rotor_like.push_back(c);
+    for (const auto& f : source_rate_findings(rep, rotor_like, io))
+      rep.warnings.push_back("too slow for identify's default cutoffs: " + f);
+  }
   if (a.json) {
     nlohmann::json j = {{"file", a.file}, {"out", a.out}, {"kind", rep.kind}, {"rate_hz", rep.rate_hz},
                         {"rows", log.rows()}, {"t0_s", rep.t0}, {"duration_s", rep.duration},
