@@ -567,11 +567,12 @@ namespace {
 std::vector<std::string> check_px4_rotor_parameters(const logs::ULog& u, const logs::RotorGeometry& g) {
   if (const auto gz = u.parameter("SIM_GZ_EN"); gz && *gz == 1.0)
     throw InputError(
-        "the log has no column Fz (nor the torques), and it is a Gazebo simulation (SIM_GZ_EN = 1): its rotors are the simulated model's, commanded in rad/s on "
-        "actuator_outputs.output[i] (SIM_GZ_EC_MIN..MAX), not the CA_ROTOR* parameters' (the allocation's rough "
-        "positions, CT and KM), which would give the mass and moments in error by tens of percent; give the "
-        "simulated vehicle: --vehicle x500-gz for PX4's x500 models, or a vehicle file with the model's rotors, "
-        "input \"speed\" on those columns (docs/vehicles.md)");
+        "the log has no column Fz (nor the torques), and it is a Gazebo simulation (SIM_GZ_EN = 1): its rotors "
+        "are the simulated model's, commanded in rad/s on actuator_outputs.output[i] (SIM_GZ_EC_MIN..MAX), not "
+        "the CA_ROTOR* parameters' (the allocation's rough positions, CT and KM), which would give the mass and "
+        "moments in error by tens of percent; give the simulated vehicle: --vehicle x500-gz for PX4's x500 "
+        "models, or a vehicle file with the model's rotors, input \"speed-command\" on those columns and its "
+        "motor time_constant (docs/vehicles.md)");
   // PX4's defaults (float parameters: compared to float precision).
   constexpr double kDefaultCt = 6.5, kDefaultKm = 0.05, kTol = 1e-6;
   bool ct_default = !g.ct.empty(), km_default = !g.km.empty();
@@ -591,7 +592,8 @@ std::vector<std::string> check_px4_rotor_parameters(const logs::ULog& u, const l
 
 }  // namespace
 
-std::vector<std::string> source_rate_findings(const logs::ImportReport& report, const std::vector<std::string>& rotor_columns,
+std::vector<std::string> source_rate_findings(const logs::ImportReport& report,
+                                              const std::vector<std::string>& rotor_columns,
                                               const IdentificationOptions& opt) {
   const double force = opt.force_cutoff_hz.value_or(opt.processing.lowpass.cutoff_hz);
   const double moment = opt.moment_cutoff_hz.value_or(opt.processing.lowpass.cutoff_hz);
@@ -611,14 +613,12 @@ std::vector<std::string> source_rate_findings(const logs::ImportReport& report, 
       const auto it = report.column_sources.find(c);
       if (it == report.column_sources.end()) continue;
       const auto& [topic, rate] = it->second;
-      if (rate >= kMinRatePerCutoff * g.cutoff ||
-          std::find(seen.begin(), seen.end(), topic) != seen.end())
-        continue;
+      if (rate >= kMinRatePerCutoff * g.cutoff || std::find(seen.begin(), seen.end(), topic) != seen.end()) continue;
       seen.push_back(topic);
       out.push_back(fmt::format(
           "{} ({}) was logged at {:.1f} Hz: linear interpolation keeps its content up to about a quarter of that "
-          "({:.1f} Hz), but the rows it feeds use it up to {:g} Hz ({}); log it faster (PX4: the high-rate bit of "
-          "SDLOG_PROFILE, or the logger's topics file) or lower {} to {:.2g} Hz",
+          "({:.1f} Hz), but the rows it feeds use it up to {:g} Hz ({}); log it faster (PX4: the system-"
+          "identification or high-rate bit of SDLOG_PROFILE, or the logger's topics file) or lower {} to {:.2g} Hz",
           topic, c, rate, rate / kMinRatePerCutoff, g.cutoff, g.option, g.option, rate / kMinRatePerCutoff));
     }
   return out;
