@@ -159,7 +159,7 @@ void register_identify(CLI::App& app) {
                   "value kept for unidentifiable parameters (default with --vehicle: the vehicle's [nominal])")
       ->capture_default_str();
   sub->add_option("--vehicle", a->real.vehicle,
-                  "vehicle file or built-in (" + fmt::format("{}", fmt::join(builtin_vehicle_names(), ", ")) +
+                  "vehicle file or built-in (" + builtin_vehicle_list() +
                       "): compute Fz and the torques from the "
                   "log's rotor columns with its rotor model, take its [nominal] as the reference set, and use the "
                   "real-flight regression (docs/vehicles.md, docs/real-flights.md). Without it, a PX4 ULog's "

@@ -132,7 +132,7 @@ void register_montecarlo(CLI::App& app) {
                                    "[nominal])")
                        ->capture_default_str();
   sub->add_option("--vehicle", a->vehicle,
-                  "fly a vehicle with its rotors (built-in: " + fmt::format("{}", fmt::join(builtin_vehicle_names(), ", ")) +
+                  "fly a vehicle with its rotors (built-in: " + builtin_vehicle_list() +
                       ", or a vehicle file): plant, gains and sensors from it, the wrench of each run from its noisy rotor columns, "
                   "gradient descent with the normalized gain (docs/vehicles.md)");
   sub->add_option("--rotor-noise", a->rotor_noise,

@@ -249,7 +249,7 @@ void register_simulate(CLI::App& app) {
                   "with --vehicle: noise std on the logged rotor speeds, rad/s or rpm (overrides [sensors] rotor_noise)");
   sub->add_option("--vehicle", args->vehicle,
                   "fly a vehicle with rotor-level actuation: a vehicle file or built-in (" +
-                      fmt::format("{}", fmt::join(builtin_vehicle_names(), ", ")) +
+                      builtin_vehicle_list() +
                       "); plant and controller model = its [nominal], gains scaled to it (docs/vehicles.md); "
                   "the log gains its rotor columns");
   sub->add_flag("--json", args->json, "print the summary as JSON on stdout (nothing else there)");

@@ -9,7 +9,7 @@ namespace quadid::cli {
 
 void PrecisionArgs::add_to(CLI::App* sub) {
   sub->add_option("--vehicle", vehicle,
-                  "vehicle flown: built-in (" + fmt::format("{}", fmt::join(builtin_vehicle_names(), ", ")) +
+                  "vehicle flown: built-in (" + builtin_vehicle_list() +
                       ") or vehicle file; its [nominal], rates, [sensors] noise and rotors for the predicted precision, and for design and "
                   "check-trajectory its [limits] and per-rotor thrust limits (default: the paper's virtual QBall 2)");
   sub->add_option("--flight-duration", flight_duration, "length of the identification flight's log, s")

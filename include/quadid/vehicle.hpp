@@ -183,6 +183,8 @@ Vehicle parse_vehicle(std::string_view toml_text, const std::string& source);
 /// A built-in name (builtin_vehicle_names()) or a vehicle file path.
 Vehicle load_vehicle(const std::string& spec);
 std::vector<std::string> builtin_vehicle_names();
+/// The same, as text for messages and --help: "qball2, crazyflie21, ...".
+std::string builtin_vehicle_list();
 /// The TOML text of a built-in vehicle (with its sources in comments); throws
 /// std::invalid_argument listing the names.
 std::string_view builtin_vehicle_text(std::string_view name);

@@ -96,8 +96,9 @@ Eigen::MatrixXd interp(const std::vector<double>& t, const Eigen::MatrixXd& x, c
 }
 
 // Onto the grid; anti-aliasing low-pass first when the series is faster.
-Eigen::MatrixXd resample(const Series& s, const Eigen::VectorXd& grid, const ImportOptions& opt, std::string& how) {
-  const double fs = 1.0 / median_period(s.t);
+// fs: the series' own (median) rate.
+Eigen::MatrixXd resample(const Series& s, double fs, const Eigen::VectorXd& grid, const ImportOptions& opt,
+                         std::string& how) {
   if (fs <= opt.rate_hz * 1.01) {
     how = fmt::format("{:.1f} Hz, linear interpolation", fs);
     return interp(s.t, s.x, grid);
@@ -229,7 +230,8 @@ FlightLog assemble(std::vector<Series> series, const ImportOptions& opt, ImportR
         if (s.x.row(i).dot(s.x.row(i - 1)) < 0) s.x.row(i) *= -1.0;
     }
     std::string how;
-    Eigen::MatrixXd y = resample(s, grid, opt, how);
+    const double fs = 1.0 / median_period(s.t);
+    Eigen::MatrixXd y = resample(s, fs, grid, opt, how);
     if (s.bounded)
       for (Eigen::Index j = 0; j < y.cols(); ++j)
         y.col(j) = y.col(j).cwiseMax(s.x.col(j).minCoeff()).cwiseMin(s.x.col(j).maxCoeff());
@@ -244,11 +246,11 @@ FlightLog assemble(std::vector<Series> series, const ImportOptions& opt, ImportR
       }
       y = e;
       out.columns.insert(out.columns.end(), {"phi", "theta", "psi"});
-      for (const char* c : {"phi", "theta", "psi"}) rep.column_sources[c] = {s.source, 1.0 / median_period(s.t)};
+      for (const char* c : {"phi", "theta", "psi"}) rep.column_sources[c] = {s.source, fs};
       rep.sources.push_back(fmt::format("phi theta psi <- {} ({})", s.source, how));
     } else {
       out.columns.insert(out.columns.end(), s.names.begin(), s.names.end());
-      for (const auto& c : s.names) rep.column_sources[c] = {s.source, 1.0 / median_period(s.t)};
+      for (const auto& c : s.names) rep.column_sources[c] = {s.source, fs};
       rep.sources.push_back(fmt::format("{} <- {} ({})", fmt::join(s.names, " "), s.source, how));
     }
     blocks.push_back(std::move(y));

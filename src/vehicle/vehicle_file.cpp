@@ -320,11 +320,13 @@ std::vector<std::string> builtin_vehicle_names() {
   return names;
 }
 
+std::string builtin_vehicle_list() { return fmt::format("{}", fmt::join(builtin_vehicle_names(), ", ")); }
+
 std::string_view builtin_vehicle_text(std::string_view name) {
   for (const auto& b : detail::builtin_vehicles())
     if (b.name == name) return b.text;
   throw std::invalid_argument(fmt::format("unknown built-in vehicle '{}' (built-in: {}; or a vehicle file path)", name,
-                                          fmt::join(builtin_vehicle_names(), ", ")));
+                                          builtin_vehicle_list()));
 }
 
 Vehicle load_vehicle(const std::string& spec) {
@@ -332,7 +334,7 @@ Vehicle load_vehicle(const std::string& spec) {
     if (b.name == spec) return parse_vehicle(b.text, "built-in " + spec);
   if (!std::filesystem::exists(spec))
     throw InputError(fmt::format("vehicle '{}': neither a built-in vehicle ({}) nor an existing file", spec,
-                                 fmt::join(builtin_vehicle_names(), ", ")));
+                                 builtin_vehicle_list()));
   return parse_vehicle(read_file(spec), spec);
 }
 
