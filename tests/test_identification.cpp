@@ -336,6 +336,44 @@ TEST(Identification, PredictionErrorIsTheRmsOfEq43) {
   EXPECT_NE(text.find("1 Fz [N]"), std::string::npos);
 }
 
+// Issue 13: identify() sums Tables 5-6 in the pass that computes the LS
+// influences (when they cover the same samples); the tables must be those of
+// prediction_error's own pass over the same regression, to the bit.
+TEST(Identification, TablesSummedBesideTheInfluencesAreThoseOfTheirOwnPass) {
+  SimulationOptions so;
+  so.duration = 20.0;
+  so.record_truth = false;
+  const FlightLog log = simulate(FourierTrajectory::table2(), so).log;
+  // The default (the whole log, holding the window), one inside the window,
+  // and one overlapping it (its own pass).
+  for (const std::optional<TimeWindow> error_window :
+       {std::optional<TimeWindow>{}, std::optional<TimeWindow>{{8.0, 15.0}}, std::optional<TimeWindow>{{2.0, 12.0}}}) {
+    const bool own_window = error_window.has_value();
+    IdentificationOptions opt;
+    opt.window = {5.0, 20.0};
+    opt.error_window = error_window;
+    const IdentificationResult r = identify(log, opt);
+    const auto sig = process_log(log, opt.processing);
+    for (auto [model, table, a, b] :
+         {std::tuple{RegressionModel::Standard, &r.errors_standard, 0, 1},
+          std::tuple{RegressionModel::Filtered, &r.errors_filtered, 2, 3}}) {
+      const Regression reg(sig, model, opt.window, opt.lambda, opt.gd_variant);
+      const PredictionErrorTable t = prediction_error(
+          reg.with_window(opt.error_window.value_or(TimeWindow{})),
+          {{r.estimates[static_cast<size_t>(a)].name, r.estimates[static_cast<size_t>(a)].params()},
+           {r.estimates[static_cast<size_t>(b)].name, r.estimates[static_cast<size_t>(b)].params()}},
+          opt.reference);
+      EXPECT_EQ(table->samples, t.samples);
+      EXPECT_EQ(table->reference.rms, t.reference.rms);
+      ASSERT_EQ(table->rows.size(), 2u);
+      for (size_t i = 0; i < 2; ++i) {
+        EXPECT_EQ(table->rows[i].name, t.rows[i].name);
+        EXPECT_EQ(table->rows[i].rms, t.rows[i].rms) << t.rows[i].name << (own_window ? " (own window)" : "");
+      }
+    }
+  }
+}
+
 TEST(Identification, YawWrappedIntoPlusMinusPiIsUnwrapped) {
   // Table 2's yaw offset by 3 rad crosses +pi; logged wrapped into (-pi, pi] it
   // jumps by 2 pi, which the pre-filter would smear into a huge fake yaw rate.

@@ -203,6 +203,24 @@ std::string improvement_undefined(double rms_ref, double rms_set);
 PredictionErrorTable prediction_error(const Regression& reg, const std::vector<NamedParams>& sets,
                                       const NamedParams& reference);
 
+/// prediction_error's sums one sample at a time, for a pass over the
+/// regression that does other work too (identify() adds them during the
+/// pass for the LS intervals). The same arithmetic, in the same order.
+class PredictionErrorSums {
+ public:
+  PredictionErrorSums(const std::vector<NamedParams>& sets, const NamedParams& reference);
+  void add(const Regressor4x7& G, const Vec4& Y) {
+    for (size_t s = 0; s < theta_.size(); ++s) sse_[s] += (G * theta_[s] - Y).cwiseAbs2();  // eq. (43), squared
+  }
+  /// The table, for the samples of `reg`'s window: the ones added.
+  PredictionErrorTable table(const Regression& reg) const;
+
+ private:
+  std::vector<std::string> names_;  // reference first
+  std::vector<Theta> theta_;
+  std::vector<Vec4> sse_;  // fixed size per set: no allocation per sample
+};
+
 // --- The whole identification ---------------------------------------------------
 
 /// The terms of the real-flight regression. Each is linear in its parameters.

@@ -39,7 +39,7 @@ struct Recorder {
   }
 };
 
-struct RunOutput {
+struct alignas(64) RunOutput {  // own cache lines: the two regressions run at once
   LeastSquaresAccumulator acc;
   std::unique_ptr<GradientDescent> gd;
 };
@@ -171,6 +171,9 @@ IdentificationResult identify(const FlightLog& log, const IdentificationOptions&
   PhysicalProjection pc_std, pc_filt;
   const Theta prior = opt.reference.params.theta();
   std::exception_ptr estimation_error;
+  // Tables 5-6 over the error window (the regression's by default).
+  const TimeWindow error_window = opt.error_window.value_or(TimeWindow{});
+  std::optional<PredictionErrorTable> errors_standard, errors_filtered;  // when computed in the second pass
   try {
     sig = process_log(log, opt.processing, &res.processing);
     std_reg_opt.emplace(sig, RegressionModel::Standard, opt.window);
@@ -204,10 +207,27 @@ IdentificationResult identify(const FlightLog& log, const IdentificationOptions&
       out = run(reg, res.gd_initial, opt.gd, rec, res.evolution.data, ls_col, gd_col, !filtered);
       sol = solve_least_squares(out.acc, prior, opt.ls, correlation_length(fs, f3, opt.lambda, filtered));
       // Second pass: the influence of each sample on the estimate, for the HAC
-      // covariance (docs/uncertainty.md).
+      // covariance (docs/uncertainty.md), and, when one window holds the other
+      // (by default Tables 5-6 cover the whole log) and the sets are final
+      // (not replaced by the real-flight regression), the tables' sums in the
+      // same pass: each sum still sees its own samples in their order.
       InfluenceAccumulator infl(sol);
       infl.reserve(static_cast<long>(reg.size()));
-      reg.for_each([&](Eigen::Index, const Regressor4x7& G, const Vec4& Y) { infl.add(G, Y); });
+      const Regression err_reg = reg.with_window(error_window);
+      const bool err_outer = err_reg.begin() <= reg.begin() && err_reg.end() >= reg.end();
+      const bool reg_outer = reg.begin() <= err_reg.begin() && reg.end() >= err_reg.end();
+      if (!opt.extended() && (err_outer || reg_outer)) {
+        std::vector<NamedParams> sets{{filtered ? "FMLS" : "LS", Params::from_theta(sol.theta)}};
+        if (!out.gd->diverged()) sets.push_back({filtered ? "FMGD" : "GD", Params::from_theta(out.gd->theta())});
+        PredictionErrorSums errors(sets, opt.reference);
+        (err_outer ? err_reg : reg).for_each([&](Eigen::Index k, const Regressor4x7& G, const Vec4& Y) {
+          if (k >= reg.begin() && k < reg.end()) infl.add(G, Y);
+          if (k >= err_reg.begin() && k < err_reg.end()) errors.add(G, Y);
+        });
+        (filtered ? errors_filtered : errors_standard) = errors.table(err_reg);
+      } else {
+        reg.for_each([&](Eigen::Index, const Regressor4x7& G, const Vec4& Y) { infl.add(G, Y); });
+      }
       attach_uncertainty(sol, infl.finish(opt.uncertainty), prior, opt.ls);
       // The physically consistent set: the closest consistent Theta in the LS metric.
       pc = closest_physical(sol, prior, opt.physical);
@@ -401,7 +421,6 @@ IdentificationResult identify(const FlightLog& log, const IdentificationOptions&
   }
 
   // Tables 5-6: each model with its own sets and the reference.
-  const TimeWindow ew = opt.error_window.value_or(TimeWindow{});
   auto sets_of = [&](int a, int b) {
     std::vector<NamedParams> v;
     for (int i : {a, b})
@@ -409,10 +428,15 @@ IdentificationResult identify(const FlightLog& log, const IdentificationOptions&
         v.push_back({res.estimates[static_cast<size_t>(i)].name, res.estimates[static_cast<size_t>(i)].params()});
     return v;
   };
-  const std::vector<NamedParams> std_sets = sets_of(0, 1), filt_sets = sets_of(2, 3);
-  detail::run_both(
-      two, [&] { res.errors_standard = prediction_error(std_reg.with_window(ew), std_sets, opt.reference); },
-      [&] { res.errors_filtered = prediction_error(filt_reg.with_window(ew), filt_sets, opt.reference); });
+  if (errors_standard && errors_filtered) {
+    res.errors_standard = std::move(*errors_standard);
+    res.errors_filtered = std::move(*errors_filtered);
+  } else {
+    const std::vector<NamedParams> std_sets = sets_of(0, 1), filt_sets = sets_of(2, 3);
+    detail::run_both(
+        two, [&] { res.errors_standard = prediction_error(std_reg.with_window(error_window), std_sets, opt.reference); },
+        [&] { res.errors_filtered = prediction_error(filt_reg.with_window(error_window), filt_sets, opt.reference); });
+  }
   res.warnings.insert(res.warnings.end(), input_warnings.begin(), input_warnings.end());
   res.recommended = recommend_set(res);
   return res;

@@ -119,31 +119,39 @@ std::string improvement_undefined(double rms_ref, double rms_set) {
   return {};
 }
 
-PredictionErrorTable prediction_error(const Regression& reg, const std::vector<NamedParams>& sets,
-                                      const NamedParams& reference) {
-  const size_t S = sets.size() + 1;  // reference first
-  Eigen::Matrix<double, 7, Eigen::Dynamic> th(7, static_cast<Eigen::Index>(S));
-  th.col(0) = reference.params.theta();
-  for (size_t i = 0; i < sets.size(); ++i) th.col(static_cast<Eigen::Index>(i + 1)) = sets[i].params.theta();
-  Eigen::Matrix<double, 4, Eigen::Dynamic> sse = Eigen::Matrix<double, 4, Eigen::Dynamic>::Zero(4, th.cols());
-  reg.for_each([&](Eigen::Index, const Regressor4x7& G, const Vec4& Y) {
-    sse.noalias() += ((G * th).colwise() - Y).cwiseAbs2();  // eq. (43), squared
-  });
+PredictionErrorSums::PredictionErrorSums(const std::vector<NamedParams>& sets, const NamedParams& reference) {
+  names_.push_back(reference.name);
+  theta_.push_back(reference.params.theta());
+  for (const auto& set : sets) {
+    names_.push_back(set.name);
+    theta_.push_back(set.params.theta());
+  }
+  sse_.assign(theta_.size(), Vec4::Zero());
+}
+
+PredictionErrorTable PredictionErrorSums::table(const Regression& reg) const {
   const double n = static_cast<double>(reg.size());
   PredictionErrorTable t;
   t.model = reg.model();
   t.window = reg.window();
   t.samples = reg.size();
-  t.reference.name = reference.name;
-  t.reference.rms = (sse.col(0) / n).cwiseSqrt();
-  for (size_t i = 0; i < sets.size(); ++i) {
+  t.reference.name = names_[0];
+  t.reference.rms = (sse_[0] / n).cwiseSqrt();
+  for (size_t i = 1; i < names_.size(); ++i) {
     PredictionErrorRow row;
-    row.name = sets[i].name;
-    row.rms = (sse.col(static_cast<Eigen::Index>(i + 1)) / n).cwiseSqrt();
+    row.name = names_[i];
+    row.rms = (sse_[i] / n).cwiseSqrt();
     for (int c = 0; c < 4; ++c) row.improvement_pct(c) = improvement_pct(t.reference.rms(c), row.rms(c));
     t.rows.push_back(row);
   }
   return t;
+}
+
+PredictionErrorTable prediction_error(const Regression& reg, const std::vector<NamedParams>& sets,
+                                      const NamedParams& reference) {
+  PredictionErrorSums sums(sets, reference);
+  reg.for_each([&](Eigen::Index, const Regressor4x7& G, const Vec4& Y) { sums.add(G, Y); });
+  return sums.table(reg);
 }
 
 }  // namespace quadid
