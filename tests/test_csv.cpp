@@ -7,6 +7,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <csignal>
 #include <filesystem>
 #include <fstream>
@@ -118,6 +119,33 @@ TEST_F(Csv, WindowsLineEndingsBomAndQuotedHeader) {
   EXPECT_EQ(log.columns.front(), "t");
   EXPECT_EQ(log.columns[1], "x");
   EXPECT_EQ(log.data(1, 13), 13.5);
+}
+
+// Spreadsheets save "CSV" with tabs or semicolons in some locales: a header
+// without a comma names its separator, and the numbers read the same.
+TEST_F(Csv, TabOrSemicolonSeparatedFilesReadTheSameNumbers) {
+  std::string comma = std::string(kHeader) + "\n" + standard_rows(5);
+  comma.replace(comma.find("\n0.002,1.01"), 11, "\n0.002,  1.01 ");  // blanks around a number
+  const FlightLog ref = read_flight_log(write("comma.csv", comma));
+  for (const char sep : {'\t', ';'}) {
+    std::string text = comma;
+    std::replace(text.begin(), text.end(), ',', sep);
+    const FlightLog log = read_flight_log(write("sep.csv", text));
+    EXPECT_EQ(log.columns, ref.columns);
+    EXPECT_EQ(log.data, ref.data) << "separator " << int(sep);
+  }
+  // An empty field between two tabs is an empty field, not a blank to skip.
+  std::string tabs = std::string(kHeader) + "\n" + standard_rows(2);
+  std::replace(tabs.begin(), tabs.end(), ',', '\t');
+  std::string msg = error_of(tabs + "0.004\t1\t\t3\t4\t5\t6\t7\t8\t9\t10\t11\t12\t13\n");
+  EXPECT_NE(msg.find("bad.csv:4: column 3 ('y'): an empty field"), std::string::npos) << msg;
+  // Semicolons with decimal commas: the message says so.
+  std::string semi = std::string(kHeader) + "\n";
+  std::replace(semi.begin(), semi.end(), ',', ';');
+  msg = error_of(semi + "0;1;2;3;4;5;6;7;8;9;17,5;11;12;13\n");
+  EXPECT_NE(msg.find("bad.csv:2: column 11 ('Fz'): '17,5' is not a finite number (a decimal comma?"),
+            std::string::npos)
+      << msg;
 }
 
 TEST_F(Csv, MapRenamesColumnsOntoTheCanonicalNames) {

@@ -78,6 +78,16 @@ std::string_view unquote(std::string_view s) {
   return s;
 }
 
+// The field separator, from the header line: a comma (docs/file-formats.md);
+// a header without one but with tabs or semicolons (as spreadsheets save
+// "CSV" in some locales) names its separator.
+char header_delimiter(std::string_view header) {
+  if (header.find(',') != std::string_view::npos) return ',';
+  if (header.find('\t') != std::string_view::npos) return '\t';
+  if (header.find(';') != std::string_view::npos) return ';';
+  return ',';
+}
+
 struct FileCloser {
   void operator()(std::FILE* f) const {
     if (f) std::fclose(f);
@@ -294,6 +304,7 @@ FlightLog read_flight_log(const std::filesystem::path& path, const CsvReadOption
   // Comments and header.
   std::string_view line;
   bool have_header = false;
+  char delim = ',';  // the header's (header_delimiter): a spreadsheet may save tabs or semicolons
   std::vector<std::string> header;
   while (in.next(line)) {
     if (trim(line).empty()) continue;
@@ -301,9 +312,10 @@ FlightLog read_flight_log(const std::filesystem::path& path, const CsvReadOption
       log.comments.emplace_back(trim(line.substr(1)));
       continue;
     }
+    delim = header_delimiter(line);
     size_t start = 0;
     while (true) {
-      const size_t comma = line.find(',', start);
+      const size_t comma = line.find(delim, start);
       header.emplace_back(unquote(line.substr(start, comma == std::string_view::npos ? line.npos : comma - start)));
       if (comma == std::string_view::npos) break;
       start = comma + 1;
@@ -368,6 +380,8 @@ FlightLog read_flight_log(const std::filesystem::path& path, const CsvReadOption
   }
   const size_t nkeep = log.columns.size();
 
+  // Blanks around a number are allowed; a tab only when it does not separate the fields.
+  const auto blank = [delim](char ch) { return ch == ' ' || (ch == '\t' && delim != '\t'); };
   // One data row into row[slot * stride]; throws InputError naming the line.
   auto parse_row = [&](std::string_view line, size_t line_no, double* row, Eigen::Index stride) {
     const char* q = line.data();
@@ -375,30 +389,32 @@ FlightLog read_flight_log(const std::filesystem::path& path, const CsvReadOption
     for (size_t c = 0; c < nfile; ++c) {
       const char* field_end;
       if (slot[c] >= 0) {
-        // Parse in place: from_chars stops at the comma, then only blanks may follow.
+        // Parse in place: from_chars stops at the separator, then only blanks may follow.
         const char* s = q;
-        while (s < le && (*s == ' ' || *s == '\t')) ++s;
+        while (s < le && blank(*s)) ++s;
         if (s < le && *s == '+') ++s;
         double val = 0.0;
         const auto [ptr, ec] = std::from_chars(s, le, val);
         const char* e = ptr;
-        while (e < le && (*e == ' ' || *e == '\t')) ++e;
-        if (ec != std::errc() || (e < le && *e != ',') || !std::isfinite(val)) {
-          const char* fe = static_cast<const char*>(std::memchr(q, ',', static_cast<size_t>(le - q)));
+        while (e < le && blank(*e)) ++e;
+        if (ec != std::errc() || (e < le && *e != delim) || !std::isfinite(val)) {
+          const char* fe = static_cast<const char*>(std::memchr(q, delim, static_cast<size_t>(le - q)));
           const std::string_view field = trim(std::string_view(q, static_cast<size_t>((fe ? fe : le) - q)));
           if (q >= le && c > 0)
             throw InputError(fmt::format("{}:{}: row has {} field(s), expected {} (one per header column)", file,
                                          line_no, c, nfile));
-          throw InputError(fmt::format("{}:{}: column {} ('{}'): {} is not a finite number", file, line_no, c + 1,
-                                       header[c], field.empty() ? "an empty field" : fmt::format("'{}'", field)));
+          const bool decimal_comma = delim != ',' && field.find(',') != std::string_view::npos;
+          throw InputError(fmt::format("{}:{}: column {} ('{}'): {} is not a finite number{}", file, line_no, c + 1,
+                                       header[c], field.empty() ? "an empty field" : fmt::format("'{}'", field),
+                                       decimal_comma ? " (a decimal comma? write numbers with a decimal point)" : ""));
         }
         row[slot[c] * stride] = val;
         field_end = e;
       } else {
-        const char* fe = static_cast<const char*>(std::memchr(q, ',', static_cast<size_t>(le - q)));
+        const char* fe = static_cast<const char*>(std::memchr(q, delim, static_cast<size_t>(le - q)));
         field_end = fe ? fe : le;
       }
-      const bool more = field_end < le;  // a comma follows
+      const bool more = field_end < le;  // a separator follows
       if (!more && c + 1 < nfile)
         throw InputError(fmt::format("{}:{}: row has {} field(s), expected {} (one per header column)", file,
                                      line_no, c + 1, nfile));
