@@ -114,6 +114,25 @@ TEST_F(CliBatch, BadOptionOrNoLogsIsExitOneWithNothingWritten) {
   EXPECT_NE(r.err.find("nope.txt"), std::string::npos) << r.err;
 }
 
+// The batch's defaults are identify's: a logger clock jittering by +-0.2 % of
+// the period (steps within 0.4 %, inside the default 1 % tolerance) is read by
+// both. The batch once defaulted to 0.1 % and refused it.
+TEST_F(CliBatch, DefaultsAreIdentifysOnAJitteredClock) {
+  quadid::FlightLog log = flight(1);
+  const Eigen::Index t = log.find("t");
+  for (Eigen::Index k = 1; k < log.rows(); ++k) log.data(k, t) += ((k % 2) ? 0.002 : -0.002) * 0.002;
+  quadid::write_flight_log(log, path("jitter.csv"));
+  const nlohmann::json single = identify_json("jitter.csv", "");
+  const auto r = run("batch -q --window " + std::string(kWindow) + " " + path("jitter.csv"));
+  ASSERT_EQ(r.rc, 0) << r.out << r.err;
+  const auto v = lines(r.out);
+  ASSERT_EQ(v.size(), 1u);
+  nlohmann::json expected = single;
+  expected["path"] = path("jitter.csv");
+  expected["ok"] = true;
+  EXPECT_EQ(v[0], expected);
+}
+
 TEST(IdentifyBatch, SinkSeesInputOrderWhateverTheCompletionOrder) {
   // 9 missing files fail fast, one real log takes longer: with 3 threads the
   // completion order differs from the input order, the sink's must not.

@@ -68,14 +68,17 @@ def _path(p) -> str:
     return os.fspath(p)
 
 
-def read_log(path, *, map: list[str] | None = None, period_tolerance: float = 1e-3) -> dict:
+def read_log(path, *, map: list[str] | None = None, period_tolerance: float | None = None) -> dict:
     """A flight log as {column name: 1-D float64 numpy array}, in file order.
 
     The arrays are read-only views of one column-major matrix (no copy).
     `map` renames columns like --map (["tau_phi=tau_x"]); the standard columns
     (t x y z phi theta psi p q r Fz tau_phi tau_theta tau_psi) are required.
+    `period_tolerance`: relative tolerance of each time step against the
+    median step, as --period-tolerance (None: the command line's default, 1 %).
     """
-    return _quadid.read_log(_path(path), list(map or []), float(period_tolerance))
+    tol = None if period_tolerance is None else float(period_tolerance)
+    return _quadid.read_log(_path(path), list(map or []), tol)
 
 
 def identify(log, **options) -> dict:

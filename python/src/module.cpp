@@ -17,6 +17,8 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <optional>
+
 #include <cmath>
 #include <memory>
 #include <string>
@@ -139,10 +141,11 @@ quadid::FlightLog log_from_mapping(const py::object& mapping, const quadid::CsvR
 
 // --- The commands ------------------------------------------------------------------
 
-py::dict read_log(const std::string& path, const std::vector<std::string>& map, double period_tolerance) {
+py::dict read_log(const std::string& path, const std::vector<std::string>& map,
+                  std::optional<double> period_tolerance) {
   quadid::CsvReadOptions csv;  // the standard columns are required, the others kept
   csv.map = quadid::parse_column_map(map);
-  csv.period_tolerance = period_tolerance;
+  if (period_tolerance) csv.period_tolerance = *period_tolerance;  // else the reader's default, as the CLI's
   quadid::FlightLog log;
   {
     py::gil_scoped_release nogil;

@@ -81,6 +81,26 @@ def test_bad_data_raises_input_error_with_the_command_lines_message(logs, tmp_pa
         quadid.read_log(bad)
 
 
+def test_period_tolerance_defaults_to_the_command_lines(logs, tmp_path):
+    # A clock jittering by +-0.2 % of the period: inside the command line's
+    # default 1 %, so read_log, identify on the path and the CLI all accept it;
+    # a tolerance of 0.1 % given explicitly refuses it, naming the line.
+    lines = open(logs[0]).read().splitlines(keepends=True)
+    first = next(i for i, l in enumerate(lines) if not l.startswith("#")) + 1  # the first data row
+    out = lines[:first]
+    for k, l in enumerate(lines[first:]):
+        t, rest = l.split(",", 1)
+        jitter = 0.0 if k == 0 else (0.002 if k % 2 else -0.002) * 0.002
+        out.append(repr(float(t) + jitter) + "," + rest)
+    p = tmp_path / "jitter.csv"
+    p.write_text("".join(out))
+    assert len(quadid.read_log(p)["t"]) == len(lines) - first
+    cli = cli_json("identify", str(p), "--window", WINDOW)
+    assert_same(without(quadid.identify(str(p), window=WINDOW), "evolution"), cli, REL)
+    with pytest.raises(quadid.InputError, match=r"jitter.csv:\d+: column 't'"):
+        quadid.read_log(p, period_tolerance=1e-3)
+
+
 def test_a_missing_column_or_short_log_in_a_mapping_raises_input_error(logs):
     log = dict(quadid.read_log(logs[0]))
     del log["tau_psi"]

@@ -333,6 +333,9 @@ struct Processing {
 };
 
 Processing read_processing(Reader& r) {
+  // Defaults: the option structs' own (one set, shared with the library's
+  // callers; a copy here once let `batch` refuse a 0.2 % clock jitter that
+  // `identify` accepts).
   Processing p;
   auto& lp = p.processing.lowpass;
   const std::string filter = r.string("filter").value_or("butter");
@@ -340,17 +343,17 @@ Processing read_processing(Reader& r) {
   else if (filter == "fir") lp.kind = signal::LowpassOptions::Kind::FirBlackmanHarris;
   else throw std::invalid_argument(fmt::format("{}: option 'filter' (--filter): {}: expected butter or fir",
                                                r.command(), filter));
-  lp.cutoff_hz = r.number("cutoff").value_or(4.0);
-  lp.order = r.integer32("order").value_or(4);
-  lp.taps = r.integer32("taps").value_or(31);
-  p.lambda = r.number("lambda").value_or(30.0);
+  lp.cutoff_hz = r.number("cutoff").value_or(lp.cutoff_hz);
+  lp.order = r.integer32("order").value_or(lp.order);
+  lp.taps = r.integer32("taps").value_or(lp.taps);
+  p.lambda = r.number("lambda").value_or(IdentificationOptions{}.lambda);
   const std::string df = r.string("derivative-filter").value_or("consistent");
   if (df == "consistent") p.gd_variant = signal::GdVariant::Consistent;
   else if (df == "printed") p.gd_variant = signal::GdVariant::Printed;
   else throw std::invalid_argument(fmt::format(
       "{}: option 'derivative-filter' (--derivative-filter): {}: expected consistent or printed", r.command(), df));
-  p.processing.g = r.number("g").value_or(kDefaultGravity);
-  p.processing.period_tolerance = r.number("period-tolerance").value_or(1e-3);
+  p.processing.g = r.number("g").value_or(p.processing.g);
+  p.processing.period_tolerance = r.number("period-tolerance").value_or(p.processing.period_tolerance);
   p.processing.exclude_edges = !r.flag("keep-edges");
   p.processing.interpolate_held = !r.flag("keep-held-samples");
   const auto map = r.list("map");
