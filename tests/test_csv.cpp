@@ -148,6 +148,40 @@ TEST_F(Csv, TabOrSemicolonSeparatedFilesReadTheSameNumbers) {
       << msg;
 }
 
+// Loggers stamp time in ms, us or ns. Read as seconds, such a log is refused
+// with the unit its rate suggests; with that unit it gives the doubles the same
+// instants written in seconds give.
+TEST_F(Csv, TimeInMillisecondsIsNamedAndReadWithItsUnit) {
+  std::string sec = std::string(kHeader) + "\n", ms = sec, us = sec;
+  for (int k = 0; k < 40; ++k) {
+    std::string rest = standard_rows(1, 0.002, k);
+    rest = rest.substr(rest.find(','));
+    sec += fmt::format("{}e-3", 2 * k) + rest;  // the decimal instants, in seconds
+    ms += fmt::format("{}", 2 * k) + rest;
+    us += fmt::format("{}", 2000 * k) + rest;
+  }
+  const FlightLog ref = read_flight_log(write("s.csv", sec));
+  std::string msg = error_of(ms);
+  EXPECT_NE(msg.find("bad.csv: column 't': the median time step is 2 s, a rate of 0.5 Hz: too slow for a flight log "
+                     "(t looks like it is in ms: a rate of 500 Hz; give --time-unit ms"),
+            std::string::npos)
+      << msg;
+  msg = error_of(us);
+  EXPECT_NE(msg.find("t looks like it is in us: a rate of 500 Hz"), std::string::npos) << msg;
+  CsvReadOptions o;
+  o.time_units_per_second = parse_time_unit("ms");
+  EXPECT_EQ(read_flight_log(write("ms.csv", ms), o).data, ref.data);  // 2k / 1000 == the double of "0.002k"
+  o.time_units_per_second = parse_time_unit("us");
+  EXPECT_EQ(read_flight_log(write("us.csv", us), o).data, ref.data);
+  // A gap in a millisecond log: the period message gets the same hint.
+  std::string gap = ms;
+  gap.replace(gap.find("\n6,"), 3, "\n9,");
+  msg = error_of(gap);
+  EXPECT_NE(msg.find("(t looks like it is in ms"), std::string::npos) << msg;
+  EXPECT_THROW(parse_time_unit("hours"), std::invalid_argument);
+  EXPECT_DOUBLE_EQ(parse_time_unit("ns"), 1e9);
+}
+
 TEST_F(Csv, MapRenamesColumnsOntoTheCanonicalNames) {
   const std::string text = "time,x,y,z,roll,theta,psi,p,q,r,Fz,tau_x,tau_theta,tau_psi\n" + standard_rows(3);
   CsvReadOptions o;

@@ -34,6 +34,9 @@ void ProcessingArgs::add_to(CLI::App* sub) {
   sub->add_option("--g", g, "gravity, m/s^2")->capture_default_str();
   sub->add_option("--period-tolerance", period_tolerance, "relative tolerance on a uniform sample period")
       ->capture_default_str();
+  sub->add_option("--time-unit", time_unit,
+                  "unit of the log's column t: s (the format's), ms, us or ns (e.g. a logger's millisecond stamps)")
+      ->capture_default_str();
   sub->add_flag("--keep-edges", keep_edges,
                 "use the windows literally, including the filters' settling at the log's two ends (by default the "
                 "pre-filter's settling time, 0.57 s for the default filter, is left out at each end)");
@@ -70,6 +73,7 @@ CsvReadOptions ProcessingArgs::csv() const {
   CsvReadOptions c;
   c.map = parse_column_map(map);
   c.period_tolerance = period_tolerance;
+  c.time_units_per_second = parse_time_unit(time_unit);
   return c;
 }
 

@@ -29,6 +29,7 @@ struct ProcessingArgs {
   std::string derivative_filter = "consistent";
   double g = kDefaultGravity;
   double period_tolerance = signal::kDefaultPeriodTolerance;
+  std::string time_unit = "s";
   bool keep_edges = false;
   bool keep_held = false;
   std::vector<std::string> map;

@@ -65,7 +65,20 @@ struct CsvReadOptions {
   /// Threads parsing the rows: 0 = two when the machine has two cores or more,
   /// 1 = one, 2 = two. The result (and the first error reported) is the same.
   int threads = 0;
+  /// Units of column t per second: 1 (seconds, the format's), 1e3 (ms), 1e6
+  /// (us), 1e9 (ns); t is divided by it as it is read (--time-unit; names by
+  /// parse_time_unit). A log whose steps are too long for seconds is refused
+  /// with the unit its rate suggests.
+  double time_units_per_second = 1.0;
 };
+
+/// The longest sample period (s) a flight log may have: 4 Hz. Slower, t is
+/// almost surely not in seconds (milliseconds at 500 Hz read as 0.5 Hz).
+inline constexpr double kSlowestLogPeriod = 0.25;
+
+/// Units per second of a --time-unit name: s 1, ms 1e3, us 1e6, ns 1e9;
+/// std::invalid_argument naming --time-unit otherwise.
+double parse_time_unit(std::string_view name);
 
 /// Reads a flight log; throws InputError naming file, line and column on any
 /// problem (missing column, NaN or text in a number, non-increasing or

@@ -68,7 +68,8 @@ def _path(p) -> str:
     return os.fspath(p)
 
 
-def read_log(path, *, map: list[str] | None = None, period_tolerance: float | None = None) -> dict:
+def read_log(path, *, map: list[str] | None = None, period_tolerance: float | None = None,
+             time_unit: str = "s") -> dict:
     """A flight log as {column name: 1-D float64 numpy array}, in file order.
 
     The arrays are read-only views of one column-major matrix (no copy).
@@ -76,9 +77,10 @@ def read_log(path, *, map: list[str] | None = None, period_tolerance: float | No
     (t x y z phi theta psi p q r Fz tau_phi tau_theta tau_psi) are required.
     `period_tolerance`: relative tolerance of each time step against the
     median step, as --period-tolerance (None: the command line's default, 1 %).
+    `time_unit`: the unit of column t, as --time-unit ("s", "ms", "us", "ns").
     """
     tol = None if period_tolerance is None else float(period_tolerance)
-    return _quadid.read_log(_path(path), list(map or []), tol)
+    return _quadid.read_log(_path(path), list(map or []), tol, str(time_unit))
 
 
 def identify(log, **options) -> dict:

@@ -142,9 +142,10 @@ quadid::FlightLog log_from_mapping(const py::object& mapping, const quadid::CsvR
 // --- The commands ------------------------------------------------------------------
 
 py::dict read_log(const std::string& path, const std::vector<std::string>& map,
-                  std::optional<double> period_tolerance) {
+                  std::optional<double> period_tolerance, const std::string& time_unit) {
   quadid::CsvReadOptions csv;  // the standard columns are required, the others kept
   csv.map = quadid::parse_column_map(map);
+  csv.time_units_per_second = quadid::parse_time_unit(time_unit);
   if (period_tolerance) csv.period_tolerance = *period_tolerance;  // else the reader's default, as the CLI's
   quadid::FlightLog log;
   {
@@ -285,7 +286,7 @@ PYBIND11_MODULE(_quadid, m) {
   py::register_exception<quadid::InputError>(m, "InputError", PyExc_ValueError);
   // A simulated flight that left the safe region.
   py::register_exception<quadid::SimulationDiverged>(m, "SimulationDiverged", PyExc_RuntimeError);
-  m.def("read_log", &read_log, py::arg("path"), py::arg("map"), py::arg("period_tolerance"));
+  m.def("read_log", &read_log, py::arg("path"), py::arg("map"), py::arg("period_tolerance"), py::arg("time_unit"));
   m.def("identify", &identify, py::arg("log"), py::arg("options"));
   m.def("simulate", &simulate, py::arg("options"), py::arg("truth"), py::arg("out"), py::arg("truth_out"));
   m.def("design", &design, py::arg("options"), py::arg("out"));

@@ -101,6 +101,28 @@ def test_period_tolerance_defaults_to_the_command_lines(logs, tmp_path):
         quadid.read_log(p, period_tolerance=1e-3)
 
 
+def test_time_in_milliseconds_is_read_with_its_unit(logs, tmp_path):
+    # t written in ms: refused as seconds (naming the unit), read with time_unit="ms",
+    # and identify with time_unit="ms" gives the command line's result on the file in seconds.
+    lines = open(logs[0]).read().splitlines(keepends=True)
+    first = next(i for i, l in enumerate(lines) if not l.startswith("#")) + 1
+    out = lines[:first]
+    for l in lines[first:]:
+        t, rest = l.split(",", 1)
+        out.append(repr(float(t) * 1000.0) + "," + rest)
+    p = tmp_path / "ms.csv"
+    p.write_text("".join(out))
+    with pytest.raises(quadid.InputError, match="looks like it is in ms"):
+        quadid.read_log(p)
+    t = quadid.read_log(p, time_unit="ms")["t"]
+    np.testing.assert_allclose(t, quadid.read_log(logs[0])["t"], rtol=1e-15, atol=1e-18)
+    cli = cli_json("identify", str(logs[0]), "--window", WINDOW)
+    res = quadid.identify(str(p), window=WINDOW, time_unit="ms")
+    assert_same(without(res, "evolution", "log"), without(cli, "log"), 1e-6)
+    with pytest.raises(ValueError, match="time-unit"):
+        quadid.read_log(p, time_unit="hours")
+
+
 def test_a_missing_column_or_short_log_in_a_mapping_raises_input_error(logs):
     log = dict(quadid.read_log(logs[0]))
     del log["tau_psi"]

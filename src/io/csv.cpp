@@ -78,6 +78,20 @@ std::string_view unquote(std::string_view s) {
   return s;
 }
 
+// " (t looks like it is in ms: ...)" when a median step of `median` (in the
+// units read, as seconds) is too long for a flight log in seconds and one of
+// ms, us or ns would make it a plausible rate (20 Hz to 100 kHz); else "".
+std::string time_unit_hint(double median) {
+  if (!(median > kSlowestLogPeriod)) return {};
+  for (const auto& [name, per_s] : {std::pair{"ms", 1e3}, std::pair{"us", 1e6}, std::pair{"ns", 1e9}}) {
+    const double rate = per_s / median;
+    if (rate >= 20.0 && rate <= 1e5)
+      return fmt::format(" (t looks like it is in {}: a rate of {:.4g} Hz; give --time-unit {}, or convert t to seconds)",
+                         name, rate, name);
+  }
+  return " (t must be in seconds; see --time-unit)";
+}
+
 // The field separator, from the header line: a comma (docs/file-formats.md);
 // a header without one but with tabs or semicolons (as spreadsheets save
 // "CSV" in some locales) names its separator.
@@ -298,6 +312,9 @@ FlightLog read_flight_log(const std::filesystem::path& path, const CsvReadOption
         fmt::format("CsvReadOptions: period_tolerance={} must be in [0, 0.5)", opt.period_tolerance));
   if (opt.threads < 0 || opt.threads > 2)
     throw std::invalid_argument(fmt::format("CsvReadOptions: threads={} must be 0 (automatic), 1 or 2", opt.threads));
+  if (!(opt.time_units_per_second > 0.0) || !std::isfinite(opt.time_units_per_second))
+    throw std::invalid_argument(fmt::format("CsvReadOptions: time_units_per_second={} must be positive (--time-unit)",
+                                            opt.time_units_per_second));
   LineReader in(path);
   FlightLog log;
 
@@ -512,6 +529,9 @@ FlightLog read_flight_log(const std::filesystem::path& path, const CsvReadOption
   // Time: strictly increasing and uniform (the filters assume one period).
   const int ti = log.find("t");
   if (ti >= 0) {
+    // Divided, not multiplied by 1e-3: integer milliseconds then give the
+    // doubles that the same instants written in seconds would.
+    if (opt.time_units_per_second != 1.0) log.data.col(ti) /= opt.time_units_per_second;
     const auto t = log.data.col(ti);
     const signal::SamplePeriodCheck chk = signal::check_sample_period(t, opt.period_tolerance);
     if (!chk.ok()) {
@@ -524,12 +544,24 @@ FlightLog read_flight_log(const std::filesystem::path& path, const CsvReadOption
       throw InputError(fmt::format(
           "{}:{}: column 't': sample period {:.6g} s (from t = {:.9g} to {:.9g}) where the log's period is {:.6g} s (its median "
           "step): {:+.3g}%, more than the {:g}% tolerated; the log must be uniformly sampled (a gap or a rate "
-          "change? resample it first)",
+          "change? resample it first){}",
           file, line, chk.step, t(k - 1), t(k), chk.median, 100.0 * (chk.step / chk.median - 1.0),
-          100.0 * opt.period_tolerance));
+          100.0 * opt.period_tolerance, time_unit_hint(chk.median)));
     }
+    if (chk.median > kSlowestLogPeriod)
+      throw InputError(fmt::format("{}: column 't': the median time step is {:.6g} s, a rate of {:.4g} Hz: too slow "
+                                   "for a flight log{}",
+                                   file, chk.median, 1.0 / chk.median, time_unit_hint(chk.median)));
   }
   return log;
+}
+
+double parse_time_unit(std::string_view name) {
+  if (name == "s") return 1.0;
+  if (name == "ms") return 1e3;
+  if (name == "us") return 1e6;
+  if (name == "ns") return 1e9;
+  throw std::invalid_argument(fmt::format("--time-unit {}: expected s, ms, us or ns (the unit of column t)", name));
 }
 
 void write_flight_log(const FlightLog& log, const std::filesystem::path& path) {

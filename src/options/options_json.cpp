@@ -34,7 +34,8 @@ const std::vector<OptionSpec>& processing_specs() {
       {"lambda", K::Number, "bandwidth of f_D, g_D of the filtered model (eqs. 35-36), rad/s (default 30)"},
       {"derivative-filter", K::String, "g_D: consistent or printed (eq. 36) (default consistent)"},
       {"g", K::Number, "gravity, m/s^2 (default 9.81)"},
-      {"period-tolerance", K::Number, "relative tolerance on a uniform sample period (default 1e-3)"},
+      {"period-tolerance", K::Number, "relative tolerance on a uniform sample period (default 0.01)"},
+      {"time-unit", K::String, "unit of the log's column t: s, ms, us or ns (default s)"},
       {"keep-edges", K::Flag, "use the windows literally, including the filters' settling at the log's ends"},
       {"keep-held-samples", K::Flag, "use the pose as logged even where it repeats each sample until the next"},
       {"map", K::List, "column name mapping CANONICAL=NAME, e.g. tau_phi=tau_x"},
@@ -359,6 +360,8 @@ Processing read_processing(Reader& r) {
   const auto map = r.list("map");
   p.csv.map = r.with_option("map", [&] { return parse_column_map(map); });
   p.csv.period_tolerance = p.processing.period_tolerance;
+  p.csv.time_units_per_second =
+      r.with_option("time-unit", [&] { return parse_time_unit(r.string("time-unit").value_or("s")); });
   return p;
 }
 
