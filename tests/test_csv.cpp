@@ -208,6 +208,28 @@ TEST_F(Csv, MapRenamesColumnsOntoTheCanonicalNames) {
   EXPECT_THROW(parse_column_map({"a=b", "a=c"}), std::invalid_argument);
 }
 
+// A header with the usual other names gets the --map that would read it, and
+// a separator closing every line is named as such.
+TEST_F(Csv, MissingColumnsSuggestTheMapAndATrailingSeparatorIsNamed) {
+  std::string msg = error_of("time,x,y,z,Roll,pitch,yaw,p,q,r,thrust,tau_x,tau_y,m\n0,1,2,3,4,5,6,7,8,9,10,11,12,13\n");
+  EXPECT_NE(msg.find("bad.csv:1: missing required column(s): t, phi, theta, psi, Fz, tau_phi, tau_theta, tau_psi"),
+            std::string::npos)
+      << msg;
+  EXPECT_NE(msg.find("perhaps --map t=time --map phi=Roll --map theta=pitch --map psi=yaw --map Fz=thrust "
+                     "--map tau_phi=tau_x --map tau_theta=tau_y (check"),
+            std::string::npos)
+      << msg;  // nothing for tau_psi: a column "m" may be anything
+  msg = error_of(std::string(kHeader) + ",\n0,1,2,3,4,5,6,7,8,9,10,11,12,13,\n");
+  EXPECT_NE(msg.find("bad.csv:1: column 15 has an empty name (a separator at the end of the header line?"),
+            std::string::npos)
+      << msg;
+  msg = error_of(std::string(kHeader) + ",   \n");  // blanks after it: still a separator closing the line
+  EXPECT_NE(msg.find("column 15 has an empty name (a separator at the end"), std::string::npos) << msg;
+  msg = error_of("t,,x\n");
+  EXPECT_NE(msg.find("bad.csv:1: column 2 has an empty name"), std::string::npos) << msg;
+  EXPECT_EQ(msg.find("at the end of the header"), std::string::npos) << msg;
+}
+
 TEST_F(Csv, NumberErrorsNameFileLineAndColumn) {
   const std::string head = std::string("# c\n") + kHeader + "\n" + standard_rows(2);
   std::string msg = error_of(head + "0.004,1,2,3,4,5,6,7,8,9,NaN,11,12,13\n");

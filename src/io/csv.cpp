@@ -17,6 +17,7 @@
 #include <algorithm>
 #include <array>
 #include <atomic>
+#include <cctype>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
@@ -90,6 +91,42 @@ std::string time_unit_hint(double median) {
                          name, rate, name);
   }
   return " (t must be in seconds; see --time-unit)";
+}
+
+// "--map CANONICAL=NAME" for each missing standard column whose usual other
+// name the header has (case aside): a hint only, as the units and the axes
+// of a column named "yaw" or "thrust" are the user's to check.
+std::vector<std::string> suggested_maps(const std::vector<std::string>& missing,
+                                        const std::vector<std::string>& header) {
+  static const std::vector<std::pair<std::string_view, std::vector<std::string_view>>> kAliases = {
+      {"t", {"time", "timestamp", "time_s", "t_s", "sec", "seconds"}},
+      {"phi", {"roll"}},
+      {"theta", {"pitch"}},
+      {"psi", {"yaw", "heading"}},
+      {"p", {"wx", "omega_x", "gyro_x", "roll_rate"}},
+      {"q", {"wy", "omega_y", "gyro_y", "pitch_rate"}},
+      {"r", {"wz", "omega_z", "gyro_z", "yaw_rate"}},
+      {"Fz", {"thrust", "fz_n", "force_z"}},
+      {"tau_phi", {"tau_x", "mx", "torque_x", "roll_torque"}},
+      {"tau_theta", {"tau_y", "my", "torque_y", "pitch_torque"}},
+      {"tau_psi", {"tau_z", "mz", "torque_z", "yaw_torque"}},
+  };
+  auto lower = [](std::string_view s) {
+    std::string l(s);
+    for (char& ch : l) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+    return l;
+  };
+  std::vector<std::string> out;
+  for (const auto& m : missing)
+    for (const auto& [canon, aliases] : kAliases) {
+      if (canon != m) continue;
+      for (const auto& h : header)
+        if (std::find(aliases.begin(), aliases.end(), lower(h)) != aliases.end()) {
+          out.push_back(fmt::format("--map {}={}", m, h));
+          break;
+        }
+    }
+  return out;
 }
 
 // The field separator, from the header line: a comma (docs/file-formats.md);
@@ -352,7 +389,10 @@ FlightLog read_flight_log(const std::filesystem::path& path, const CsvReadOption
     std::unordered_map<std::string_view, size_t> seen;  // wide logs have thousands of columns
     for (size_t i = 0; i < header.size(); ++i) {
       if (header[i].empty())
-        throw InputError(fmt::format("{}:{}: column {} has an empty name", file, header_line, i + 1));
+        throw InputError(fmt::format("{}:{}: column {} has an empty name{}", file, header_line, i + 1,
+                                     i + 1 == header.size() && i > 0
+                                         ? " (a separator at the end of the header line? remove it from every line)"
+                                         : ""));
       const auto [it, fresh] = seen.emplace(header[i], i);
       if (!fresh)
         throw InputError(fmt::format("{}:{}: column '{}' appears twice (columns {} and {})", file, header_line,
@@ -379,10 +419,16 @@ FlightLog read_flight_log(const std::filesystem::path& path, const CsvReadOption
   std::vector<std::string> missing;
   for (const auto& r : opt.required)
     if (find_in(r) < 0) missing.push_back(r);
-  if (!missing.empty())
+  if (!missing.empty()) {
+    const std::vector<std::string> maps = suggested_maps(missing, header);
     throw InputError(fmt::format("{}:{}: missing required column(s): {} (the file has: {}; use --map CANONICAL=NAME "
-                                 "for other names)",
-                                 file, header_line, fmt::join(missing, ", "), fmt::join(header, ",")));
+                                 "for other names{})",
+                                 file, header_line, fmt::join(missing, ", "), fmt::join(header, ","),
+                                 maps.empty() ? std::string()
+                                              : fmt::format("; perhaps {} (check their units and axes against "
+                                                            "the flight-log format: SI, body FLU, z up)",
+                                                            fmt::join(maps, " "))));
+  }
 
   // Which file columns are stored, and where.
   const size_t nfile = header.size();
