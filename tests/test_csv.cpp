@@ -5,6 +5,8 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
+
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -180,6 +182,58 @@ TEST_F(Csv, TimeInMillisecondsIsNamedAndReadWithItsUnit) {
   EXPECT_NE(msg.find("(t looks like it is in ms"), std::string::npos) << msg;
   EXPECT_THROW(parse_time_unit("hours"), std::invalid_argument);
   EXPECT_DOUBLE_EQ(parse_time_unit("ns"), 1e9);
+}
+
+// The attitude as a quaternion (qw qx qy qz: scalar first, body FLU -> world
+// z up) stands for phi theta psi; the angles are those the quaternion was
+// built from (by Eigen's angle-axis products, an independent path), psi
+// continuous past +-pi, whatever the quaternion's sign.
+TEST_F(Csv, AttitudeQuaternionColumnsGiveTheEulerAngles) {
+  const int n = 200;
+  const double T = 0.02;
+  auto eta_at = [&](int k) {
+    const double t = k * T;
+    return Eigen::Vector3d(0.3 * std::sin(t), 0.2 * std::cos(1.3 * t), -2.0 + 4.0 * t);  // psi: -2 .. 14 rad
+  };
+  // Row k is on line k + 2; bad_row's quaternion is doubled.
+  auto quaternion_csv = [&](int bad_row) {
+    std::string text = "t,x,y,z,qw,qx,qy,qz,p,q,r,Fz,tau_phi,tau_theta,tau_psi\n";
+    for (int k = 0; k < n; ++k) {
+      const Eigen::Vector3d e = eta_at(k);
+      Eigen::Quaterniond q = Eigen::AngleAxisd(e(2), Eigen::Vector3d::UnitZ()) *
+                             Eigen::AngleAxisd(e(1), Eigen::Vector3d::UnitY()) *
+                             Eigen::AngleAxisd(e(0), Eigen::Vector3d::UnitX());
+      if (k % 3 == 1) q.coeffs() *= -1.0;  // the same attitude
+      if (k == bad_row) q.coeffs() *= 2.0;
+      text += fmt::format("{},1,2,3,{},{},{},{},7,8,9,10,11,12,13\n", k * T, q.w(), q.x(), q.y(), q.z());
+    }
+    return text;
+  };
+  const FlightLog log = read_flight_log(write("q.csv", quaternion_csv(-1)));
+  EXPECT_EQ(log.columns, standard_log_columns());  // phi theta psi at qw's place
+  for (int k = 0; k < n; ++k) {
+    const Eigen::Vector3d e = eta_at(k);
+    EXPECT_NEAR(log.column("phi")(k), e(0), 1e-12) << k;  // rounding of atan2/asin on doubles
+    EXPECT_NEAR(log.column("theta")(k), e(1), 1e-12) << k;
+    // The first sample's psi is in [-pi, pi] (here -2 rad itself); the rest follow it continuously.
+    EXPECT_NEAR(log.column("psi")(k), e(2), 1e-11) << k;
+  }
+  EXPECT_EQ(log.column("p")(5), 7.0);
+  // A row that is not a unit quaternion is named by its line.
+  const std::string msg = error_of(quaternion_csv(6));
+  EXPECT_NE(msg.find("bad.csv:8: columns qw qx qy qz: the quaternion's norm is 2; expected a unit"), std::string::npos) << msg;
+  // Euler angles present: they are used, the quaternion kept as extra columns.
+  std::string both = std::string(kHeader) + ",qw,qx,qy,qz\n";
+  const std::string rows = standard_rows(3);
+  for (size_t a = 0, b; (b = rows.find('\n', a)) != std::string::npos; a = b + 1)
+    both += rows.substr(a, b - a) + ",1,0,0,0\n";
+  const FlightLog kept = read_flight_log(write("both.csv", both));
+  EXPECT_EQ(kept.column("phi")(1), 1.04);
+  EXPECT_EQ(kept.find("qw"), 14);
+  // The quaternion under other names: the message gives the maps.
+  const std::string named = error_of("t,x,y,z,q0,q1,q2,q3,p,q,r,Fz,tau_phi,tau_theta,tau_psi\n0,1,2,3,1,0,0,0,7,8,9,10,11,12,13\n");
+  EXPECT_NE(named.find("missing required column(s): phi, theta, psi"), std::string::npos) << named;
+  EXPECT_NE(named.find("perhaps --map qw=q0 --map qx=q1 --map qy=q2 --map qz=q3 (check"), std::string::npos) << named;
 }
 
 TEST_F(Csv, MapRenamesColumnsOntoTheCanonicalNames) {

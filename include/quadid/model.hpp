@@ -98,6 +98,14 @@ Eigen::Matrix<S, 3, 3> euler_rate_matrix_inverse(const Eigen::Matrix<S, 3, 1>& e
   return Wi;
 }
 
+/// ZYX Euler angles [phi, theta, psi] of the attitude quaternion q = (w, x, y, z)
+/// (scalar first, rotating body FLU vectors into the z-up world frame), so that
+/// rotation(eta) = R(q / |q|); psi in [-pi, pi].
+Eigen::Vector3d euler_zyx_from_quaternion(const Eigen::Vector4d& q);
+/// The same for a series of quaternions (one per row, n x 4), each normalized,
+/// with psi unwrapped (continuous past +-pi) as the processing expects: n x 3.
+Eigen::MatrixXd euler_zyx_series(const Eigen::Ref<const Eigen::MatrixXd>& q);
+
 /// S(w) of section II-A: S(w) v = w x v.
 template <class S>
 Eigen::Matrix<S, 3, 3> skew(const Eigen::Matrix<S, 3, 1>& w) {

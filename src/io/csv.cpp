@@ -116,17 +116,70 @@ std::vector<std::string> suggested_maps(const std::vector<std::string>& missing,
     for (char& ch : l) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
     return l;
   };
+  // The attitude as a quaternion under other names, for missing Euler angles.
+  static const std::vector<std::pair<std::string_view, std::vector<std::string_view>>> kQuaternionAliases = {
+      {"qw", {"q0", "quat_w", "q_w", "orientation_w", "w"}},
+      {"qx", {"q1", "quat_x", "q_x", "orientation_x"}},
+      {"qy", {"q2", "quat_y", "q_y", "orientation_y"}},
+      {"qz", {"q3", "quat_z", "q_z", "orientation_z"}},
+  };
   std::vector<std::string> out;
+  auto suggest = [&](std::string_view canon, const std::vector<std::string_view>& aliases) {
+    for (const auto& h : header)
+      if (std::find(aliases.begin(), aliases.end(), lower(h)) != aliases.end()) {
+        out.push_back(fmt::format("--map {}={}", canon, h));
+        return true;
+      }
+    return false;
+  };
   for (const auto& m : missing)
-    for (const auto& [canon, aliases] : kAliases) {
-      if (canon != m) continue;
-      for (const auto& h : header)
-        if (std::find(aliases.begin(), aliases.end(), lower(h)) != aliases.end()) {
-          out.push_back(fmt::format("--map {}={}", m, h));
-          break;
-        }
-    }
+    for (const auto& [canon, aliases] : kAliases)
+      if (canon == m) suggest(canon, aliases);
+  const auto is_missing = [&](std::string_view n) { return std::find(missing.begin(), missing.end(), n) != missing.end(); };
+  if (is_missing("phi") && is_missing("theta") && is_missing("psi")) {
+    std::vector<std::string> quaternion;
+    std::swap(out, quaternion);
+    bool all = true;
+    for (const auto& [canon, aliases] : kQuaternionAliases) all = suggest(canon, aliases) && all;
+    std::swap(out, quaternion);
+    if (all) out.insert(out.end(), quaternion.begin(), quaternion.end());
+  }
   return out;
+}
+
+// The attitude quaternion's columns: scalar first, body FLU -> world z up.
+const std::array<std::string, 4> kQuaternionColumns = {"qw", "qx", "qy", "qz"};
+
+// Replaces the columns qw qx qy qz by phi theta psi (ZYX, psi unwrapped), at
+// qw's place. `where(k)` names data row k ("file:line") for a bad norm.
+template <class Where>
+void attitude_from_quaternion(FlightLog& log, Where&& where) {
+  std::array<Eigen::Index, 4> qc{};
+  for (size_t j = 0; j < 4; ++j) qc[j] = log.find(kQuaternionColumns[j]);
+  Eigen::MatrixXd q(log.rows(), 4);
+  for (size_t j = 0; j < 4; ++j) q.col(static_cast<Eigen::Index>(j)) = log.data.col(qc[j]);
+  for (Eigen::Index k = 0; k < q.rows(); ++k) {
+    const double norm = q.row(k).norm();
+    // A unit quaternion, as logged (rounded or slightly drifted): within 10 %.
+    if (!(norm > 0.9 && norm < 1.1))
+      throw InputError(fmt::format("{}: columns qw qx qy qz: the quaternion's norm is {:.6g}; expected a unit "
+                                   "attitude quaternion (scalar first, body FLU -> world z up)",
+                                   where(k), norm));
+  }
+  const Eigen::MatrixXd eta = euler_zyx_series(q);
+  std::vector<std::string> columns;
+  Eigen::MatrixXd data(log.rows(), log.data.cols() - 1);
+  for (Eigen::Index c = 0; c < log.data.cols(); ++c) {
+    if (c == qc[0]) {
+      for (int j = 0; j < 3; ++j) data.col(static_cast<Eigen::Index>(columns.size()) + j) = eta.col(j);
+      columns.insert(columns.end(), {"phi", "theta", "psi"});
+    } else if (std::find(qc.begin(), qc.end(), c) == qc.end()) {
+      data.col(static_cast<Eigen::Index>(columns.size())) = log.data.col(c);
+      columns.push_back(log.columns[static_cast<size_t>(c)]);
+    }
+  }
+  log.columns = std::move(columns);
+  log.data = std::move(data);
 }
 
 // The field separator, from the header line: a comma (docs/file-formats.md);
@@ -416,8 +469,21 @@ FlightLog read_flight_log(const std::filesystem::path& path, const CsvReadOption
     renamed[static_cast<size_t>(i)] = canon;
   }
   header = std::move(renamed);
+  // The attitude as a quaternion (docs/file-formats.md): qw qx qy qz stand for
+  // phi theta psi when the file has none of the three.
+  std::vector<std::string> required = opt.required;
+  const auto requires_column = [&](std::string_view n) {
+    return std::find(required.begin(), required.end(), n) != required.end();
+  };
+  bool from_quaternion = false;
+  if (requires_column("phi") && requires_column("theta") && requires_column("psi") && find_in("phi") < 0 &&
+      find_in("theta") < 0 && find_in("psi") < 0 && find_in("qw") >= 0) {
+    std::erase_if(required, [](const std::string& n) { return n == "phi" || n == "theta" || n == "psi"; });
+    required.insert(required.end(), kQuaternionColumns.begin(), kQuaternionColumns.end());
+    from_quaternion = true;
+  }
   std::vector<std::string> missing;
-  for (const auto& r : opt.required)
+  for (const auto& r : required)
     if (find_in(r) < 0) missing.push_back(r);
   if (!missing.empty()) {
     const std::vector<std::string> maps = suggested_maps(missing, header);
@@ -434,8 +500,7 @@ FlightLog read_flight_log(const std::filesystem::path& path, const CsvReadOption
   const size_t nfile = header.size();
   std::vector<int> slot(nfile, -1);
   for (size_t i = 0; i < nfile; ++i) {
-    const bool keep = opt.keep_extra_columns ||
-                      std::find(opt.required.begin(), opt.required.end(), header[i]) != opt.required.end();
+    const bool keep = opt.keep_extra_columns || requires_column(header[i]);
     if (keep) {
       slot[i] = static_cast<int>(log.columns.size());
       log.columns.push_back(header[i]);
@@ -571,6 +636,9 @@ FlightLog read_flight_log(const std::filesystem::path& path, const CsvReadOption
   if (nrow < 2)
     throw InputError(fmt::format("{}: only {} data row(s); a flight log needs many samples", file, nrow));
   log.data = store.take();
+  if (from_quaternion) attitude_from_quaternion(log, [&](Eigen::Index k) {
+      return fmt::format("{}:{}", file, row_lines.line_of(static_cast<size_t>(k)));
+    });
 
   // Time: strictly increasing and uniform (the filters assume one period).
   const int ti = log.find("t");

@@ -124,14 +124,6 @@ Eigen::MatrixXd resample(const Series& s, double fs, const Eigen::VectorXd& grid
   return interp(uv, X, grid);
 }
 
-// Quaternion (q0 scalar, body -> world) to ZYX Euler angles phi, theta, psi.
-Eigen::Vector3d euler_zyx(double q0, double q1, double q2, double q3) {
-  const double phi = std::atan2(2.0 * (q0 * q1 + q2 * q3), 1.0 - 2.0 * (q1 * q1 + q2 * q2));
-  const double theta = std::asin(std::clamp(2.0 * (q0 * q2 - q3 * q1), -1.0, 1.0));
-  const double psi = std::atan2(2.0 * (q0 * q3 + q1 * q2), 1.0 - 2.0 * (q2 * q2 + q3 * q3));
-  return {phi, theta, psi};
-}
-
 Series from_topic(const ULog& log, const std::string& topic, const std::vector<std::string>& fields,
                   const std::vector<std::string>& names, const std::vector<double>& sign) {
   const ULogTopic* t = log.find_topic(topic);
@@ -236,15 +228,7 @@ FlightLog assemble(std::vector<Series> series, const ImportOptions& opt, ImportR
       for (Eigen::Index j = 0; j < y.cols(); ++j)
         y.col(j) = y.col(j).cwiseMax(s.x.col(j).minCoeff()).cwiseMin(s.x.col(j).maxCoeff());
     if (s.quaternion) {
-      Eigen::MatrixXd e(rows, 3);
-      for (Eigen::Index i = 0; i < rows; ++i) {
-        Eigen::Vector4d q = y.row(i).transpose();
-        q /= q.norm();
-        e.row(i) = euler_zyx(q[0], q[1], q[2], q[3]).transpose();
-        // psi unwrapped: continuous past +-pi
-        if (i > 0) e(i, 2) = e(i - 1, 2) + std::remainder(e(i, 2) - e(i - 1, 2), 2.0 * std::numbers::pi);
-      }
-      y = e;
+      y = euler_zyx_series(y);  // psi unwrapped: continuous past +-pi
       out.columns.insert(out.columns.end(), {"phi", "theta", "psi"});
       for (const char* c : {"phi", "theta", "psi"}) rep.column_sources[c] = {s.source, fs};
       rep.sources.push_back(fmt::format("phi theta psi <- {} ({})", s.source, how));

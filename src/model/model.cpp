@@ -2,9 +2,31 @@
 
 #include <Eigen/Cholesky>
 #include <fmt/format.h>
+#include <algorithm>
+#include <cmath>
+#include <numbers>
 #include <stdexcept>
 
 namespace quadid {
+
+Eigen::Vector3d euler_zyx_from_quaternion(const Eigen::Vector4d& q_in) {
+  const Eigen::Vector4d q = q_in / q_in.norm();
+  const double q0 = q(0), q1 = q(1), q2 = q(2), q3 = q(3);
+  const double phi = std::atan2(2.0 * (q0 * q1 + q2 * q3), 1.0 - 2.0 * (q1 * q1 + q2 * q2));
+  const double theta = std::asin(std::clamp(2.0 * (q0 * q2 - q3 * q1), -1.0, 1.0));
+  const double psi = std::atan2(2.0 * (q0 * q3 + q1 * q2), 1.0 - 2.0 * (q2 * q2 + q3 * q3));
+  return {phi, theta, psi};
+}
+
+Eigen::MatrixXd euler_zyx_series(const Eigen::Ref<const Eigen::MatrixXd>& q) {
+  if (q.cols() != 4) throw std::invalid_argument(fmt::format("euler_zyx_series: {} columns, expected 4", q.cols()));
+  Eigen::MatrixXd e(q.rows(), 3);
+  for (Eigen::Index i = 0; i < q.rows(); ++i) {
+    e.row(i) = euler_zyx_from_quaternion(q.row(i).transpose()).transpose();
+    if (i > 0) e(i, 2) = e(i - 1, 2) + std::remainder(e(i, 2) - e(i - 1, 2), 2.0 * std::numbers::pi);
+  }
+  return e;
+}
 
 Theta relative_error_scale(const Theta& th) {
   const double mean_moment = (std::abs(th(1)) + std::abs(th(4)) + std::abs(th(6))) / 3.0;
