@@ -17,10 +17,9 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
-#include <optional>
-
 #include <cmath>
 #include <memory>
+#include <optional>
 #include <string>
 #include <utility>
 

@@ -123,26 +123,29 @@ std::vector<std::string> suggested_maps(const std::vector<std::string>& missing,
       {"qy", {"q2", "quat_y", "q_y", "orientation_y"}},
       {"qz", {"q3", "quat_z", "q_z", "orientation_z"}},
   };
-  std::vector<std::string> out;
-  auto suggest = [&](std::string_view canon, const std::vector<std::string_view>& aliases) {
+  // The header's column with one of these names (case aside), or null.
+  auto alias_in_header = [&](const std::vector<std::string_view>& aliases) -> const std::string* {
     for (const auto& h : header)
-      if (std::find(aliases.begin(), aliases.end(), lower(h)) != aliases.end()) {
-        out.push_back(fmt::format("--map {}={}", canon, h));
-        return true;
-      }
-    return false;
+      if (std::find(aliases.begin(), aliases.end(), lower(h)) != aliases.end()) return &h;
+    return nullptr;
   };
+  std::vector<std::string> out;
   for (const auto& m : missing)
     for (const auto& [canon, aliases] : kAliases)
-      if (canon == m) suggest(canon, aliases);
+      if (canon == m)
+        if (const std::string* h = alias_in_header(aliases)) out.push_back(fmt::format("--map {}={}", canon, *h));
   const auto is_missing = [&](std::string_view n) { return std::find(missing.begin(), missing.end(), n) != missing.end(); };
   if (is_missing("phi") && is_missing("theta") && is_missing("psi")) {
-    std::vector<std::string> quaternion;
-    std::swap(out, quaternion);
-    bool all = true;
-    for (const auto& [canon, aliases] : kQuaternionAliases) all = suggest(canon, aliases) && all;
-    std::swap(out, quaternion);
-    if (all) out.insert(out.end(), quaternion.begin(), quaternion.end());
+    std::vector<std::string> quaternion;  // all four, or none
+    for (const auto& [canon, aliases] : kQuaternionAliases) {
+      const std::string* h = alias_in_header(aliases);
+      if (!h) {
+        quaternion.clear();
+        break;
+      }
+      quaternion.push_back(fmt::format("--map {}={}", canon, *h));
+    }
+    out.insert(out.end(), quaternion.begin(), quaternion.end());
   }
   return out;
 }
