@@ -390,6 +390,38 @@ TEST(Extended, HighpassChoiceLeavesOutSlowModelError) {
   }
   // No offset_x / offset_y under a high-pass: the rows have no constant part left.
   for (const auto& n : chosen.estimates[0].names) EXPECT_TRUE(n != "offset_x" && n != "offset_y") << n;
+  // Band dependence. Here the bands' Ixx span 1.6 %: beyond their standard
+  // errors but below band_spread_fraction (5 %), so no warning.
+  const auto band_warning = [](const ExtendedResult& r) {
+    for (const auto& w : r.warnings)
+      if (w.find("depend on the band") != std::string::npos) return w;
+    return std::string();
+  };
+  const HighpassSelection& sel = *chosen.highpass_selection;
+  double lo = 1e300, hi = -1e300;
+  for (const auto& c : sel.candidates)
+    if (c.usable) lo = std::min(lo, c.Ixx), hi = std::max(hi, c.Ixx);
+  EXPECT_EQ(sel.Ixx_min, lo);
+  EXPECT_EQ(sel.Ixx_max, hi);
+  EXPECT_GT(hi - lo, 0.01 * truth.I(0, 0));
+  EXPECT_LT(hi - lo, HighpassSelection::band_spread_fraction * truth.I(0, 0));
+  EXPECT_FALSE(sel.band_dependent);
+  EXPECT_EQ(band_warning(chosen), "");
+  EXPECT_EQ(band_warning(off), "");  // a given cutoff: nothing to compare
+  // A moment seven times larger (0.02 N m/rad) moves them by ~10 %: said, with the span.
+  FlightLog windy = perfect_log(truth, 500.0, 50.0, 30.0, both);
+  for (Eigen::Index k = 0; k < windy.rows(); ++k) {
+    windy.data(k, 11) += 0.02 * windy.data(k, 4);
+    windy.data(k, 12) += 0.02 * windy.data(k, 5);
+  }
+  const ExtendedResult w = identify_extended(windy, o);
+  ASSERT_TRUE(w.highpass_selection.has_value());
+  EXPECT_TRUE(w.highpass_selection->band_dependent) << format_real_flight(w);
+  EXPECT_GT(w.highpass_selection->Ixx_max - w.highpass_selection->Ixx_min, 0.05 * truth.I(0, 0));
+  EXPECT_NE(band_warning(w).find(fmt::format("Ixx runs {:.4g} to {:.4g}", w.highpass_selection->Ixx_min,
+                                             w.highpass_selection->Ixx_max)),
+            std::string::npos)
+      << band_warning(w);
 
   FlightLog quiet = perfect_log(truth, 500.0, 50.0);  // Table 2: little motion above 1 Hz
   std::mt19937 rng(3);
@@ -401,6 +433,9 @@ TEST(Extended, HighpassChoiceLeavesOutSlowModelError) {
   EXPECT_EQ(q.moment_highpass_hz, 0.0) << format_real_flight(q);
   EXPECT_GT(q.highpass_selection->candidates.back().noise_share, HighpassSelection::max_noise_share);
   EXPECT_FALSE(q.highpass_selection->candidates.back().usable);
+  // Nothing unmodelled: every usable band gives the same Ixx and Iyy.
+  EXPECT_FALSE(q.highpass_selection->band_dependent) << format_real_flight(q);
+  EXPECT_EQ(band_warning(q), "");
   // Option checks name the option.
   o.moment_highpass_hz = 5.0;  // not below half the 8 Hz moment cutoff
   try {

@@ -132,10 +132,21 @@ struct HighpassCandidate {
 };
 struct HighpassSelection {
   static constexpr double max_noise_share = 0.01;
+  /// Band dependence: Ixx or Iyy spanning, over the usable candidates, more
+  /// than band_spread_se of its largest standard error there and more than
+  /// band_spread_fraction of the value used. Clean simulated flights span at
+  /// most 1.4 % (2.8 standard errors), flights in wind and gusts 12-20 %
+  /// (3.4-8.3); docs/real-flights.md, "When the estimates depend on the band".
+  static constexpr double band_spread_se = 4.0, band_spread_fraction = 0.05;
   double hz = 0.0;
   double gyro_noise = 0.0;  // rad/s, white-noise standard deviation of p and q (the larger)
   std::vector<HighpassCandidate> candidates;
   std::string reason;
+  /// Over the usable candidates (kg m^2; all 0 when none is usable).
+  double Ixx_min = 0.0, Ixx_max = 0.0, Iyy_min = 0.0, Iyy_max = 0.0;
+  /// Moments no term models reach the roll and pitch rows: Ixx and Iyy may be
+  /// off by more than their intervals say. ExtendedResult::warnings says so.
+  bool band_dependent = false;
 };
 
 /// The held-out choice of the two cutoffs: for each candidate, LS is fitted on

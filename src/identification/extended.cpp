@@ -618,7 +618,52 @@ HighpassSelection choose_highpass(const FlightLog& log, const RawSignals& raw, c
       break;
     }
   }
+  // Band dependence: with nothing unmodelled in the rows every usable band
+  // estimates the same Ixx and Iyy, within their standard errors.
+  const HighpassCandidate* used = nullptr;
+  double se_xx = 0.0, se_yy = 0.0;
+  bool first = true;
+  for (const auto& c : sel.candidates) {
+    if (!c.usable) continue;
+    if (c.hz == sel.hz) used = &c;
+    sel.Ixx_min = first ? c.Ixx : std::min(sel.Ixx_min, c.Ixx);
+    sel.Ixx_max = first ? c.Ixx : std::max(sel.Ixx_max, c.Ixx);
+    sel.Iyy_min = first ? c.Iyy : std::min(sel.Iyy_min, c.Iyy);
+    sel.Iyy_max = first ? c.Iyy : std::max(sel.Iyy_max, c.Iyy);
+    se_xx = std::max(se_xx, c.se_Ixx);
+    se_yy = std::max(se_yy, c.se_Iyy);
+    first = false;
+  }
+  if (used) {
+    const auto spread = [](double lo, double hi, double se, double value) {
+      return hi - lo > HighpassSelection::band_spread_se * se &&
+             hi - lo > HighpassSelection::band_spread_fraction * std::abs(value);
+    };
+    sel.band_dependent = spread(sel.Ixx_min, sel.Ixx_max, se_xx, used->Ixx) ||
+                         spread(sel.Iyy_min, sel.Iyy_max, se_yy, used->Iyy);
+  }
   return sel;
+}
+
+// The warning of a band-dependent selection (HighpassSelection::band_dependent).
+std::string band_dependence_warning(const HighpassSelection& sel) {
+  double lo_hz = -1.0, hi_hz = 0.0;
+  for (const auto& c : sel.candidates)
+    if (c.usable) {
+      if (lo_hz < 0.0) lo_hz = c.hz;
+      hi_hz = c.hz;
+    }
+  const auto span = [](double lo, double hi) {
+    return fmt::format("{:.4g} to {:.4g} kg m^2 ({:.0f} %)", lo, hi, 100.0 * (hi - lo) / std::max(std::abs(lo), std::abs(hi)));
+  };
+  return fmt::format(
+      "Ixx and Iyy depend on the band the roll and pitch rows are fitted in: over the usable high-pass cutoffs "
+      "{:g}-{:g} Hz, Ixx runs {} and Iyy {}, beyond their standard errors. Moments no term models reach these rows "
+      "(wind and gusts, aerodynamic moments of translational flight, the controller reacting to them). The cutoff "
+      "used ({:g} Hz) leaves out the band where they move the estimates most; where they also reach its band (wind, "
+      "gusts), Ixx and Iyy can be off by as much as this spread, or more, and their intervals do not include it: "
+      "compare flights, fly in still air with faster roll and pitch manoeuvres (docs/real-flights.md)",
+      lo_hz, hi_hz, span(sel.Ixx_min, sel.Ixx_max), span(sel.Iyy_min, sel.Iyy_max), sel.hz);
 }
 
 }  // namespace
@@ -642,6 +687,7 @@ ExtendedResult identify_extended(const FlightLog& log, const ExtendedOptions& op
   if (!opt.moment_highpass_hz) {
     res.highpass_selection = choose_highpass(log, raw, opt);
     hp = res.highpass_selection->hz;
+    if (res.highpass_selection->band_dependent) res.warnings.push_back(band_dependence_warning(*res.highpass_selection));
   }
   res.moment_highpass_hz = hp;
   const Unknowns u(opt, hp > 0.0);

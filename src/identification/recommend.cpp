@@ -1,6 +1,8 @@
 // Which set to use (include/quadid/identification.hpp, recommend_set).
 #include "quadid/identification.hpp"
 
+#include "quadid/extended.hpp"
+
 #include <fmt/format.h>
 
 #include <cmath>
@@ -103,6 +105,11 @@ Recommendation recommend_set(const IdentificationResult& r) {
                          "noise, dominates these parameters",
                          best->set->name, other->set->name, fmt::join(differ, ", "));
   }
+  // Model error that no standard error shows (docs/real-flights.md, "When the
+  // estimates depend on the band").
+  if (r.extended && r.extended->highpass_selection && r.extended->highpass_selection->band_dependent)
+    why += ". Ixx and Iyy depend on the band the roll and pitch rows are fitted in (see the warnings): moments no "
+           "term models reach those rows, and Ixx and Iyy may be off by more than their intervals";
   rec.reason = why + ".";
   return rec;
 }

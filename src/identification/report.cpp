@@ -406,7 +406,10 @@ json to_json(const ExtendedResult& x) {
                                  {"gyro_noise", x.highpass_selection->gyro_noise},
                                  {"max_noise_share", HighpassSelection::max_noise_share},
                                  {"reason", x.highpass_selection->reason},
-                                 {"candidates", cands}};
+                                 {"candidates", cands},
+                                 {"Ixx_range", {x.highpass_selection->Ixx_min, x.highpass_selection->Ixx_max}},
+                                 {"Iyy_range", {x.highpass_selection->Iyy_min, x.highpass_selection->Iyy_max}},
+                                 {"band_dependent", x.highpass_selection->band_dependent}};
   }
   if (x.cutoff_selection) {
     const auto& c = *x.cutoff_selection;
@@ -445,6 +448,8 @@ std::string format_real_flight(const ExtendedResult& x) {
       out += fmt::format("    {:>6g} Hz {:>11.4g} +- {:<7.2g} {:>11.4g} +- {:<7.2g} {:>10.2g} % {:>10.3g} %{}\n", c.hz,
                          c.Ixx, c.se_Ixx, c.Iyy, c.se_Iyy, 100.0 * c.noise_share, 100.0 * c.unexplained, note);
     }
+    if (x.highpass_selection->band_dependent)
+      out += "    Ixx and Iyy depend on the band beyond their standard errors: unmodelled moments (see the warnings)\n";
   }
   const auto& a = x.estimates[0];
   const auto& b = x.estimates[1];
