@@ -445,3 +445,45 @@ TEST(Extended, HighpassChoiceLeavesOutSlowModelError) {
     EXPECT_NE(std::string(e.what()).find("--moment-highpass"), std::string::npos) << e.what();
   }
 }
+
+// Errors in variables: white noise of sd on the gyro reaches the r_dot column
+// that Izz multiplies in the yaw row, and biases Izz toward zero by about its
+// share of that column's power. gyro_noise_share predicts it; the interval
+// reaches up to the estimate the share predicts. The yaw of Table 2 is slow,
+// so 0.05 rad/s of noise is a few percent of r_dot's power.
+TEST(Extended, GyroNoiseShareMeasuresTheBiasTowardZero) {
+  const Params truth = Params::qball2_virtual();
+  ExtendedOptions o;
+  o.terms = ModelTerms::real_flight(false);
+  o.moment_cutoff_hz = 8.0;
+  o.moment_highpass_hz = 0.0;
+  FlightLog log = perfect_log(truth, 500.0, 50.0);
+  const ExtendedResult clean = identify_extended(log, o);
+  EXPECT_LT(clean.gyro_noise_share.maxCoeff(), 1e-6);  // no noise: no share (the 1 mm motion capture steps are not gyro)
+  std::mt19937 rng(5);
+  std::normal_distribution<double> gyro(0.0, 0.05);  // rad/s
+  for (Eigen::Index k = 0; k < log.rows(); ++k)
+    for (int c = 7; c < 10; ++c) log.data(k, c) += gyro(rng);
+  const ExtendedResult noisy = identify_extended(log, o);
+  const double s = noisy.gyro_noise_share(2);
+  const ExtendedEstimate& ls = noisy.estimates[0];
+  const double bias = ls.theta(6) / truth.I(2, 2) - 1.0;
+  fmt::print("Izz: share {:.3g} %, LS error {:+.3g} %, interval [{:.5g}, {:.5g}], truth {:.5g}\n", 100 * s, 100 * bias,
+             ls.ci_low(6), ls.ci_high(6), truth.I(2, 2));
+  EXPECT_GT(s, 0.01);
+  EXPECT_LT(s, 0.5);
+  // Toward zero, by the share to within half of it (one flight: the noise's own spread).
+  EXPECT_LT(bias, 0.0);
+  EXPECT_NEAR(-bias, s, 0.5 * s);
+  // The interval: symmetric below, up to x / (1 - s) above.
+  const double half = ls.theta(6) - ls.ci_low(6);
+  EXPECT_NEAR(ls.ci_high(6), ls.theta(6) / (1.0 - s) + half, 1e-12 * truth.I(2, 2));
+  EXPECT_GE(truth.I(2, 2), ls.ci_low(6));
+  EXPECT_LE(truth.I(2, 2), ls.ci_high(6));
+  // Said when above 2 %.
+  bool warned = false;
+  for (const auto& w : noisy.warnings)
+    warned = warned || (w.find("biases estimates toward zero") != std::string::npos &&
+                        w.find(fmt::format("Izz by about {:.2g} %", 100 * s)) != std::string::npos);
+  EXPECT_EQ(warned, s > 0.02);
+}

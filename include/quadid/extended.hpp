@@ -173,6 +173,13 @@ struct ExtendedResult {
   std::optional<CutoffSelection> cutoff_selection;  // with ExtendedOptions::auto_cutoffs
   double moment_highpass_hz = 0.0;                   // used (0 = off)
   std::optional<HighpassSelection> highpass_selection;  // when chosen from the data
+  /// The gyro's white noise as a share of the power of the p_dot, q_dot and
+  /// r_dot columns (Ixx in the roll row, Iyy in the pitch row, Izz in the yaw
+  /// row; standard model, the rows' filters and high-pass): noise in a
+  /// regressor biases its parameter toward zero by about this fraction
+  /// (errors in variables), which no standard error shows. The 95 % intervals
+  /// of Ixx, Iyy and Izz reach that far above the estimates (docs/uncertainty.md).
+  Eigen::Vector3d gyro_noise_share = Eigen::Vector3d::Zero();
   std::vector<std::string> warnings;
 };
 

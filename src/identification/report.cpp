@@ -391,6 +391,7 @@ json to_json(const ExtendedResult& x) {
               {"force_prefilter", x.force_processing.filter},
               {"moment_prefilter", x.moment_processing.filter}};
   out["moment_highpass_hz"] = x.moment_highpass_hz;
+  out["gyro_noise_share"] = {{"Ixx", x.gyro_noise_share(0)}, {"Iyy", x.gyro_noise_share(1)}, {"Izz", x.gyro_noise_share(2)}};
   if (x.highpass_selection) {
     json cands = json::array();
     for (const auto& c : x.highpass_selection->candidates)
@@ -451,6 +452,9 @@ std::string format_real_flight(const ExtendedResult& x) {
     if (x.highpass_selection->band_dependent)
       out += "    Ixx and Iyy depend on the band beyond their standard errors: unmodelled moments (see the warnings)\n";
   }
+  out += fmt::format("  gyro noise in the rate derivatives (biases toward zero; the intervals reach that far above): "
+                     "Ixx {:.2g} %, Iyy {:.2g} %, Izz {:.2g} %\n",
+                     100.0 * x.gyro_noise_share(0), 100.0 * x.gyro_noise_share(1), 100.0 * x.gyro_noise_share(2));
   const auto& a = x.estimates[0];
   const auto& b = x.estimates[1];
   out += fmt::format("  {:<14} {:>24} {:>24}\n", "parameter", "LS", "FMLS");
