@@ -161,7 +161,7 @@ std::shared_ptr<const RegressionSignals> process_log(const FlightLog& log, const
   // first: a wrapped yaw's 2 pi jump, interpolated over a hold, would become
   // a fast turn that the unwrap could no longer see (unwrapping keeps a run of
   // equal values equal).
-  std::array<signal::HeldSamples, 4> held{};
+  std::array<signal::HeldSamples, 6> held{};
   auto pose_into = [&](int log_col, int x_col, size_t i) {
     X.col(x_col) = log.data.col(log_col);
     if (x_col == 10 && opt.unwrap_yaw) unwrap(X.col(10).data(), n);
@@ -170,7 +170,11 @@ std::shared_ptr<const RegressionSignals> process_log(const FlightLog& log, const
   auto attitude_and_position = [&, T](signal::ZeroPhaseFilter& f) {
     pose_into(col[6], 10, 3);  // psi
     for (int i = 0; i < 3; ++i) pose_into(col[1 + static_cast<size_t>(i)], 5 + i, static_cast<size_t>(i));  // x y z
-    filter_into(f, {{col[4], 8}, {col[5], 9}, {-1, 10}, {-1, 5}, {-1, 6}, {-1, 7}});  // phi theta psi x y z
+    // Roll and pitch too: from motion capture they are held like the rest of
+    // the pose (from an IMU they are not, and stay as logged).
+    pose_into(col[4], 8, 4);  // phi
+    pose_into(col[5], 9, 5);  // theta
+    filter_into(f, {{-1, 8}, {-1, 9}, {-1, 10}, {-1, 5}, {-1, 6}, {-1, 7}});  // phi theta psi x y z
     for (int i = 0; i < 3; ++i) signal::central_difference_inplace(X.col(5 + i).data(), n, T);
   };
   if (detail::use_second_thread(opt.threads)) {
@@ -181,8 +185,8 @@ std::shared_ptr<const RegressionSignals> process_log(const FlightLog& log, const
     attitude_and_position(zf);
   }
   if (summary) {
-    static constexpr std::array<const char*, 4> kPose{"x", "y", "z", "psi"};
-    for (size_t i = 0; i < held.size(); ++i)
+    static constexpr std::array<const char*, 6> kPose{"x", "y", "z", "psi", "phi", "theta"};
+    for (size_t i : {0, 1, 2, 4, 5, 3})  // listed x y z phi theta psi
       if (held[i].held) {
         summary->held_columns.emplace_back(kPose[i]);
         const double rate = static_cast<double>(held[i].samples) / (static_cast<double>(n) * T);

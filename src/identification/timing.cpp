@@ -109,8 +109,8 @@ Eigen::Vector2d nelder_mead_2d(const std::function<double(const Eigen::Vector2d&
 // roll and pitch axes: the integer lag of least squared difference, refined by
 // a parabola through it and its neighbours. nullopt with a note when the
 // minimum is at the search limit or not curved (too little rotation).
-std::optional<double> gyro_offset(const FlightLog& log, double cutoff_hz, const TimingOptions& opt,
-                                  std::vector<std::string>& notes) {
+std::optional<double> gyro_offset(const FlightLog& log, double cutoff_hz, bool interpolate_held,
+                                  const TimingOptions& opt, std::vector<std::string>& notes) {
   const double T = log_sample_period(log);
   const double fs = 1.0 / T;
   const Eigen::Index n = log.rows();
@@ -119,6 +119,11 @@ std::optional<double> gyro_offset(const FlightLog& log, double cutoff_hz, const 
   Eigen::MatrixXd eta(n, 3), w(n, 3);
   eta << log.column("phi"), log.column("theta"), log.column("psi");
   w << log.column("p"), log.column("q"), log.column("r");
+  // A held attitude (motion capture) on its sample instants, as process_log
+  // puts it: held, it lags the gyro by half a frame, which would be taken for
+  // the gyro's offset.
+  if (interpolate_held)
+    for (int c = 0; c < 3; ++c) signal::interpolate_held_samples(eta.col(c).data(), n);
   eta = signal::zero_phase_lowpass(eta, fs, lp);
   w = signal::zero_phase_lowpass(w, fs, lp);
   const Eigen::MatrixXd eta_dot = signal::central_difference(eta, T);
@@ -213,7 +218,7 @@ TimingEstimate estimate_timing(const FlightLog& log, const RotorModel& rotors, c
 
   FlightLog base = log;
   if (opt.estimate_offsets) {
-    if (const auto d = gyro_offset(log, xo.moment_cutoff_hz, opt, est.notes)) {
+    if (const auto d = gyro_offset(log, xo.moment_cutoff_hz, xo.processing.interpolate_held, opt, est.notes)) {
       est.gyro_offset = *d;
       est.gyro_offset_estimated = true;
       base = shift_columns(log, {"p", "q", "r"}, *d);
