@@ -136,7 +136,7 @@ struct HighpassSelection {
   /// than band_spread_se of its largest standard error there and more than
   /// band_spread_fraction of the value used. Clean simulated flights span at
   /// most 1.4 % (2.8 standard errors), flights in wind and gusts 12-20 %
-  /// (3.4-8.3); docs/real-flights.md, "When the estimates depend on the band".
+  /// (3.4-8.1); docs/real-flights.md, "When the estimates depend on the band".
   static constexpr double band_spread_se = 4.0, band_spread_fraction = 0.05;
   double hz = 0.0;
   double gyro_noise = 0.0;  // rad/s, white-noise standard deviation of p and q (the larger)
