@@ -15,7 +15,6 @@
 #include <optional>
 #include <random>
 #include <stdexcept>
-#include <tuple>
 
 namespace quadid {
 namespace {
@@ -542,13 +541,13 @@ double noise_gain(const ExtendedOptions& opt, double f_moment, double f_hz, doub
   return d.segment(k0, k1 - k0).squaredNorm() / static_cast<double>(k1 - k0);
 }
 
-HighpassSelection choose_highpass(const FlightLog& log, const RawSignals& raw, const ExtendedOptions& opt) {
+HighpassSelection choose_highpass(const RawSignals& raw, const Eigen::Vector3d& gyro_sd, const ExtendedOptions& opt) {
   HighpassSelection sel;
   const Discrete disc = discretize(raw, RegressionModel::Standard, opt);
   const auto [k0, k1] = window_range(raw, RegressionModel::Standard, opt);
   const int K = opt.uncertainty.jackknife_blocks > 0 ? opt.uncertainty.jackknife_blocks : 8;
   const double fs = 1.0 / raw.T;
-  const double sd_p = white_noise_sd(log.column("p"), fs), sd_q = white_noise_sd(log.column("q"), fs);
+  const double sd_p = gyro_sd(0), sd_q = gyro_sd(1);
   sel.gyro_noise = std::max(sd_p, sd_q);
   for (double f : highpass_candidates(raw.f_moment)) {
     HighpassCandidate hc;
@@ -650,28 +649,24 @@ HighpassSelection choose_highpass(const FlightLog& log, const RawSignals& raw, c
 // A gyro noise share above this is worth a warning (the bias it predicts is
 // beyond what 1 % intervals of a good flight would hold).
 constexpr double kNoiseBiasWarning = 0.02;
-constexpr std::array<const char*, 3> kNoiseShareNames{"Ixx", "Iyy", "Izz"};
+// The principal moments in Theta (Ixx, Iyy, Izz), each with the row and the
+// gyro column its rate derivative comes from: roll p, pitch q, yaw r.
+constexpr std::array<int, 3> kMoments{1, 4, 6};
 
 // ExtendedResult::gyro_noise_share: each gyro column's white noise carried
 // through the rows' chain (noise_gain), against the power of the column that
 // Ixx, Iyy and Izz multiply in their own rows over [k0, k1).
-Eigen::Vector3d gyro_noise_share(const FlightLog& log, const RawSignals& raw, const RowCache& rows, double hp,
+Eigen::Vector3d gyro_noise_share(const RawSignals& raw, const RowCache& rows, double hp, const Eigen::Vector3d& gyro_sd,
                                  Eigen::Index k0, Eigen::Index k1, const ExtendedOptions& opt) {
-  const double fs = 1.0 / raw.T;
   const Eigen::Index n = rows.M.rows();
   const double g_hp = noise_gain(opt, raw.f_moment, hp, raw.T, n, k0, k1);
   const double g_0 = hp > 0.0 ? noise_gain(opt, raw.f_moment, 0.0, raw.T, n, k0, k1) : g_hp;
-  // (row, column of Theta, gyro column, gain): roll Ixx p, pitch Iyy q, yaw Izz r (no high-pass).
-  const std::array<std::tuple<int, int, const char*, double>, 3> cols{
-      {{1, 1, "p", g_hp}, {2, 4, "q", g_hp}, {3, 6, "r", g_0}}};
   Eigen::Vector3d share;
-  for (size_t i = 0; i < cols.size(); ++i) {
-    const auto [row, col, name, gain] = cols[i];
-    double power = 0.0;
-    for (Eigen::Index k = k0; k < k1; ++k) power += rows.M(k, row * rows.stride() + col) * rows.M(k, row * rows.stride() + col);
-    power /= static_cast<double>(k1 - k0);
-    const double sd = white_noise_sd(log.column(name), fs);
-    share(static_cast<Eigen::Index>(i)) = power > 0.0 ? sd * sd * gain / power : 0.0;
+  for (Eigen::Index i = 0; i < 3; ++i) {
+    const Eigen::Index c = (i + 1) * rows.stride() + kMoments[static_cast<size_t>(i)];  // row i + 1, the moment's column
+    const double gain = i < 2 ? g_hp : g_0;  // the yaw row has no high-pass
+    const double power = rows.M.col(c).segment(k0, k1 - k0).squaredNorm() / static_cast<double>(k1 - k0);
+    share(i) = power > 0.0 ? gyro_sd(i) * gyro_sd(i) * gain / power : 0.0;
   }
   return share;
 }
@@ -714,9 +709,13 @@ ExtendedResult identify_extended(const FlightLog& log, const ExtendedOptions& op
   res.force_processing = raw.pf;
   res.moment_processing = raw.pm;
   // The roll and pitch rows' high-pass: given, or chosen from the data.
+  // The gyro's white noise (p, q, r), rad/s: for the high-pass candidates and the noise shares.
+  Eigen::Vector3d gyro_sd;
+  for (Eigen::Index i = 0; i < 3; ++i)
+    gyro_sd(i) = white_noise_sd(log.column(std::array{"p", "q", "r"}[static_cast<size_t>(i)]), 1.0 / raw.T);
   double hp = opt.moment_highpass_hz.value_or(0.0);
   if (!opt.moment_highpass_hz) {
-    res.highpass_selection = choose_highpass(log, raw, opt);
+    res.highpass_selection = choose_highpass(raw, gyro_sd, opt);
     hp = res.highpass_selection->hz;
     if (res.highpass_selection->band_dependent) res.warnings.push_back(band_dependence_warning(*res.highpass_selection));
   }
@@ -744,12 +743,12 @@ ExtendedResult identify_extended(const FlightLog& log, const ExtendedOptions& op
     RowCache rows = build_rows(discretize(raw, model, opt), assemble);
     if (hp > 0.0) highpass_rows(rows, hp, 1.0 / raw.T, opt.highpass_order);
     if (mi == 0) {
-      res.gyro_noise_share = gyro_noise_share(log, raw, rows, hp, k0, k1, opt);
+      res.gyro_noise_share = gyro_noise_share(raw, rows, hp, gyro_sd, k0, k1, opt);
       std::vector<std::string> biased;
-      for (int i = 0; i < 3; ++i)
-        if (res.gyro_noise_share(i) > kNoiseBiasWarning)
-          biased.push_back(fmt::format("{} by about {:.2g} %", kNoiseShareNames[static_cast<size_t>(i)],
-                                       100.0 * res.gyro_noise_share(i)));
+      for (size_t i = 0; i < kMoments.size(); ++i)
+        if (res.gyro_noise_share(static_cast<Eigen::Index>(i)) > kNoiseBiasWarning)
+          biased.push_back(fmt::format("{} by about {:.2g} %", kThetaNames[static_cast<size_t>(kMoments[i])],
+                                       100.0 * res.gyro_noise_share(static_cast<Eigen::Index>(i))));
       if (!biased.empty())
         res.warnings.push_back(fmt::format(
             "the gyro's noise biases estimates toward zero: {} (errors in variables: the noise in the rate "
@@ -886,8 +885,10 @@ ExtendedResult identify_extended(const FlightLog& log, const ExtendedOptions& op
     // interval reaches up to the estimate the share predicts, x / (1 - s)
     // (the share of the standard model's columns: the filtered model's f_D
     // passes less noise, so for FMLS it is an upper bound).
-    for (const auto& [j, i] : {std::pair{1, 0}, std::pair{4, 1}, std::pair{6, 2}}) {
-      const double sh = std::min(res.gyro_noise_share(i), 0.5);
+    for (size_t i = 0; i < kMoments.size(); ++i) {
+      const Eigen::Index j = kMoments[i];
+      const double sh = std::min(res.gyro_noise_share(static_cast<Eigen::Index>(i)), 0.5);
+      // Up to x / (1 - s) + the half-width (max: never below it by rounding when s is tiny).
       if (x(j) > 0.0 && sh > 0.0) e.ci_high(j) = std::max(e.ci_high(j), x(j) / (1.0 - sh) + (e.ci_high(j) - x(j)));
     }
     // The reported covariance: the standard errors above, with the
