@@ -646,6 +646,29 @@ TEST(Spectrum, WelchMatchesScipy) {
 // reconstruction is the chord, so it differs from the quadratic by at most
 // a T^2 / 8 |x''| (closed form, T = 1/30 s), and it passes exactly through
 // every sample. The held signal itself lags by half a period.
+TEST(Unwrap, UndoesTheWrapAndLeavesAContinuousAngleAlone) {
+  // A yaw turning 2.5 rad per sample forwards, then backwards (steps below
+  // pi, so continuous), wrapped into (-pi, pi] by remainder: unwrap gives it
+  // back. 1e-12 rad: a few roundings of 2 pi multiples of up to ~40 rad.
+  constexpr Eigen::Index n = 40;
+  std::vector<double> truth(n), a(n);
+  for (Eigen::Index k = 0; k < n; ++k) {
+    truth[static_cast<size_t>(k)] = k < 20 ? 0.3 + 2.5 * static_cast<double>(k) : 0.3 + 2.5 * static_cast<double>(38 - k);
+    a[static_cast<size_t>(k)] = std::remainder(truth[static_cast<size_t>(k)], 2.0 * std::numbers::pi);
+  }
+  quadid::signal::unwrap(a.data(), n);
+  for (Eigen::Index k = 0; k < n; ++k) EXPECT_NEAR(a[static_cast<size_t>(k)], truth[static_cast<size_t>(k)], 1e-12) << k;
+  // Already continuous: the same bits.
+  std::vector<double> b = truth;
+  quadid::signal::unwrap(b.data(), n);
+  EXPECT_EQ(b, truth);
+  // Empty and one-sample series are left alone.
+  quadid::signal::unwrap(nullptr, 0);
+  double one = 3.0;
+  quadid::signal::unwrap(&one, 1);
+  EXPECT_EQ(one, 3.0);
+}
+
 TEST(HeldSamples, InterpolatesBetweenTheSampleInstants) {
   const double fs = 480.0, fm = 30.0, a = 0.7;  // x = a t^2
   const Eigen::Index n = 4800, per = 16;

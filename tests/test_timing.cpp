@@ -14,7 +14,9 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <cmath>
 #include <fstream>
+#include <numbers>
 #include <span>
 
 using namespace quadid;
@@ -173,6 +175,37 @@ TEST(Timing, HeldMotionCaptureAttitudeIsNotTakenForAGyroOffset) {
   keep.processing.interpolate_held = false;
   const TimingEstimate k = estimate_timing(raw, v.rotors, keep);
   EXPECT_LT(k.gyro_offset, -0.5 * 0.5 * static_cast<double>(hold - 1) * T) << format_timing(k);
+}
+
+TEST(Timing, WrappedYawIsNotTakenForAGyroOffset) {
+  // A CSV may log psi in (-pi, pi]. Its 2 pi jumps enter p and q through
+  // psi_dot (eq. 4) unless psi is unwrapped first, as process_log does. Yaw
+  // turned by a constant (which p and q do not see) so that it crosses the
+  // wrap back and forth, then wrapped: the offsets are those of the same
+  // log unwrapped.
+  const Vehicle v = small_vehicle();
+  Px4SimOptions o;
+  o.duration = 15.0;
+  o.seed = 3;
+  FlightLog log = logs::import_ulog(logs::parse_ulog(bytes_of(px4_sim_ulog(v, o)), "sim.ulg"));
+  const int j = log.find("psi");
+  const double shift = std::numbers::pi - log.data.col(j).mean();
+  log.data.col(j).array() += shift;
+  FlightLog wrapped = log;
+  long wraps = 0;
+  for (Eigen::Index k = 0; k < log.rows(); ++k) {
+    wrapped.data(k, j) = std::remainder(log.data(k, j), 2.0 * std::numbers::pi);
+    if (k > 0 && std::abs(wrapped.data(k, j) - wrapped.data(k - 1, j)) > std::numbers::pi) ++wraps;
+  }
+  ASSERT_GE(wraps, 2) << "the test needs yaw to cross the wrap";
+  const TimingEstimate a = estimate_timing(log, v.rotors, real_flight_options());
+  const TimingEstimate b = estimate_timing(wrapped, v.rotors, real_flight_options());
+  ASSERT_TRUE(a.gyro_offset_estimated) << format_timing(a);
+  ASSERT_TRUE(b.gyro_offset_estimated) << format_timing(b);
+  // Unwrapping gives back psi + shift up to a rounding of 2 pi: 1e-9 s is far
+  // below the 0.1 ms the search resolves and far above any rounding.
+  EXPECT_NEAR(b.gyro_offset, a.gyro_offset, 1e-9) << format_timing(b);
+  EXPECT_NEAR(b.rotor_offset, a.rotor_offset, 1e-9) << format_timing(b);
 }
 
 TEST(Timing, OptionsNamed) {

@@ -188,6 +188,12 @@ struct HeldSamples {
 };
 HeldSamples interpolate_held_samples(double* x, Eigen::Index n);
 
+// Removes the 2 pi jumps of an angle logged in (-pi, pi] (as numpy.unwrap):
+// a step of more than pi between two samples is taken for a wrap and undone
+// from there on. Harmless on an angle already continuous (steps below pi, as
+// any yaw sampled faster than half a turn per sample). In place on a[0..n).
+void unwrap(double* a, Eigen::Index n);
+
 // Eq. (33) at sample k of n samples: (x[k+1] - x[k-1]) / (2T) in the interior;
 // at the two ends the second-order one-sided (-3 x[0] + 4 x[1] - x[2]) / (2T)
 // and (3 x[n-1] - 4 x[n-2] + x[n-3]) / (2T) (exact for quadratics, like the

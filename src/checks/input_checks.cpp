@@ -21,16 +21,6 @@ double rms(const Eigen::VectorXd& v) { return v.size() ? std::sqrt(v.squaredNorm
 // r within a factor tol of target (both positive).
 bool near_factor(double r, double target, double tol) { return r > target / tol && r < target * tol; }
 
-void unwrap(Eigen::VectorXd& a) {
-  const double two_pi = 2.0 * std::numbers::pi;
-  double offset = 0.0;
-  for (Eigen::Index k = 1; k < a.size(); ++k) {
-    const double d = (a(k) + offset) - a(k - 1);
-    if (std::abs(d) > std::numbers::pi) offset -= two_pi * std::round(d / two_pi);
-    a(k) += offset;
-  }
-}
-
 }  // namespace
 
 const char* to_string(Severity s) {
@@ -115,11 +105,7 @@ std::vector<InputFinding> check_input(const FlightLog& log, const InputCheckOpti
   Eigen::MatrixXd raw(n, 9);
   const char* names[9] = {"z", "phi", "theta", "psi", "p", "q", "r", "Fz", "tau_phi"};
   for (int c = 0; c < 9; ++c) raw.col(c) = log.column(names[c]);
-  {
-    Eigen::VectorXd psi = raw.col(3);
-    unwrap(psi);
-    raw.col(3) = psi;
-  }
+  signal::unwrap(raw.col(3).data(), n);
   Eigen::MatrixXd f;
   try {
     f = signal::zero_phase_lowpass(raw, fs, lp);

@@ -20,21 +20,6 @@
 namespace quadid {
 namespace {
 
-// Removes 2 pi jumps (as numpy.unwrap), for a yaw logged in (-pi, pi].
-void unwrap(double* a, Eigen::Index n) {
-  const double two_pi = 2.0 * std::numbers::pi;
-  double offset = 0.0;
-  double prev = a[0];
-  for (Eigen::Index k = 1; k < n; ++k) {
-    const double raw = a[k];
-    const double d = raw - prev;
-    if (d > std::numbers::pi) offset -= two_pi * std::round(d / two_pi);
-    else if (d < -std::numbers::pi) offset += two_pi * std::round(-d / two_pi);
-    prev = raw;
-    a[k] = raw + offset;
-  }
-}
-
 // Frequency where the zero-phase (squared-magnitude) response falls to -3 dB,
 // |H|^2 = 1/sqrt(2), by bisection: both filters are monotone in their pass band.
 double zero_phase_f3db(const signal::ZeroPhaseFilter& zf, double fs) {
@@ -164,7 +149,7 @@ std::shared_ptr<const RegressionSignals> process_log(const FlightLog& log, const
   std::array<signal::HeldSamples, 6> held{};
   auto pose_into = [&](int log_col, int x_col, size_t i) {
     X.col(x_col) = log.data.col(log_col);
-    if (x_col == 10 && opt.unwrap_yaw) unwrap(X.col(10).data(), n);
+    if (x_col == 10 && opt.unwrap_yaw) signal::unwrap(X.col(10).data(), n);
     if (opt.interpolate_held) held[i] = signal::interpolate_held_samples(X.col(x_col).data(), n);
   };
   auto attitude_and_position = [&, T](signal::ZeroPhaseFilter& f) {

@@ -119,9 +119,11 @@ std::optional<double> gyro_offset(const FlightLog& log, double cutoff_hz, bool i
   Eigen::MatrixXd eta(n, 3), w(n, 3);
   eta << log.column("phi"), log.column("theta"), log.column("psi");
   w << log.column("p"), log.column("q"), log.column("r");
-  // A held attitude (motion capture) on its sample instants, as process_log
-  // puts it: held, it lags the gyro by half a frame, which would be taken for
-  // the gyro's offset.
+  // psi continuous, as process_log makes it: a wrap's 2 pi jump would enter p
+  // and q through psi_dot (eq. 4). Then a held attitude (motion capture) on
+  // its sample instants: held, it lags the gyro by half a frame, which would
+  // be taken for the gyro's offset.
+  signal::unwrap(eta.col(2).data(), n);
   if (interpolate_held)
     for (int c = 0; c < 3; ++c) signal::interpolate_held_samples(eta.col(c).data(), n);
   eta = signal::zero_phase_lowpass(eta, fs, lp);
