@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 
 using namespace quadid;
 
@@ -88,6 +89,20 @@ TEST(InputChecks, ThrustInKgfIsNamed) {
   const auto f = findings(check_input(log, options()), "thrust-units");
   ASSERT_EQ(f.size(), 1u) << dump(check_input(log, options()));
   EXPECT_NE(f[0].action.find("kgf"), std::string::npos) << f[0].action;
+}
+
+TEST(InputChecks, RotorSpeedsInTheOtherUnitAreNamed) {
+  // Thrust goes as the rotor speed squared: speeds in rad/s read as rpm give
+  // (2 pi / 60)^2 = 0.011 of the thrust, rpm read as rad/s 91 times it.
+  for (const double f : {std::pow(2.0 * std::numbers::pi / 60.0, 2), std::pow(60.0 / (2.0 * std::numbers::pi), 2)}) {
+    FlightLog log = clean_log();
+    scale_column(log, "Fz", f);
+    const auto all = check_input(log, options());
+    const auto t = findings(all, "thrust-units", Severity::Warning);
+    ASSERT_EQ(t.size(), 1u) << dump(all);
+    EXPECT_NE(t[0].action.find("rotor speeds in rad/s where the vehicle file says rpm"), std::string::npos)
+        << t[0].action;
+  }
 }
 
 TEST(InputChecks, NoThrustAtAllIsAnErrorAndNothingElseAboutTheThrust) {

@@ -15,6 +15,7 @@ namespace quadid {
 namespace {
 
 constexpr double kRad2Deg = 180.0 / std::numbers::pi;
+constexpr double kRadPerSPerRpm = 2.0 * std::numbers::pi / 60.0;  // rad/s per rpm: thrust goes as its square
 
 double rms(const Eigen::VectorXd& v) { return v.size() ? std::sqrt(v.squaredNorm() / double(v.size())) : 0.0; }
 
@@ -221,6 +222,12 @@ std::vector<InputFinding> check_input(const FlightLog& log, const InputCheckOpti
       else if (near_factor(ratio, opt.g, opt.ratio_tolerance))
         add("thrust-units", Severity::Warning, saw,
             "Fz is g times too large for the reference mass: the reference mass may be a weight in N, or Fz scaled");
+      else if (near_factor(ratio, kRadPerSPerRpm * kRadPerSPerRpm, opt.ratio_tolerance) ||
+               near_factor(ratio, 1.0 / (kRadPerSPerRpm * kRadPerSPerRpm), opt.ratio_tolerance))
+        add("thrust-units", Severity::Warning, saw,
+            fmt::format("a factor (60 / 2 pi)^2 = {:.1f}: rotor speeds in rad/s where the vehicle file says rpm, or "
+                        "the reverse (its [rotors] input)",
+                        1.0 / (kRadPerSPerRpm * kRadPerSPerRpm)));
       else if (near_factor(ratio, 1e-3, opt.ratio_tolerance) || near_factor(ratio, 1e3, opt.ratio_tolerance))
         add("thrust-units", Severity::Warning, saw, "a factor 1000: grams vs kilograms (mass) or mN vs N (thrust)");
       else if (!near_factor(ratio, 1.0, opt.ratio_tolerance))

@@ -11,10 +11,12 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
+#include <array>
 #include <cmath>
 #include <exception>
 #include <future>
 #include <optional>
+#include <limits>
 #include <numbers>
 #include <stdexcept>
 #include <tuple>
@@ -23,6 +25,13 @@ namespace quadid {
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+// Above this share of the roll and pitch rows left unexplained (at the best
+// high-pass band) the torques do not belong to the rotations: real Crazyflie
+// flights leave 2-6 %, simulated flights in gusts up to 8 %; rotor columns
+// rotated by one 46-101 %, an X layout given for a + vehicle 50 % when roll
+// and pitch move independently (20 % on the crazyflie21's table2 flight,
+// whose roll and pitch move together: not caught).
+constexpr double kMaxUnexplained = 0.3;
 
 // Which samples of the window are recorded in the evolution.
 struct Recorder {
@@ -72,6 +81,48 @@ double correlation_length(double fs, double f3db, double lambda, bool filtered) 
   double f = f3db;
   if (filtered) f = std::min(f, lambda / (2.0 * std::numbers::pi));
   return std::max(1.0, fs / (2.0 * f));
+}
+
+// The torques must explain the rotations, with positive moments of inertia.
+// A principal moment negative beyond its 95 % interval, or roll and pitch rows
+// that the fit leaves mostly unexplained in every high-pass band, is not a
+// body but a wrench in the wrong frame or a rotor model that does not match
+// the log (motor order, spin directions, X vs + layout): findings for the
+// input-check errors' rule (docs/input-checks.md, "Model fit").
+std::vector<std::string> model_fit_findings(const IdentificationResult& res) {
+  std::vector<std::string> out;
+  constexpr std::array<std::pair<int, const char*>, 3> kMoments{
+      {{1, "tau_phi (roll)"}, {4, "tau_theta (pitch)"}, {6, "tau_psi (yaw)"}}};
+  for (const auto& [j, torque] : kMoments) {
+    for (const auto& [set, sol] : {std::pair{"LS", &res.ls_standard}, std::pair{"FMLS", &res.ls_filtered}}) {
+      const auto& u = sol->uncertainty;
+      if (!u.computed || !(u.ci_high(j) < 0.0)) continue;
+      const bool yaw = j == 6;
+      out.push_back(fmt::format(
+          "model-fit: {} {} = {:.4g} kg m^2 is negative (95 % interval [{:.4g}, {:.4g}]): the torque {} has the wrong "
+          "sign for the measured rotations ({})",
+          set, kThetaNames[static_cast<size_t>(j)], sol->theta(j), u.ci_low(j), u.ci_high(j), torque,
+          yaw ? "with a vehicle file: its spin directions are reversed, or the log's rotor columns are not in its "
+                "order; with torque columns: tau_psi's sign (body FLU: a z-down FRD log needs tau_theta and tau_psi "
+                "negated)"
+              : "with a vehicle file: its rotor positions or the order of the log's rotor columns do not match the "
+                "vehicle (motor numbering, X vs + layout); with torque columns: their axes and signs (body FLU)"));
+      break;  // one finding per moment
+    }
+  }
+  if (res.extended && res.extended->highpass_selection) {
+    double best = std::numeric_limits<double>::infinity();
+    for (const auto& c : res.extended->highpass_selection->candidates)
+      if (c.se_Ixx > 0.0) best = std::min(best, c.unexplained);  // the bands that were fitted
+    if (best > kMaxUnexplained && std::isfinite(best))
+      out.push_back(fmt::format(
+          "model-fit: the rotor model's roll and pitch torques leave {:.0f} % of those rows unexplained in the best "
+          "high-pass band (real flights: under 10 %): the vehicle file's rotor positions or the order of the log's "
+          "rotor columns do not match the vehicle (the motor numbering, or an X layout given for a + vehicle or the "
+          "reverse)",
+          100.0 * best));
+  }
+  return out;
 }
 
 }  // namespace
@@ -351,6 +402,19 @@ IdentificationResult identify(const FlightLog& log, const IdentificationOptions&
     }
     for (const auto& w : xr->warnings) res.warnings.push_back(w);
     res.extended = std::move(xr);
+  }
+
+  // The torques must fit the rotations: otherwise the error is the log's or
+  // the vehicle file's, and the estimates are not a body's.
+  if (opt.input_checks) {
+    const std::vector<std::string> misfit = model_fit_findings(res);
+    if (!misfit.empty()) {
+      if (!opt.ignore_input_errors)
+        throw InputError(fmt::format("the log fails the input checks: {}; if the log and the vehicle file are right, "
+                                     "ignore the checks (--ignore-input-errors)",
+                                     fmt::join(misfit, "; ")));
+      for (const auto& m : misfit) input_warnings.push_back("input check " + m + " (ignored)");
+    }
   }
 
   // Identifiability: rank deficiency is an error unless allowed; a large
