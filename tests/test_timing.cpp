@@ -52,6 +52,14 @@ Vehicle small_vehicle() {
   return v;
 }
 
+// 15 s of small_vehicle's flight (seed 3), through the ULog importer.
+FlightLog small_vehicle_flight() {
+  Px4SimOptions o;
+  o.duration = 15.0;
+  o.seed = 3;
+  return logs::import_ulog(logs::parse_ulog(bytes_of(px4_sim_ulog(small_vehicle(), o)), "sim.ulg"));
+}
+
 }  // namespace
 
 TEST(Timing, ShiftColumnsReadsAtTPlusOffset) {
@@ -151,10 +159,7 @@ TEST(Timing, HeldMotionCaptureAttitudeIsNotTakenForAGyroOffset) {
   // 250 Hz log), which the gyro-offset search took for the gyro being early.
   // Put back on its sample instants (as process_log does) the offset is ~0.
   const Vehicle v = small_vehicle();
-  Px4SimOptions o;
-  o.duration = 15.0;
-  o.seed = 3;
-  FlightLog raw = logs::import_ulog(logs::parse_ulog(bytes_of(px4_sim_ulog(v, o)), "sim.ulg"));
+  FlightLog raw = small_vehicle_flight();
   const double T = raw.data(1, raw.find("t")) - raw.data(0, raw.find("t"));
   const auto hold = static_cast<Eigen::Index>(std::llround(0.02 / T));
   ASSERT_GE(hold, 4);
@@ -184,10 +189,7 @@ TEST(Timing, WrappedYawIsNotTakenForAGyroOffset) {
   // wrap back and forth, then wrapped: the offsets are those of the same
   // log unwrapped.
   const Vehicle v = small_vehicle();
-  Px4SimOptions o;
-  o.duration = 15.0;
-  o.seed = 3;
-  FlightLog log = logs::import_ulog(logs::parse_ulog(bytes_of(px4_sim_ulog(v, o)), "sim.ulg"));
+  FlightLog log = small_vehicle_flight();
   const int j = log.find("psi");
   const double shift = std::numbers::pi - log.data.col(j).mean();
   log.data.col(j).array() += shift;
