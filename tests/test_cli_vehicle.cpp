@@ -167,40 +167,60 @@ TEST_F(CliVehicle, RealCrazyflieFlightsRecommendASetPhysicalInBodyAndTerms) {
 }
 
 TEST_F(CliVehicle, RotorModelThatDoesNotMatchTheLogIsAnInputError) {
-  // A vehicle-file mistake on a good log of the crazyflie21 (X layout): the
-  // rotor columns in another order (rotated by one: the yaw torque changes
-  // sign, the roll and pitch torques turn by 90 deg and no longer match the
-  // rotations). It used to give confident estimates with a negative Izz; now
-  // an input error names the torque of the wrong sign (--ignore-input-errors
-  // turns it into a warning), and a warning the unexplained rows.
+  // The vehicle-file mistakes on a good log of the crazyflie21 (X layout):
+  // the rotor columns in another order (rotated by one: the yaw torque
+  // changes sign, the roll and pitch torques turn by 90 deg), and a + layout
+  // written for the X vehicle (the torques turned by 45 deg; its roll and
+  // pitch move together on table2, so the real-flight fit still explains 80 %
+  // of their rows). Both used to give confident wrong estimates (a negative
+  // Izz; Ixx and Iyy 27 % low without a warning). Now the rotor-mapping
+  // check names the arrangement that fits, and --ignore-input-errors turns it
+  // and the model-fit findings into warnings.
   const CliRun sim = run("simulate --vehicle crazyflie21 --trajectory table2 --duration 30 -o " + path("log.csv"));
   ASSERT_EQ(sim.rc, 0) << sim.err;
   quadid::CsvReadOptions csv;
   csv.required = {"t"};
   const quadid::FlightLog rotors = drop_wrench(quadid::read_flight_log(path("log.csv"), csv));
   quadid::write_flight_log(rotors, path("good.csv"));
-  quadid::FlightLog rotated = rotors;
+  quadid::FlightLog rotated = rotors;  // column rpm.m(i) holds rotor i + 1's speed
   for (int i = 0; i < 4; ++i)
     rotated.data.col(rotated.find(fmt::format("rpm.m{}", i + 1))) = rotors.column(fmt::format("rpm.m{}", (i + 1) % 4 + 1));
   quadid::write_flight_log(rotated, path("rotated.csv"));
+  std::string plus;
+  for (const auto& b : quadid::detail::builtin_vehicles())
+    if (b.name == "crazyflie21") plus = std::string(b.text);
+  const std::string x_pos =
+      "positions = [[0.0325, -0.0325, 0.0], [-0.0325, -0.0325, 0.0],\n             [-0.0325, 0.0325, 0.0], [0.0325, "
+      "0.0325, 0.0]]";
+  const size_t at = plus.find(x_pos);
+  ASSERT_NE(at, std::string::npos) << "the builtin's positions changed: update the test";
+  plus.replace(at, x_pos.size(),
+               "positions = [[0.046, 0.0, 0.0], [0.0, -0.046, 0.0], [-0.046, 0.0, 0.0], [0.0, 0.046, 0.0]]");
+  write("plus.toml", plus);
 
   const CliRun good = run("identify " + path("good.csv") + " --vehicle crazyflie21 --window 5:30");
   ASSERT_EQ(good.rc, 0) << good.err;
+  EXPECT_EQ(good.err.find("rotor-mapping"), std::string::npos) << good.err;
   EXPECT_EQ(good.err.find("model-fit"), std::string::npos) << good.err;
 
+  // Rotated: the file's rotor 1 is the log's rpm.m4, and so on.
   const CliRun r = run("identify " + path("rotated.csv") + " --vehicle crazyflie21 --window 5:30");
   EXPECT_NE(r.rc, 0);
-  EXPECT_NE(r.err.find("model-fit: LS Izz = -"), std::string::npos) << r.err;
-  EXPECT_NE(r.err.find("spin directions are reversed, or the log's rotor columns are not in its order"),
-            std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("rotor-mapping:"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find(R"(columns = ["rpm.m4", "rpm.m1", "rpm.m2", "rpm.m3"])"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("--ignore-input-errors"), std::string::npos) << r.err;
   const CliRun ri = run("identify " + path("rotated.csv") + " --vehicle crazyflie21 --window 5:30 --ignore-input-errors");
   EXPECT_EQ(ri.rc, 0) << ri.err;
-  EXPECT_NE(ri.err.find("input check model-fit"), std::string::npos) << ri.err;
+  EXPECT_NE(ri.err.find("input check rotor-mapping"), std::string::npos) << ri.err;
+  // The estimates then show the wrong sign, named by model-fit.
+  EXPECT_NE(ri.err.find("input check model-fit: LS Izz = -"), std::string::npos) << ri.err;
   EXPECT_NE(ri.err.find("(ignored)"), std::string::npos) << ri.err;
-  // And the roll and pitch rows, turned by 90 deg, mostly unexplained: a warning.
-  EXPECT_NE(ri.err.find("of those rows unexplained in the best high-pass band"), std::string::npos) << ri.err;
 
+  // The + layout for the X vehicle: the positions turned by 45 deg fit.
+  const CliRun p = run("identify " + path("good.csv") + " --vehicle " + path("plus.toml") + " --window 5:30");
+  EXPECT_NE(p.rc, 0);
+  EXPECT_NE(p.err.find("rotor-mapping:"), std::string::npos) << p.err;
+  EXPECT_NE(p.err.find("turned by +45 deg about z"), std::string::npos) << p.err;
 }
 
 TEST_F(CliVehicle, TorqueOfTheWrongSignIsAnInputError) {

@@ -202,6 +202,27 @@ double log_sample_period(const FlightLog& log);
 /// rotor model (replacing them when present, appended otherwise).
 FlightLog with_rotor_wrench(const FlightLog& log, const RotorModel& rotors);
 
+/// Whether the log's rotor columns drive the rotors as the vehicle file
+/// arranges them: the moment rows of the rigid body (eq. 10, six inertias and
+/// a constant torque per row, low-passed at `cutoff_hz`) fitted with the
+/// torques of the file's arrangement and of every other (the columns
+/// permuted, the positions turned by +-45 deg about z). A mistake in the file
+/// fits far worse than the right arrangement; noise in the rotor speeds
+/// leaves every arrangement alike (docs/input-checks.md, "Rotor mapping").
+struct RotorMappingCheck {
+  static constexpr int kMaxPermutedRotors = 6;   // 720 permutations x 3 turns: a few ms
+  static constexpr double kFactor = 0.5, kMargin = 0.1;  // the mismatch rule below
+  bool checked = false;            // false: too short a log, or a rotor count outside 3-6
+  double unexplained = 0.0;        // the file's arrangement: share of the moment rows' variance left
+  double best_unexplained = 0.0;   // the best arrangement's (the file's when none is better)
+  std::vector<std::string> best_columns;  // its [rotors] columns, empty when the file's order is best
+  double best_turn_deg = 0.0;             // its positions' turn about z
+  /// best_unexplained below kFactor x unexplained and at least kMargin below it.
+  bool mismatch = false;
+  std::string describe() const;    // the finding, with the fix, in words
+};
+RotorMappingCheck check_rotor_mapping(const FlightLog& log, const RotorModel& rotors, double cutoff_hz);
+
 // --- PX4's rotor model from its control-allocation parameters (docs/import.md) ---------
 
 /// The rotor model PX4's CA_ROTOR* parameters describe (logs::px4_rotor_geometry):

@@ -688,6 +688,16 @@ IdentificationInput prepare_identification(const std::string& path, const Identi
                                      fmt::join(slow, "; ")));
       for (const auto& s : slow) in.warnings.push_back("input check sample rate: " + s + " (ignored)");
     }
+    // The rotor columns against the file's arrangement of the rotors: a wrong
+    // order or layout gives confident, wrong moments (the same rule).
+    const double moment_cutoff = in.options.moment_cutoff_hz.value_or(in.options.processing.lowpass.cutoff_hz);
+    if (const RotorMappingCheck rm = check_rotor_mapping(raw, rotors, moment_cutoff); rm.mismatch) {
+      if (!in.options.ignore_input_errors)
+        throw InputError(fmt::format("the log fails the input checks: rotor-mapping: {}; if the log and the vehicle "
+                                     "file are right, ignore the checks (--ignore-input-errors)",
+                                     rm.describe()));
+      in.warnings.push_back("input check rotor-mapping: " + rm.describe() + " (ignored)");
+    }
     TimingOptions topt = req.timing;
     topt.estimate_time_constant = !req.motor_time_constant && rotors.input_leads_rotor() &&
                                   rotors.time_constant == 0.0;
