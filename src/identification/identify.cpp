@@ -15,8 +15,8 @@
 #include <cmath>
 #include <exception>
 #include <future>
-#include <optional>
 #include <limits>
+#include <optional>
 #include <numbers>
 #include <stdexcept>
 #include <string_view>
@@ -30,9 +30,9 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 // high-pass band) the torques may not belong to the rotations: real
 // Crazyflie flights leave 2-6 %, simulated flights in gusts up to 8 %; rotor
 // columns rotated by one 46-101 %, an X layout given for a + vehicle 50 %
-// when roll and pitch move independently (20 % on the crazyflie21's table2
-// flight, whose roll and pitch move together: not caught); but 2 % rotor-speed
-// noise on a 32 g quad 61 % with a correct model, hence a warning.
+// when roll and pitch move independently (20 % when they move together: the
+// rotor-mapping check, vehicle.hpp, finds those); but 2 % rotor-speed noise
+// on a 32 g quad 61 % with a correct model, hence a warning.
 constexpr double kMaxUnexplained = 0.3;
 
 // Which samples of the window are recorded in the evolution.
