@@ -211,7 +211,8 @@ void register_identify(CLI::App& app) {
   sub->add_flag("--allow-rank-deficient", a->allow_rank_deficient,
                 "warn instead of failing when the data do not determine some parameters (they keep the nominal values)");
   sub->add_flag("--ignore-input-errors", a->ignore_input_errors,
-                "go on when the input checks find an error (angles in degrees, z down, time gaps; docs/input-checks.md)");
+                "go on when the input checks find an error (angles in degrees, z down, time gaps, rotor columns or "
+                "layout not the vehicle file's, a negative moment of inertia; docs/input-checks.md)");
   a->proc.add_to(sub);
   sub->add_option("--evolution", a->evolution,
                   "write the estimates over time (Figs. 4-5) as CSV: t then LS_m..LS_Izz, GD_*, FMLS_*, FMGD_*");
