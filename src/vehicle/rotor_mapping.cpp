@@ -89,10 +89,21 @@ RotorMappingCheck check_rotor_mapping(const FlightLog& log, const RotorModel& ro
     return total > 0.0 ? double(v.transpose() * residual_gram * v) / total : 1.0;
   };
   out.unexplained = unexplained(B);
-  out.best_unexplained = out.unexplained;
   out.checked = true;
   // Every other arrangement: the positions turned by 0 or +-45 deg about z (X
-  // for +), and log column j driving the file's rotor perm[j].
+  // for +), and log column j driving the file's rotor perm[j]. Some fit
+  // equally well (a + layout turned by -45 deg is the X layout with its
+  // columns rotated and turned by +45 deg); which of them comes out least by
+  // rounding is arbitrary, so the simplest within kTie of the least is named:
+  // a turn alone or a reorder alone before both.
+  constexpr double kTie = 0.005;  // half a point of the variance: rounding is ~1e-12, real differences are points
+  struct Candidate {
+    double u;
+    int changes;  // 0 the file's own, 1 a turn or a reorder, 2 both
+    double deg;
+    std::vector<int> perm;
+  };
+  std::vector<Candidate> all{{out.unexplained, 0, 0.0, {}}};
   constexpr std::array<double, 3> kTurns{0.0, 45.0, -45.0};
   std::vector<int> perm(static_cast<size_t>(N));
   for (const double deg : kTurns) {
@@ -102,20 +113,25 @@ RotorMappingCheck check_rotor_mapping(const FlightLog& log, const RotorModel& ro
     Bt.row(1) = std::sin(a) * B.row(0) + std::cos(a) * B.row(1);
     std::iota(perm.begin(), perm.end(), 0);
     do {
-      if (deg == 0.0 && std::is_sorted(perm.begin(), perm.end())) continue;  // the file's own
+      const bool reordered = !std::is_sorted(perm.begin(), perm.end());
+      if (deg == 0.0 && !reordered) continue;  // the file's own
       Eigen::Matrix<double, 3, Eigen::Dynamic> Bh(3, N);
       for (int j = 0; j < N; ++j) Bh.col(j) = Bt.col(perm[static_cast<size_t>(j)]);
-      const double u = unexplained(Bh);
-      if (u < out.best_unexplained) {
-        out.best_unexplained = u;
-        out.best_turn_deg = deg;
-        out.best_columns.clear();
-        if (!std::is_sorted(perm.begin(), perm.end())) {  // rotor perm[j]'s column is column j
-          out.best_columns.assign(static_cast<size_t>(N), std::string());
-          for (size_t j = 0; j < perm.size(); ++j) out.best_columns[static_cast<size_t>(perm[j])] = rotors.columns[j];
-        }
-      }
+      all.push_back({unexplained(Bh), int(deg != 0.0) + int(reordered), deg, reordered ? perm : std::vector<int>{}});
     } while (std::next_permutation(perm.begin(), perm.end()));
+  }
+  double least = out.unexplained;
+  for (const auto& c : all) least = std::min(least, c.u);
+  const Candidate* named = nullptr;
+  for (const auto& c : all)
+    if (c.u <= least + kTie && (!named || c.changes < named->changes || (c.changes == named->changes && c.u < named->u)))
+      named = &c;
+  out.best_unexplained = named->u;
+  out.best_turn_deg = named->deg;
+  if (!named->perm.empty()) {  // rotor perm[j]'s column is column j
+    out.best_columns.assign(static_cast<size_t>(N), std::string());
+    for (size_t j = 0; j < named->perm.size(); ++j)
+      out.best_columns[static_cast<size_t>(named->perm[j])] = rotors.columns[j];
   }
   out.mismatch = out.best_unexplained < RotorMappingCheck::kFactor * out.unexplained &&
                  out.unexplained - out.best_unexplained >= RotorMappingCheck::kMargin;
