@@ -49,6 +49,11 @@ TEST_F(CliIdentify, PrintsTable3AndTables5And6) {
                         "P_imp%", "condition number"})
     EXPECT_NE(r.out.find(s), std::string::npos) << s << "\n" << r.out;
   EXPECT_EQ(r.err, "");  // no warnings on a well-excited flight
+  // The virtual QBall's plant (the paper's LS set) breaks the triangle
+  // inequality, so PC and FMPC are moved, and said to be moved only.
+  EXPECT_NE(r.out.find("  PC moved from LS to be consistent"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("  FMPC moved from FMLS to be consistent"), std::string::npos) << r.out;
+  EXPECT_EQ(r.out.find("already consistent"), std::string::npos) << r.out;
 }
 
 TEST_F(CliIdentify, JsonOnStdoutAloneAndTheSameInTheOutputFile) {
@@ -198,4 +203,36 @@ TEST_F(CliIdentify, HelpTeachesUnitsAndDefaults) {
   for (const char* s : {"--window", "10:50", "--cutoff", "Hz", "--lambda", "rad/s", "--sigma", "--map", "--json",
                         "--evolution", "--gd-discretization", "--derivative-filter", "--nominal", "qball2-nominal"})
     EXPECT_NE(r.out.find(s), std::string::npos) << s;
+}
+
+TEST_F(CliIdentify, ShortLogWithoutWindowTakesTheRestOfTheLog) {
+  // The paper's 10-50 s window on shorter logs, when --window is not given:
+  // 30 s keeps the start (10 s to the end), 15 s takes the whole log, each
+  // with a warning; the estimates are those of the window given explicitly.
+  auto write_head = [&](double seconds, const std::string& name) {
+    quadid::FlightLog log = flight();
+    const auto rows = static_cast<Eigen::Index>(std::llround(seconds * 500.0)) + 1;  // the simulator's 500 Hz log
+    log.data.conservativeResize(rows, Eigen::NoChange);
+    quadid::write_flight_log(log, path(name));
+  };
+  write_head(30.0, "l30.csv");
+  write_head(15.0, "l15.csv");
+  const quadid::testing::CliRun a = run(path("l30.csv") + " --json");
+  ASSERT_EQ(a.rc, 0) << a.err;
+  EXPECT_NE(a.err.find("warning: window: the log holds 30 s, less than the default window 10-50 s needs: 10 s to "
+                       "the end used instead"),
+            std::string::npos)
+      << a.err;
+  const quadid::testing::CliRun a_explicit = run(path("l30.csv") + " --json --window 10:");
+  ASSERT_EQ(a_explicit.rc, 0) << a_explicit.err;
+  EXPECT_EQ(nlohmann::json::parse(a.out)["estimates"], nlohmann::json::parse(a_explicit.out)["estimates"]);
+  EXPECT_EQ(a_explicit.err.find("warning: window:"), std::string::npos) << a_explicit.err;
+
+  const quadid::testing::CliRun b = run(path("l15.csv") + " --json");
+  ASSERT_EQ(b.rc, 0) << b.err;
+  EXPECT_NE(b.err.find("the whole log used instead"), std::string::npos) << b.err;
+  const quadid::testing::CliRun b_explicit = run(path("l15.csv") + " --json --window 0:");
+  ASSERT_EQ(b_explicit.rc, 0) << b_explicit.err;
+  EXPECT_EQ(nlohmann::json::parse(b.out)["estimates"], nlohmann::json::parse(b_explicit.out)["estimates"]);
+  // An explicit window past the end stays an error (BadInputFailsClearlyAndWritesNothing).
 }

@@ -136,7 +136,8 @@ void register_identify(CLI::App& app) {
       ->required();
   a->window_opt = sub->add_option("--window", a->window,
                                   "estimation window T0:T1, seconds from the log's start ('T0:' = to the end); "
-                                  "default with --vehicle: the whole log")
+                                  "default with --vehicle: the whole log; without, on a log shorter than 50 s: 10 s "
+                                  "to its end (the whole log under 20 s)")
                       ->capture_default_str();
   sub->add_option("--error-window", a->error_window,
                   "window of the prediction-error tables (default: the whole log, as the paper's 0-50 s)");

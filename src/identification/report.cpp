@@ -201,19 +201,19 @@ std::string format_consistency(const IdentificationResult& r) {
   }
   for (size_t i = 0; i < r.physical_sets.size() && i < r.projections.size(); ++i) {
     const auto& p = r.projections[i];
-    if (p.changed)
-      fmt::format_to(it, "  {} moved from {} to be consistent: least-squares cost +{:.3g} ({}, {} evaluations)\n",
-                     r.physical_sets[i].name, r.physical_sets[i].name == "PC" ? "LS" : "FMLS", p.cost, p.status,
-                     p.evaluations);
+    const char* from = r.physical_sets[i].name == "PC" ? "LS" : "FMLS";
+    if (!p.changed) {
+      fmt::format_to(it, "  {} = {} (already consistent)\n", r.physical_sets[i].name, from);
+      continue;
+    }
+    fmt::format_to(it, "  {} moved from {} to be consistent: least-squares cost +{:.3g} ({}, {} evaluations)\n",
+                   r.physical_sets[i].name, from, p.cost, p.status, p.evaluations);
     // Its terms moved with its rigid body (closest_physical_with_terms).
-    if (p.changed && !r.physical_sets[i].extra.empty()) {
+    if (!r.physical_sets[i].extra.empty()) {
       std::vector<std::string> v;
       for (const auto& [n, x] : r.physical_sets[i].extra) v.push_back(fmt::format("{} {:.4g}", n, x));
       fmt::format_to(it, "    its terms: {}\n", fmt::join(v, ", "));
     }
-    else
-      fmt::format_to(it, "  {} = {} (already consistent)\n", r.physical_sets[i].name,
-                     r.physical_sets[i].name == "PC" ? "LS" : "FMLS");
   }
   if (!r.recommended.set.empty())
     fmt::format_to(it, "\nRecommended set: {}. {}\n", r.recommended.set, r.recommended.reason);

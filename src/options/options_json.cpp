@@ -630,6 +630,28 @@ std::vector<std::string> source_rate_findings(const logs::ImportReport& report,
   return out;
 }
 
+namespace {
+// The paper's window (10-50 s, the default without a vehicle) on a log that
+// ends before 50 s: an error would only ask for the obvious, so the window
+// keeps its start and runs to the log's end, or, when that leaves less than
+// the 10 s before it, takes the whole log; a warning says which.
+void fit_default_window(IdentificationInput& in) {
+  const TimeWindow paper = in.options.window;
+  const int ti = in.log.find("t");
+  if (ti < 0 || in.log.rows() < 2 || !std::isfinite(paper.t1)) return;
+  const auto t = in.log.data.col(ti);
+  const double duration = t(t.size() - 1) - t(0);
+  const double T = duration / static_cast<double>(t.size() - 1);
+  if (paper.t1 <= duration + 1.5 * T) return;  // it fits (Regression's rule)
+  const bool keep_start = duration - paper.t0 >= paper.t0;
+  in.options.window = keep_start ? TimeWindow{paper.t0, std::numeric_limits<double>::infinity()} : TimeWindow{};
+  in.warnings.push_back(fmt::format(
+      "window: the log holds {:.3g} s, less than the default window {} needs: {} used instead (--window T0:T1 to "
+      "choose)",
+      duration, paper.to_string(), keep_start ? fmt::format("{:g} s to the end", paper.t0) : "the whole log"));
+}
+}  // namespace
+
 IdentificationInput prepare_identification(const std::string& path, const IdentifyRequest& req_in) {
   IdentifyRequest req = req_in;
   IdentificationInput in;
@@ -658,6 +680,7 @@ IdentificationInput prepare_identification(const std::string& path, const Identi
   if (!req.vehicle) {
     in.log = load_identification_log(path, req);
     in.options = req.options;
+    if (!req.real.window_given) fit_default_window(in);
     return in;
   }
   in.wrench_source = from_log ? req.vehicle->source : fmt::format("the rotor model of vehicle {}", req.vehicle->source);
