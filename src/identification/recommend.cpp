@@ -61,10 +61,15 @@ Recommendation recommend_set(const IdentificationResult& r) {
     if (&x != best) other = &x;
 
   std::string why;
-  if (other && std::isfinite(best->precision) && std::isfinite(other->precision))
+  if (other && std::isfinite(best->precision) && std::isfinite(other->precision)) {
+    // Two significant digits, more when two would print the same number ("3 % against 3 %").
+    const double a = 100.0 * best->precision, b = 100.0 * other->precision;
+    int digits = 2;
+    while (digits < 4 && fmt::format("{:.{}g}", a, digits) == fmt::format("{:.{}g}", b, digits)) ++digits;
     why = fmt::format("{} has the smaller standard errors (RMS over the parameters, relative to each one's scale: "
-                      "{:.2g} % against {:.2g} % for {})",
-                      best->set->name, 100.0 * best->precision, 100.0 * other->precision, other->set->name);
+                      "{:.{}g} % against {:.{}g} % for {})",
+                      best->set->name, a, digits, b, digits, other->set->name);
+  }
   else if (other)
     why = fmt::format("{} is the set whose standard errors are defined", best->set->name);
   else
