@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
 
 namespace quadid {
 
@@ -150,11 +151,13 @@ std::vector<std::pair<std::string, Params>> load_param_sets(const std::string& s
   if (j.contains("estimates")) {
     const json& e = j["estimates"];
     if (!e.is_object()) throw InputError(fmt::format("{}: \"estimates\" must be an object", spec));
-    for (const char* key : {"LS", "GD", "FMLS", "FMGD"})
+    // identify's order (its Table 3), then any other set by name.
+    static constexpr std::array<const char*, 6> kOrder{"LS", "GD", "FMLS", "FMGD", "PC", "FMPC"};
+    for (const char* key : kOrder)
       if (e.contains(key)) sets.emplace_back(key, params_from_json(e[key], fmt::format("{}: estimates.{}", spec, key), false));
     for (auto it = e.begin(); it != e.end(); ++it) {
       const std::string& k = it.key();
-      if (k != "LS" && k != "GD" && k != "FMLS" && k != "FMGD")
+      if (std::find(kOrder.begin(), kOrder.end(), k) == kOrder.end())
         sets.emplace_back(k, params_from_json(it.value(), fmt::format("{}: estimates.{}", spec, k), false));
     }
     if (sets.empty()) throw InputError(fmt::format("{}: \"estimates\" is empty", spec));
