@@ -1,5 +1,6 @@
 // Monte Carlo: results independent of the thread count, statistics checked
 // against a direct computation, seeds independent and reproducible.
+#include "cli_fixture.hpp"
 #include "quadid/montecarlo.hpp"
 #include "quadid/vehicle.hpp"
 
@@ -98,6 +99,48 @@ TEST(MonteCarlo, OptionsAreValidated) {
   o = {};
   o.threads = -1;
   EXPECT_THROW(o.validate(), std::invalid_argument);
+  // A window past the flights' end would fail every run alike: the options' error.
+  o = {};
+  o.simulation.duration = 30.0;
+  o.identification.window = {10.0, 50.0};
+  try {
+    o.validate();
+    ADD_FAILURE() << "no error";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("--window 10-50 s does not fit the 30 s flights (--duration): use e.g. "
+                                         "--window 10:30"),
+              std::string::npos)
+        << e.what();
+  }
+  o.identification.window = {10.0, 30.0};  // ends at the last sample: fits
+  EXPECT_NO_THROW(o.validate());
+}
+
+class CliMonteCarlo : public quadid::testing::CliTest {
+ protected:
+  void SetUp() override {
+    CliTest::SetUp();
+    prefix_ = "montecarlo --quiet --runs 2 ";
+  }
+};
+
+TEST_F(CliMonteCarlo, ShortFlightsFitTheDefaultWindowAndAllRunsFailedIsAnError) {
+  // Without --window, 15 s flights take all of each flight (identify's rule).
+  const quadid::testing::CliRun a = run("--duration 15");
+  ASSERT_EQ(a.rc, 0) << a.err;
+  EXPECT_NE(a.err.find("note: window: 15 s of data, less than the default window 10-50 s needs: all of it used"),
+            std::string::npos)
+      << a.err;
+  EXPECT_NE(a.out.find("2 runs (0 failed)"), std::string::npos) << a.out;
+  // Given, it is checked against the flights.
+  const quadid::testing::CliRun b = run("--duration 15 --window 10:50");
+  EXPECT_NE(b.rc, 0);
+  EXPECT_NE(b.err.find("--window 10-50 s does not fit the 15 s flights"), std::string::npos) << b.err;
+  // A window inside the filter's edge fails every run: the report is printed, the exit status says it.
+  const quadid::testing::CliRun c = run("--duration 15 --window 0:0.5");
+  EXPECT_NE(c.rc, 0);
+  EXPECT_NE(c.out.find("2 runs (2 failed)"), std::string::npos) << c.out;
+  EXPECT_NE(c.err.find("error: all 2 runs failed (run 0: window 0-0.5 s holds only"), std::string::npos) << c.err;
 }
 
 }  // namespace

@@ -3,6 +3,7 @@
 #include "common.hpp"
 #include "quadid/io.hpp"
 #include "quadid/montecarlo.hpp"
+#include "quadid/options_json.hpp"
 #include "quadid/report.hpp"
 #include "quadid/vehicle.hpp"
 
@@ -31,12 +32,19 @@ struct MonteCarloArgs {
   std::string window = "10:50";
   std::string vehicle;
   std::optional<double> rotor_noise;
-  CLI::Option *plant_opt = nullptr, *nominal_opt = nullptr;
+  CLI::Option *plant_opt = nullptr, *nominal_opt = nullptr, *window_opt = nullptr;
   ProcessingArgs proc;
   std::string out;
   bool json = false;
   bool quiet = false;
 };
+
+// No statistics at all is not a result: the exit status says so (the
+// report, with each run's error, is still printed and written).
+void fail_if_every_run_failed(const MonteCarloResult& r) {
+  if (r.runs.empty() || r.failed < static_cast<int>(r.runs.size())) return;
+  throw InputError(fmt::format("all {} runs failed (run 0: {})", r.runs.size(), r.runs.front().error));
+}
 
 void run(const MonteCarloArgs& a) {
   MonteCarloOptions o;
@@ -63,6 +71,11 @@ void run(const MonteCarloArgs& a) {
   }
   if (a.rotor_noise) o.simulation.rotor_noise = *a.rotor_noise;
   id.window = TimeWindow::parse(a.window);
+  if (a.window_opt->count() == 0) {  // the paper's 10-50 s, fitted to shorter flights as identify does
+    std::string note;
+    id.window = fit_paper_window(id.window, a.duration, 0.0, &note);
+    if (!note.empty()) fmt::print(stderr, "quadid montecarlo: note: {}\n", note);
+  }
   id.processing = a.proc.processing();
   id.lambda = a.proc.lambda;
   id.gd_variant = a.proc.gd_variant();
@@ -98,6 +111,7 @@ void run(const MonteCarloArgs& a) {
   }
   if (a.json) {
     fmt::print("{}\n", j.dump(2));
+    fail_if_every_run_failed(r);
     return;
   }
   fmt::print("{}", format_montecarlo(r));
@@ -105,6 +119,7 @@ void run(const MonteCarloArgs& a) {
     for (const auto& run : r.runs)
       if (!run.ok) fmt::print("run {} (seed {}) failed: {}\n", run.index, run.seed, run.error);
   if (!a.out.empty()) fmt::print("Written: {}/montecarlo.json, runs.csv, summary.txt, histogram_*.svg, index.html\n", a.out);
+  fail_if_every_run_failed(r);
 }
 
 }  // namespace
@@ -138,7 +153,10 @@ void register_montecarlo(CLI::App& app) {
   sub->add_option("--rotor-noise", a->rotor_noise,
                   "with --vehicle: std of the white noise on the logged rotor speeds, rad/s or rpm (default: the "
                   "vehicle's [sensors] rotor_noise, else 0)");
-  sub->add_option("--window", a->window, "estimation window T0:T1 (s)")->capture_default_str();
+  a->window_opt = sub->add_option("--window", a->window,
+                                  "estimation window T0:T1 (s); shorter flights than 50 s without it: 10 s to the "
+                                  "end (the whole flight under 20 s)")
+                      ->capture_default_str();
   a->proc.add_to(sub);
   sub->add_option("-o,--out", a->out, "folder for montecarlo.json, runs.csv, summary.txt, histogram_*.svg, index.html");
   sub->add_flag("--json", a->json, "print the result JSON on stdout (nothing else there)");

@@ -98,6 +98,14 @@ IdentifyRequest identify_options_from_json(const nlohmann::json& j);
 /// paper's model. Throws std::invalid_argument naming the option.
 void apply_real_flight(IdentifyRequest& req, const RealFlightArgs& a);
 
+/// The paper's window (10-50 s: identify's and montecarlo's default without a
+/// vehicle) for a log or flight of `duration` seconds sampled every `period`:
+/// unchanged when it fits (Regression's rule: it may end up to 1.5 periods
+/// past the last sample), else its start to the end, or the whole log when
+/// that leaves less than the start. `note` (when given and the window
+/// changed) says so, for a warning.
+TimeWindow fit_paper_window(const TimeWindow& paper, double duration, double period, std::string* note = nullptr);
+
 /// Reads the log of an identification: any format (load_any_log); with a
 /// vehicle, the rotor columns instead of the wrench, which the rotor model
 /// computes (with_rotor_wrench). InputError names the file.

@@ -61,6 +61,14 @@ void MonteCarloOptions::validate() const {
   if (trajectory.empty()) throw std::invalid_argument("--trajectory: empty");
   simulation.validate();
   identification.validate();
+  // Every run's log is as long as the flight: a window past its end would
+  // fail each run alike, so it is the options' error.
+  const TimeWindow& w = identification.window;
+  const double d = simulation.duration;
+  if (w.t0 >= d || (std::isfinite(w.t1) && w.t1 > d * (1.0 + 1e-9)))
+    throw std::invalid_argument(fmt::format("--window {} does not fit the {:g} s flights (--duration): use e.g. "
+                                            "--window {:g}:{:g}",
+                                            w.to_string(), d, w.t0 <= 0.5 * d ? w.t0 : 0.0, d));
 }
 
 std::uint64_t run_seed(std::uint64_t seed, int run) {

@@ -630,25 +630,26 @@ std::vector<std::string> source_rate_findings(const logs::ImportReport& report,
   return out;
 }
 
-namespace {
-// The paper's window (10-50 s, the default without a vehicle) on a log that
-// ends before 50 s: an error would only ask for the obvious, so the window
-// keeps its start and runs to the log's end, or, when that leaves less than
-// the 10 s before it, takes the whole log; a warning says which.
-void fit_default_window(IdentificationInput& in) {
-  const TimeWindow paper = in.options.window;
-  const int ti = in.log.find("t");
-  if (ti < 0 || in.log.rows() < 2 || !std::isfinite(paper.t1)) return;
-  const auto t = in.log.data.col(ti);
-  const double duration = t(t.size() - 1) - t(0);
-  const double T = duration / static_cast<double>(t.size() - 1);
-  if (paper.t1 <= duration + 1.5 * T) return;  // it fits (Regression's rule)
+TimeWindow fit_paper_window(const TimeWindow& paper, double duration, double period, std::string* note) {
+  if (!std::isfinite(paper.t1) || paper.t1 <= duration + 1.5 * period) return paper;
   const bool keep_start = duration - paper.t0 >= paper.t0;
-  in.options.window = keep_start ? TimeWindow{paper.t0, std::numeric_limits<double>::infinity()} : TimeWindow{};
-  in.warnings.push_back(fmt::format(
-      "window: the log holds {:.3g} s, less than the default window {} needs: {} used instead (--window T0:T1 to "
-      "choose)",
-      duration, paper.to_string(), keep_start ? fmt::format("{:g} s to the end", paper.t0) : "the whole log"));
+  if (note)
+    *note = fmt::format("window: {:.3g} s of data, less than the default window {} needs: {} used instead "
+                        "(--window T0:T1 to choose)",
+                        duration, paper.to_string(), keep_start ? fmt::format("{:g} s to the end", paper.t0) : "all of it");
+  return keep_start ? TimeWindow{paper.t0, std::numeric_limits<double>::infinity()} : TimeWindow{};
+}
+
+namespace {
+// An error would only ask for the obvious: the paper's window fitted to the log.
+void fit_default_window(IdentificationInput& in) {
+  const int ti = in.log.find("t");
+  if (ti < 0 || in.log.rows() < 2) return;
+  const auto t = in.log.data.col(ti);
+  std::string note;
+  const double duration = t(t.size() - 1) - t(0);
+  in.options.window = fit_paper_window(in.options.window, duration, duration / static_cast<double>(t.size() - 1), &note);
+  if (!note.empty()) in.warnings.push_back(note);
 }
 }  // namespace
 
