@@ -63,7 +63,9 @@ std::vector<OptionSpec> concat(std::vector<OptionSpec> a, const std::vector<Opti
 const std::vector<OptionSpec>& identify_specs() {
   static const std::vector<OptionSpec> s = concat(
       {
-          {"window", K::String, "estimation window T0:T1, seconds from the log's start (default 10:50)"},
+          {"window", K::String,
+           "estimation window T0:T1, seconds from the log's start (default 10:50; on a shorter log 10 s to its end, "
+           "all of it under 20 s; with a vehicle the whole log)"},
           {"error-window", K::String, "window of the prediction-error tables (default: the whole log)"},
           {"sigma", K::Number, "gradient-descent gain of eq. (41) with gd-gain paper (default 30)"},
           {"gd-gain", K::String, "auto (normalized with a vehicle, else paper), paper (sigma) or normalized (gd-rate)"},
