@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <tuple>
 
 using namespace quadid;
 
@@ -66,6 +67,37 @@ TEST(Validation, PredictionErrorOfTheTrueSetIsFarBelowNominal) {
   }
   const auto sel = select_rows(v.standard, {"true", "absent"});
   EXPECT_EQ(sel.rows.size(), 1u);
+}
+
+// validate --vehicle: the torque rows' errors about their means. A constant
+// torque added to the log (a centre of mass off the rotors' centre) then
+// changes none of them (to rounding: 1e-9 of the RMS), while the plain RMS
+// grows by it; Fz, whose mean error is the mass's, is never centred.
+TEST(Validation, CentredTorqueErrorsIgnoreAConstantTorque) {
+  const SimulationResult r = fly(FourierTrajectory::table2(), 12.0, true);
+  FlightLog offset = r.log;
+  offset.data.col(offset.find("tau_phi")).array() += 0.02;  // N m, a third of the torque's RMS
+  PredictionValidationOptions plain, centred;
+  plain.window = centred.window = {2.0, 11.0};
+  centred.centre_torque_errors = true;
+  const std::vector<NamedParams> sets{{"true", Params::qball2_virtual()}};
+  const NamedParams nom{"nom", Params::qball2_nominal()};
+  const auto a = validate_prediction(r.log, sets, nom, centred);
+  const auto b = validate_prediction(offset, sets, nom, centred);
+  const auto p = validate_prediction(offset, sets, nom, plain);
+  for (auto [ta, tb, tp] : {std::tuple{&a.standard, &b.standard, &p.standard},
+                            std::tuple{&a.filtered, &b.filtered, &p.filtered}}) {
+    for (int c = 1; c < 4; ++c) {
+      EXPECT_NEAR(tb->rows[0].rms(c), ta->rows[0].rms(c), 1e-9 * ta->rows[0].rms(c)) << c;
+      EXPECT_NEAR(tb->reference.rms(c), ta->reference.rms(c), 1e-9 * ta->reference.rms(c)) << c;
+      EXPECT_LE(tb->rows[0].rms(c), tp->rows[0].rms(c)) << c;  // about the mean is the least RMS
+      EXPECT_NEAR(tb->rows[0].improvement_pct(c),
+                  (tb->reference.rms(c) - tb->rows[0].rms(c)) / tb->reference.rms(c) * 100.0, 1e-9);
+    }
+    EXPECT_GT(tp->rows[0].rms(1), 10.0 * tb->rows[0].rms(1));  // the offset dominates the plain RMS
+    EXPECT_EQ(tb->rows[0].rms(0), tp->rows[0].rms(0));         // Fz as it is
+    EXPECT_EQ(tb->reference.rms(0), tp->reference.rms(0));
+  }
 }
 
 TEST(Validation, DivergingReflightIsReportedNotFatal) {

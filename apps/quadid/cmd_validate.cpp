@@ -5,6 +5,7 @@
 #include "quadid/logs.hpp"
 #include "quadid/options_json.hpp"
 #include "quadid/validation.hpp"
+#include "quadid/vehicle.hpp"
 
 #include <fmt/format.h>
 
@@ -16,7 +17,8 @@ namespace {
 struct ValidateArgs {
   std::string log;
   std::vector<std::string> params;
-  std::string reference = "qball2-nominal";
+  std::string reference;  // empty: qball2-nominal, or the vehicle's [nominal]
+  std::string vehicle;
   std::string trajectory;
   std::string window = "10:50";
   std::string error_window;
@@ -31,6 +33,7 @@ void run(const ValidateArgs& a) {
   ValidateRequest req;
   req.params = a.params;
   req.reference = a.reference;
+  if (!a.vehicle.empty()) req.vehicle = load_vehicle(a.vehicle);
   req.trajectory = a.trajectory;
   req.no_simulation = a.no_simulation;
   req.prediction.processing = a.proc.processing();
@@ -43,9 +46,9 @@ void run(const ValidateArgs& a) {
   req.simulation.validate();
   if (!a.out.empty()) check_output_file(a.out, "-o/--out");
 
-  logs::LoadOptions load;
-  load.csv = a.proc.csv();
-  const FlightLog log = logs::load_any_log(a.log, load);  // CSV, or an autopilot log imported
+  req.csv = a.proc.csv();
+  // CSV, or an autopilot log imported; with a vehicle, the wrench from its rotor columns.
+  const FlightLog log = load_validation_log(a.log, req);
   const LogValidation v =
       validate_log(log, req, [](const std::string& note) { fmt::print(stderr, "quadid validate: {}\n", note); });
 
@@ -57,8 +60,11 @@ void run(const ValidateArgs& a) {
   }
   if (v.simulation)
     fmt::print("{}\n", format_simulation_table(*v.simulation, "Simulation against the log (Table 4 format)"));
-  fmt::print("{}\n", format_prediction_table(v.prediction.standard, "Output prediction error (Tables 5, 7, 9, 11 format)"));
-  fmt::print("{}", format_prediction_table(v.prediction.filtered, "Output prediction error (Tables 6, 8, 10, 12 format)"));
+  const char* centred = v.torque_errors_centred ? ", the torques' errors about their means" : "";
+  fmt::print("{}\n", format_prediction_table(v.prediction.standard,
+                                             fmt::format("Output prediction error (Tables 5, 7, 9, 11 format{})", centred)));
+  fmt::print("{}", format_prediction_table(v.prediction.filtered,
+                                           fmt::format("Output prediction error (Tables 6, 8, 10, 12 format{})", centred)));
 }
 
 }  // namespace
@@ -73,14 +79,20 @@ void register_validate(CLI::App& app) {
       "   x y z (m), phi theta psi (deg), Fz (N), torques (N m), with P_imp% against the reference set.\n"
       "   Needs a log from 'quadid simulate' (it records the reference) or --trajectory.\n"
       "2. Output prediction error (eq. 43, Tables 5-12) of the standard and filtered regressions.\n"
-      "Example: quadid validate --log flight.csv --params result.json --params my.json");
+      "Example: quadid validate --log flight.csv --params result.json --params my.json\n"
+      "Held-out flight of a real vehicle: quadid validate --log flight2.ulg --vehicle x500 --params result1.json");
   sub->add_option("--log", a->log, "flight log CSV")->required();
   sub->add_option("--params", a->params,
                   "a parameter set to judge (repeatable): params JSON, identify result JSON (its four sets), or "
                   "preset qball2-nominal|qball2-virtual")
       ->required();
-  sub->add_option("--reference", a->reference, "the set improvements are measured against (P_imp%)")
-      ->capture_default_str();
+  sub->add_option("--reference", a->reference,
+                  "the set improvements are measured against (P_imp%): a preset or params JSON (default "
+                  "qball2-nominal; with --vehicle its [nominal])");
+  sub->add_option("--vehicle", a->vehicle,
+                  "the wrench from the log's rotor columns by the vehicle's rotor model, as identify --vehicle "
+                  "computes it (built-in: " + builtin_vehicle_list() + ", or a vehicle file): judge sets identified "
+                  "on one flight by their output prediction error on another; no simulation comparison");
   sub->add_option("--trajectory", a->trajectory,
                   "reference to re-fly (table2, circle1..3, or a trajectory JSON); default: the one the log records");
   sub->add_option("--window", a->window, "window of the simulation comparison, seconds from the log's start")

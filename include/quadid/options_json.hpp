@@ -162,7 +162,13 @@ CheckOptions check_options_from_json(const nlohmann::json& j);
 /// `quadid validate` options besides the log and the sets.
 struct ValidateRequest {
   std::vector<std::string> params;     // --params specs (presets, params JSON, identify result JSON)
-  std::string reference = "qball2-nominal";
+  /// --reference: a preset or params JSON; empty: the vehicle's [nominal] with
+  /// a vehicle, else qball2-nominal.
+  std::string reference;
+  /// --vehicle: the log's wrench from its rotor columns by the vehicle's rotor
+  /// model (load_validation_log), as identify --vehicle computes it; the
+  /// simulation comparison, which flies the virtual QBall 2, is then skipped.
+  std::optional<Vehicle> vehicle;
   std::string trajectory;              // empty: the one the log records
   bool no_simulation = false;
   PredictionValidationOptions prediction;
@@ -171,12 +177,17 @@ struct ValidateRequest {
 };
 ValidateRequest validate_options_from_json(const nlohmann::json& j);
 
+/// The log of a validation: any format (load_any_log); with req.vehicle, the
+/// wrench computed from the rotor columns (load_identification_log's way).
+FlightLog load_validation_log(const std::string& path, const ValidateRequest& req);
+
 /// What `quadid validate` computes on one log.
 struct LogValidation {
   std::vector<NamedParams> sets;                 // from req.params, in order
   NamedParams reference;                         // from req.reference, named "nom"
   std::optional<SimulationComparison> simulation;  // Table 4 (absent: no_simulation or no reference to re-fly)
   PredictionValidation prediction;               // Tables 5-12
+  bool torque_errors_centred = false;            // the torque rows about their means (with a vehicle)
 };
 /// `quadid validate` on a log already read: loads the sets (an unphysical one
 /// is judged by prediction error only, with a note), re-flies the log for

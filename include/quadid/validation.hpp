@@ -70,6 +70,11 @@ struct PredictionValidationOptions {
   TimeWindow window{};
   double lambda = 30.0;
   signal::GdVariant gd_variant = signal::GdVariant::Consistent;
+  /// The torque rows' errors about their means over the window (validate
+  /// --vehicle): a constant torque (centre of mass off the rotors' centre, a
+  /// rotor's trim) belongs to the flight, not to the body, and the paper's
+  /// model has none; left in, it can hide every set's difference.
+  bool centre_torque_errors = false;
   void validate() const;
 };
 

@@ -253,7 +253,7 @@ py::dict validate(const std::string& log, const py::dict& opts, py::object warn)
   json j;
   {
     py::gil_scoped_release nogil;
-    const quadid::FlightLog fl = quadid::load_log_file(log, req.csv);
+    const quadid::FlightLog fl = quadid::load_validation_log(log, req);
     j = quadid::to_json(quadid::validate_log(fl, req, [&](const std::string& s) { notes.push_back(s); }), log);
   }
   for (const auto& s : notes) warn(s);

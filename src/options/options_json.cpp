@@ -161,7 +161,11 @@ const std::vector<OptionSpec>& validate_specs() {
   static const std::vector<OptionSpec> s = concat(
       {
           {"params", K::List, "parameter sets to judge: presets, params JSON or identify result JSON files"},
-          {"reference", K::String, "the set improvements are measured against (default qball2-nominal)"},
+          {"reference", K::String,
+           "the set improvements are measured against (default qball2-nominal; with a vehicle its [nominal])"},
+          {"vehicle", K::String,
+           "vehicle file or built-in name: the wrench from the rotor columns (docs/vehicles.md); no simulation "
+           "comparison"},
           {"trajectory", K::String, "reference to re-fly (default: the one the log records)"},
           {"window", K::String, "window of the simulation comparison (default 10:50)"},
           {"error-window", K::String, "window of the prediction error (default: the whole log)"},
@@ -895,7 +899,8 @@ ValidateRequest validate_options_from_json(const nlohmann::json& j) {
   Reader r(j, "validate", validate_specs());
   ValidateRequest req;
   req.params = r.list("params");
-  req.reference = r.string("reference").value_or(req.reference);
+  req.reference = r.string("reference").value_or("");
+  if (const auto v = r.string("vehicle")) req.vehicle = r.with_option("vehicle", [&] { return load_vehicle(*v); });
   req.trajectory = r.string("trajectory").value_or("");
   req.simulation.window =
       r.with_option("window", [&] { return TimeWindow::parse(r.string("window").value_or("10:50")); });

@@ -200,15 +200,49 @@ nlohmann::json to_json(const SimulationComparison& c) {
           {"rows", rows}};
 }
 
+namespace {
+
+// prediction_error with the torque rows' RMS taken about each error's mean
+// over the window (two passes: the means, then the centred squares, so that
+// an offset large against the spread loses nothing to cancellation). Fz is
+// left as it is: its mean error is the mass's.
+PredictionErrorTable prediction_error_centred_torques(const Regression& reg, const std::vector<NamedParams>& sets,
+                                                      const NamedParams& reference) {
+  PredictionErrorTable t = prediction_error(reg, sets, reference);
+  std::vector<Theta> theta{reference.params.theta()};
+  for (const auto& s : sets) theta.push_back(s.params.theta());
+  std::vector<Vec4> mean(theta.size(), Vec4::Zero()), ss(theta.size(), Vec4::Zero());
+  reg.for_each([&](Eigen::Index, const Regressor4x7& G, const Vec4& Y) {
+    for (size_t s = 0; s < theta.size(); ++s) mean[s] += G * theta[s] - Y;
+  });
+  const double n = static_cast<double>(reg.size());
+  for (auto& m : mean) m /= n;
+  reg.for_each([&](Eigen::Index, const Regressor4x7& G, const Vec4& Y) {
+    for (size_t s = 0; s < theta.size(); ++s) ss[s] += (G * theta[s] - Y - mean[s]).cwiseAbs2();
+  });
+  auto centre = [&](PredictionErrorRow& row, size_t s) {
+    row.rms.tail<3>() = (ss[s].tail<3>() / n).cwiseSqrt();
+  };
+  centre(t.reference, 0);
+  for (size_t i = 0; i < t.rows.size(); ++i) {
+    centre(t.rows[i], i + 1);
+    for (int c = 1; c < 4; ++c) t.rows[i].improvement_pct(c) = improvement_pct(t.reference.rms(c), t.rows[i].rms(c));
+  }
+  return t;
+}
+
+}  // namespace
+
 PredictionValidation validate_prediction(const FlightLog& log, const std::vector<NamedParams>& sets,
                                          const NamedParams& reference, const PredictionValidationOptions& opt) {
   opt.validate();
   const auto signals = process_log(log, opt.processing);
+  const auto table = opt.centre_torque_errors ? prediction_error_centred_torques : prediction_error;
   PredictionValidation v;
-  v.standard = prediction_error(Regression(signals, RegressionModel::Standard, opt.window, opt.lambda, opt.gd_variant),
-                                sets, reference);
-  v.filtered = prediction_error(Regression(signals, RegressionModel::Filtered, opt.window, opt.lambda, opt.gd_variant),
-                                sets, reference);
+  v.standard = table(Regression(signals, RegressionModel::Standard, opt.window, opt.lambda, opt.gd_variant), sets,
+                     reference);
+  v.filtered = table(Regression(signals, RegressionModel::Filtered, opt.window, opt.lambda, opt.gd_variant), sets,
+                     reference);
   return v;
 }
 
