@@ -81,9 +81,10 @@ void register_validate(CLI::App& app) {
       "2. Output prediction error (eq. 43, Tables 5-12) of the standard and filtered regressions.\n"
       "Example: quadid validate --log flight.csv --params result.json --params my.json\n"
       "Held-out flight of a real vehicle: quadid validate --log flight2.ulg --vehicle x500 --params result1.json");
-  sub->add_option("--log", a->log, "flight log CSV")->required();
+  sub->add_option("--log", a->log, "flight log: CSV, PX4 ULog or Crazyflie uSD file")->required();
   sub->add_option("--params", a->params,
-                  "a parameter set to judge (repeatable): params JSON, identify result JSON (its four sets), or "
+                  "a parameter set to judge (repeatable): params JSON, identify result JSON (its sets LS, GD, FMLS, "
+                  "FMGD, PC, FMPC), or "
                   "preset qball2-nominal|qball2-virtual")
       ->required();
   sub->add_option("--reference", a->reference,
