@@ -105,6 +105,9 @@ void apply_real_flight(IdentifyRequest& req, const RealFlightArgs& a);
 /// that leaves less than the start. `note` (when given and the window
 /// changed) says so, for a warning.
 TimeWindow fit_paper_window(const TimeWindow& paper, double duration, double period, std::string* note = nullptr);
+/// The same for a log: its duration and mean period from its column t (the
+/// window unchanged when it has none, or fewer than 2 samples).
+TimeWindow fit_paper_window(const TimeWindow& paper, const FlightLog& log, std::string* note = nullptr);
 
 /// Reads the log of an identification: any format (load_any_log); with a
 /// vehicle, the rotor columns instead of the wrench, which the rotor model

@@ -167,7 +167,11 @@ py::dict identify(const py::object& log, const py::dict& opts) {
       throw py::type_error("identify: log must be a path or a mapping of column name -> array");
     const quadid::FlightLog fl = log_from_mapping(log, req.csv);
     py::gil_scoped_release nogil;
-    quadid::IdentificationResult res = quadid::identify(fl, req.options);
+    quadid::IdentificationOptions options = req.options;
+    std::string note;  // the paper's window on a shorter log, as for a file
+    if (!req.real.window_given) options.window = quadid::fit_paper_window(options.window, fl, &note);
+    quadid::IdentificationResult res = quadid::identify(fl, options);
+    if (!note.empty()) res.warnings.insert(res.warnings.begin(), note);
     j = quadid::to_json(res);
     j["log"] = nullptr;  // the command's "log" is the file's name; a mapping has none
     evo = std::move(res.evolution);

@@ -41,6 +41,17 @@ def test_identify_on_arrays_equals_the_command_line(logs):
     assert all(isinstance(v, float) for v in res["estimates"]["LS"].values())
 
 
+def test_short_log_without_window_fits_it_as_the_command_line(logs):
+    # These logs are shorter than the paper's 50 s: without a window, arrays,
+    # path and command line all take 10 s to the end, with the same warning.
+    cli = cli_json("identify", str(logs[0]))
+    arrays = {k: np.array(v) for k, v in quadid.read_log(logs[0]).items()}
+    res = quadid.identify(arrays)
+    assert any(w.startswith("window: ") for w in res["warnings"]), res["warnings"]
+    assert_same(without(res, "evolution", "log"), without(cli, "log"), REL)
+    assert_same(without(quadid.identify(logs[0]), "evolution"), cli, REL)
+
+
 def test_identify_on_a_path_equals_the_command_line_with_options(logs):
     args = ["--window", WINDOW, "--cutoff", "3", "--lambda", "20", "--order", "2", "--sigma", "10"]
     cli = cli_json("identify", str(logs[1]), *args)

@@ -646,18 +646,13 @@ TimeWindow fit_paper_window(const TimeWindow& paper, double duration, double per
   return keep_start ? TimeWindow{paper.t0, std::numeric_limits<double>::infinity()} : TimeWindow{};
 }
 
-namespace {
-// An error would only ask for the obvious: the paper's window fitted to the log.
-void fit_default_window(IdentificationInput& in) {
-  const int ti = in.log.find("t");
-  if (ti < 0 || in.log.rows() < 2) return;
-  const auto t = in.log.data.col(ti);
-  std::string note;
+TimeWindow fit_paper_window(const TimeWindow& paper, const FlightLog& log, std::string* note) {
+  const int ti = log.find("t");
+  if (ti < 0 || log.rows() < 2) return paper;
+  const auto t = log.data.col(ti);
   const double duration = t(t.size() - 1) - t(0);
-  in.options.window = fit_paper_window(in.options.window, duration, duration / static_cast<double>(t.size() - 1), &note);
-  if (!note.empty()) in.warnings.push_back(note);
+  return fit_paper_window(paper, duration, duration / static_cast<double>(t.size() - 1), note);
 }
-}  // namespace
 
 IdentificationInput prepare_identification(const std::string& path, const IdentifyRequest& req_in) {
   IdentifyRequest req = req_in;
@@ -687,7 +682,11 @@ IdentificationInput prepare_identification(const std::string& path, const Identi
   if (!req.vehicle) {
     in.log = load_identification_log(path, req);
     in.options = req.options;
-    if (!req.real.window_given) fit_default_window(in);
+    if (!req.real.window_given) {  // an error would only ask for the obvious: the paper's window fitted
+      std::string note;
+      in.options.window = fit_paper_window(in.options.window, in.log, &note);
+      if (!note.empty()) in.warnings.push_back(note);
+    }
     return in;
   }
   in.wrench_source = from_log ? req.vehicle->source : fmt::format("the rotor model of vehicle {}", req.vehicle->source);
