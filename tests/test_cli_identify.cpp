@@ -67,7 +67,7 @@ TEST_F(CliIdentify, JsonOnStdoutAloneAndTheSameInTheOutputFile) {
   const auto sets = quadid::load_param_sets(path("result.json"));
   ASSERT_EQ(sets.size(), 6u);  // LS GD FMLS FMGD, then the physically consistent PC, FMPC
   const std::vector<std::string> order{"LS", "GD", "FMLS", "FMGD", "PC", "FMPC"};  // Table 3's, not the JSON's
-  for (size_t i = 0; i < order.size(); ++i) EXPECT_EQ(sets[i].first, order[i]);
+  for (size_t i = 0; i < order.size(); ++i) EXPECT_EQ(sets[i].name, order[i]);
   for (const char* set : {"LS", "FMLS"}) {
     const auto& u = j["uncertainty"][set]["Izz"];
     EXPECT_LE(u["ci95"][0].get<double>(), j["estimates"][set]["Izz"].get<double>()) << set;
@@ -78,7 +78,7 @@ TEST_F(CliIdentify, JsonOnStdoutAloneAndTheSameInTheOutputFile) {
   EXPECT_FALSE(j["consistency"]["LS"]["physical"].get<bool>());
   EXPECT_TRUE(j["consistency"]["PC"]["physical"].get<bool>());
   EXPECT_TRUE(j["input_checks"].is_array());
-  EXPECT_NEAR(sets[0].second.m, truth.m, 0.005 * truth.m);
+  EXPECT_NEAR(sets[0].params.m, truth.m, 0.005 * truth.m);
   EXPECT_NEAR(j["estimates"]["FMLS"]["Izz"].get<double>(), truth.I(2, 2), 0.03 * truth.I(2, 2));
   const auto& pe = j["prediction_error"]["standard"];
   EXPECT_EQ(pe["reference"]["name"], "nom");

@@ -288,6 +288,14 @@ TEST_F(CliVehicle, ValidateWithAVehicleJudgesSetsOnAHeldOutFlight) {
   ASSERT_TRUE(j["sets"].contains("r1:LS")) << j["sets"].dump();
   ASSERT_TRUE(j["sets"].contains("r2:PC")) << j["sets"].dump();
   EXPECT_FALSE(j["sets"].contains("LS"));
+  // Each set is judged with the real-flight terms it was identified with, and
+  // says which: the vehicle's (flapping, rotor inertia) but not the flight's
+  // own torque offsets.
+  EXPECT_TRUE(j["prediction_error"]["real_flight_terms"].get<bool>());
+  EXPECT_TRUE(j["sets"]["r1:LS"]["extra"].contains("flapping_x")) << j["sets"]["r1:LS"].dump();
+  EXPECT_NE(v.err.find("r1:LS: judged with its terms flapping_x, flapping_y, rotor_inertia; not offset_x"),
+            std::string::npos)
+      << v.err;
   // The held-out torques. The simulated plant is the vehicle's [nominal]:
   // the identified PC predicts them within 5 % of the truth's error (what is
   // left is the noise both share), and far better than a tensor twice as

@@ -233,6 +233,38 @@ TEST(Timing, OptionsNamed) {
   }
 }
 
+// The timing an identification estimated, read back from its set's extra
+// parameters (validate --vehicle applies it to the held-out log): the round
+// trip of add_timing_extras, the rotor model's time constant where none was
+// estimated, and nothing when there is no timing.
+TEST(Timing, ReadBackFromASetsExtras) {
+  RotorModel rotors;
+  rotors.time_constant = 0.03;
+  TimingEstimate t;
+  t.gyro_offset = 0.004;
+  t.gyro_offset_estimated = true;
+  t.rotor_offset = -0.012;
+  t.rotor_offset_estimated = true;
+  std::vector<std::pair<std::string, double>> extra{{"flapping_x", 0.1}};
+  add_timing_extras(extra, t);
+  const auto back = timing_from_extras(extra, rotors);
+  ASSERT_TRUE(back.has_value());
+  EXPECT_EQ(back->gyro_offset, 0.004);
+  EXPECT_EQ(back->rotor_offset, -0.012);
+  EXPECT_TRUE(back->gyro_offset_estimated && back->rotor_offset_estimated);
+  EXPECT_FALSE(back->time_constant_estimated);
+  EXPECT_EQ(back->time_constant, 0.03);  // the rotor model's
+  t.time_constant = 0.045;
+  t.time_constant_estimated = true;
+  extra.clear();
+  add_timing_extras(extra, t);
+  EXPECT_EQ(timing_from_extras(extra, rotors)->time_constant, 0.045);
+  EXPECT_FALSE(timing_from_extras({{"flapping_x", 0.1}, {"thrust_scale", 1.1}}, rotors).has_value());
+  EXPECT_THROW(timing_from_extras({{"motor_time_constant", -0.01}}, rotors), InputError);
+  EXPECT_TRUE(is_timing_extra("rotor_time_offset"));
+  EXPECT_FALSE(is_timing_extra("rotor_inertia"));
+}
+
 class Px4Identify : public CliTest {
  protected:
   // `quadid identify FILE.ulg --json` without a vehicle file on a simulated

@@ -60,7 +60,8 @@ void run(const ValidateArgs& a) {
   }
   if (v.simulation)
     fmt::print("{}\n", format_simulation_table(*v.simulation, "Simulation against the log (Table 4 format)"));
-  const char* centred = v.torque_errors_centred ? ", the torques' errors about their means" : "";
+  const std::string centred = fmt::format("{}{}", v.real_flight_terms ? ", each set with its real-flight terms" : "",
+                                          v.torque_errors_centred ? ", the torques' errors about their means" : "");
   fmt::print("{}\n", format_prediction_table(v.prediction.standard,
                                              fmt::format("Output prediction error (Tables 5, 7, 9, 11 format{})", centred)));
   fmt::print("{}", format_prediction_table(v.prediction.filtered,
@@ -93,7 +94,8 @@ void register_validate(CLI::App& app) {
   sub->add_option("--vehicle", a->vehicle,
                   "the wrench from the log's rotor columns by the vehicle's rotor model, as identify --vehicle "
                   "computes it (built-in: " + builtin_vehicle_list() + ", or a vehicle file): judge sets identified "
-                  "on one flight by their output prediction error on another; no simulation comparison");
+                  "on one flight by their output prediction error on another, each with the real-flight terms and timing "
+                  "identify found for it (not the flight's own offsets and wind); no simulation comparison");
   sub->add_option("--trajectory", a->trajectory,
                   "reference to re-fly (table2, circle1..3, or a trajectory JSON); default: the one the log records");
   sub->add_option("--window", a->window, "window of the simulation comparison, seconds from the log's start")

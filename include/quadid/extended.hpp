@@ -227,6 +227,31 @@ struct TermsProjection {
 TermsProjection closest_physical_with_terms(const ExtendedEstimate& x, std::optional<double> known_mass,
                                             const Theta& scale, const PhysicalProjectionOptions& opt = {});
 
+/// Whether a real-flight term belongs to the vehicle, so that a set's value
+/// predicts another flight: the thrust scale, flapping, rate damping, rotor
+/// inertia and vertical drag do; the torque offsets (a trim, a battery's
+/// place) and the wind terms (that day's wind) belong to the flight they were
+/// identified on.
+bool term_carries_to_other_flights(std::string_view name);
+
+/// Output prediction error of the real-flight rows (this header's equations)
+/// on `log`, for every set with its own terms (NamedParams::terms; a term a
+/// set lacks is 0, its thrust scale 1): per sample e = G x - s F, with x the
+/// rigid body and the terms, and s the thrust scale, so that a set identified
+/// with the mass known (m weighed, s estimated) is judged with both. Only the
+/// terms that term_carries_to_other_flights are applied. Both rows' low-pass
+/// is opt.processing's, without the roll and pitch rows' high-pass (the
+/// prediction covers the whole band); window, lambda and discretization as in
+/// `opt`. With centre_torques, the torque rows' errors are taken about their
+/// means over the window (validate --vehicle). The log needs the column
+/// Omega_r when a set has a rotor inertia. The timing extras
+/// (motor_time_constant, ...) are skipped: they apply to the log
+/// (timing_from_extras, apply_timing). Throws InputError on a term it does
+/// not know, naming the set.
+PredictionErrorTable real_flight_prediction_error(const FlightLog& log, const std::vector<NamedParams>& sets,
+                                                  const NamedParams& reference, RegressionModel model,
+                                                  const ExtendedOptions& opt, bool centre_torques);
+
 /// {"sets": {"LS": {"parameters": {name: {value, std_error}}, row_weight, residual_rms, ...}}, "window", ...}
 nlohmann::json to_json(const ExtendedResult& x);
 /// Text: the cutoffs (and how they were chosen), then every parameter of LS

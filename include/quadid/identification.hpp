@@ -17,6 +17,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 namespace quadid {
@@ -28,12 +29,6 @@ struct TimeWindow {
   /// "T0:T1", "T0:" (to the end) or ":T1"; throws std::invalid_argument naming the text.
   static TimeWindow parse(std::string_view spec);
   std::string to_string() const;
-};
-
-/// A named parameter set (LS, GD, FMLS, FMGD, nom, or a file's name).
-struct NamedParams {
-  std::string name;
-  Params params;
 };
 
 // --- Processing (section II-C) -----------------------------------------------

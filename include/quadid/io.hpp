@@ -129,8 +129,9 @@ Params load_params(const std::string& spec);
 /// Named parameter sets from a file or preset: a parameters JSON gives one set
 /// (named after the file), an identification result with "estimates" gives one
 /// per method (LS, GD, FMLS, FMGD), a preset gives itself. The estimates of a
-/// result are not required to be physical (see params_from_json).
-std::vector<std::pair<std::string, Params>> load_param_sets(const std::string& spec);
+/// result are not required to be physical (see params_from_json). A set's
+/// "extra" object (identify --vehicle's real-flight terms) becomes its terms.
+std::vector<NamedParams> load_param_sets(const std::string& spec);
 
 /// Parses a JSON file; InputError names the file, line and column of a syntax error.
 nlohmann::json read_json_file(const std::filesystem::path& path);

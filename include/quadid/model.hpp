@@ -12,6 +12,7 @@
 #include <cmath>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 namespace quadid {
@@ -46,6 +47,16 @@ struct Params {
   /// A preset by name: "qball2-nominal" or "qball2-virtual"; throws listing the valid names.
   static Params preset(std::string_view name);
   static std::vector<std::string> preset_names();
+};
+
+/// A named parameter set (LS, GD, FMLS, FMGD, PC, FMPC, nom, or a file's name).
+struct NamedParams {
+  std::string name;
+  Params params;
+  /// The real-flight terms identified with the set (identify --vehicle's
+  /// "extra": thrust_scale, flapping_x, rotor_inertia, ...), name -> value;
+  /// empty for the paper's model. Used by real_flight_prediction_error.
+  std::vector<std::pair<std::string, double>> terms{};
 };
 
 /// The scale relative errors of Theta are quoted against (bias, spread, standard

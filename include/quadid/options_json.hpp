@@ -191,6 +191,9 @@ struct LogValidation {
   std::optional<SimulationComparison> simulation;  // Table 4 (absent: no_simulation or no reference to re-fly)
   PredictionValidation prediction;               // Tables 5-12
   bool torque_errors_centred = false;            // the torque rows about their means (with a vehicle)
+  /// Each set judged with its own real-flight terms (with a vehicle):
+  /// PredictionValidationOptions::real_flight_terms.
+  bool real_flight_terms = false;
 };
 /// `quadid validate` on a log already read: loads the sets (an unphysical one
 /// is judged by prediction error only, with a note), re-flies the log for

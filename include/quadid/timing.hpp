@@ -29,6 +29,7 @@
 
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace quadid {
@@ -98,5 +99,13 @@ std::string format_timing(const TimingEstimate& t);
 /// Appends the estimated quantities (motor_time_constant, gyro_time_offset,
 /// rotor_time_offset; s) to the extra parameters of the least-squares sets.
 void add_timing_extras(std::vector<std::pair<std::string, double>>& extra, const TimingEstimate& t);
+/// Whether `name` is one of add_timing_extras' names.
+bool is_timing_extra(std::string_view name);
+/// The timing an identification applied, read back from a set's extra
+/// parameters (add_timing_extras' names), the rotor model's time constant
+/// where none was estimated; nullopt when `extra` holds none. InputError when
+/// a value is not finite or a time constant is negative.
+std::optional<TimingEstimate> timing_from_extras(const std::vector<std::pair<std::string, double>>& extra,
+                                                 const RotorModel& rotors);
 
 }  // namespace quadid

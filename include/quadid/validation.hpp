@@ -75,6 +75,10 @@ struct PredictionValidationOptions {
   /// rotor's trim) belongs to the flight, not to the body, and the paper's
   /// model has none; left in, it can hide every set's difference.
   bool centre_torque_errors = false;
+  /// Judge each set with its own real-flight terms (NamedParams::terms), by the
+  /// real-flight regression's rows (real_flight_prediction_error, extended.hpp):
+  /// validate --vehicle. Off: the paper's rows (eq. 43), terms ignored.
+  bool real_flight_terms = false;
   void validate() const;
 };
 

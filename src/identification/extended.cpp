@@ -4,6 +4,7 @@
 #include "quadid/extended.hpp"
 
 #include "quadid/qr_least_squares.hpp"
+#include "quadid/timing.hpp"
 
 #include <fmt/format.h>
 
@@ -1009,6 +1010,108 @@ CutoffSelection select_cutoffs(const FlightLog& log, const ExtendedOptions& opt)
   for (double ff : cand) force.push_back(score(ff, sel.moment_cutoff_hz).first);
   sel.force_cutoff_hz = choose(force, sel.force_scores);
   return sel;
+}
+
+namespace {
+
+template <size_t N>
+bool names_a_term(const Term (&terms)[N], std::string_view name) {
+  return std::any_of(std::begin(terms), std::end(terms), [&](const Term& t) { return name == t.name; });
+}
+
+bool is_term_name(std::string_view name) {
+  return name == "thrust_scale" || names_a_term(kOffsetTerms, name) || names_a_term(kFlapTerms, name) ||
+         names_a_term(kDampTerms, name) || names_a_term(kRotorTerms, name) || names_a_term(kWindTerms, name) ||
+         names_a_term(kDragTerms, name);
+}
+
+}  // namespace
+
+bool term_carries_to_other_flights(std::string_view name) {
+  return name == "thrust_scale" || names_a_term(kFlapTerms, name) || names_a_term(kDampTerms, name) ||
+         names_a_term(kRotorTerms, name) || names_a_term(kDragTerms, name);
+}
+
+PredictionErrorTable real_flight_prediction_error(const FlightLog& log, const std::vector<NamedParams>& sets,
+                                                  const NamedParams& reference, RegressionModel model,
+                                                  const ExtendedOptions& opt, bool centre_torques) {
+  std::vector<const NamedParams*> all{&reference};  // the reference first, as in PredictionErrorTable
+  for (const auto& s : sets) all.push_back(&s);
+  // The columns: every term that some set carries to this flight.
+  ModelTerms terms;
+  for (const auto* s : all)
+    for (const auto& [name, v] : s->terms) {
+      if (is_timing_extra(name)) continue;  // applied to the log (apply_timing), not a column
+      if (!is_term_name(name))
+        throw InputError(fmt::format("set {}: '{}' is not a real-flight term (thrust_scale, offset_x|y|z, "
+                                     "flapping_x|y, damping_x|y|z, rotor_inertia, drag_z, wind_*)",
+                                     s->name, name));
+      if (!std::isfinite(v)) throw InputError(fmt::format("set {}: its term {} is not a finite number", s->name, name));
+      if (!term_carries_to_other_flights(name)) continue;
+      terms.flapping |= names_a_term(kFlapTerms, name);
+      terms.rate_damping |= names_a_term(kDampTerms, name);
+      terms.rotor_inertia |= names_a_term(kRotorTerms, name);
+      terms.force_drag |= names_a_term(kDragTerms, name);
+      if (names_a_term(kRotorTerms, name) && !log.has(kRotorMomentumColumn))
+        throw InputError(fmt::format("set {} has a rotor inertia, whose term needs the rotor speeds (log column '{}', "
+                                     "made from the rotor columns by --vehicle)",
+                                     s->name, kRotorMomentumColumn));
+    }
+  ExtendedOptions eo = opt;
+  eo.terms = terms;
+  eo.moment_highpass_hz = 0.0;
+  const double f = opt.processing.lowpass.cutoff_hz;
+  const RawSignals raw = raw_signals(log, eo, f, f);
+  const auto [k0, k1] = window_range(raw, model, eo);
+  const Discrete d = discretize(raw, model, eo);
+  const std::vector<Term> extra = active_terms(terms);
+  const Eigen::Index P = 7 + static_cast<Eigen::Index>(extra.size());
+  const Assembler assemble{terms, extra, P};
+  // Each set's x (rigid body, then its terms in the columns' order) and s.
+  std::vector<Eigen::VectorXd> x(all.size(), Eigen::VectorXd::Zero(P));
+  std::vector<double> s(all.size(), 1.0);
+  for (size_t i = 0; i < all.size(); ++i) {
+    x[i].head<7>() = all[i]->params.theta();
+    for (const auto& [name, v] : all[i]->terms) {
+      if (name == "thrust_scale") s[i] = v;
+      for (size_t j = 0; j < extra.size(); ++j)
+        if (name == extra[j].name) x[i](7 + static_cast<Eigen::Index>(j)) = v;
+    }
+  }
+  // e = G x - s F (the rows with s F on the right); centred: two passes, the
+  // means, then the squares about them (no cancellation).
+  Eigen::Matrix<double, 4, Eigen::Dynamic> G(4, P);
+  Vec4 Y;
+  const double n = static_cast<double>(k1 - k0);
+  std::vector<Vec4> mean(all.size(), Vec4::Zero()), ss(all.size(), Vec4::Zero());
+  if (centre_torques) {
+    for (Eigen::Index k = k0; k < k1; ++k) {
+      assemble(d.DA.row(k).data(), d.BV.row(k).data(), G, Y);
+      for (size_t i = 0; i < all.size(); ++i) mean[i] += G * x[i] - s[i] * Y;
+    }
+    for (auto& m : mean) {
+      m /= n;
+      m(0) = 0.0;  // the force row keeps its constant: a wrong mass or thrust scale shows there
+    }
+  }
+  for (Eigen::Index k = k0; k < k1; ++k) {
+    assemble(d.DA.row(k).data(), d.BV.row(k).data(), G, Y);
+    for (size_t i = 0; i < all.size(); ++i) ss[i] += (G * x[i] - s[i] * Y - mean[i]).cwiseAbs2();
+  }
+  PredictionErrorTable t;
+  t.model = model;
+  t.window = {static_cast<double>(k0) * raw.T, static_cast<double>(k1 - 1) * raw.T};
+  t.samples = k1 - k0;
+  t.reference.name = reference.name;
+  t.reference.rms = (ss[0] / n).cwiseSqrt();
+  for (size_t i = 1; i < all.size(); ++i) {
+    PredictionErrorRow row;
+    row.name = all[i]->name;
+    row.rms = (ss[i] / n).cwiseSqrt();
+    for (int c = 0; c < 4; ++c) row.improvement_pct(c) = improvement_pct(t.reference.rms(c), row.rms(c));
+    t.rows.push_back(row);
+  }
+  return t;
 }
 
 }  // namespace quadid

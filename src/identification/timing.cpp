@@ -333,4 +333,32 @@ void add_timing_extras(std::vector<std::pair<std::string, double>>& extra, const
   if (t.rotor_offset_estimated) extra.emplace_back("rotor_time_offset", t.rotor_offset);
 }
 
+bool is_timing_extra(std::string_view name) {
+  return name == "motor_time_constant" || name == "gyro_time_offset" || name == "rotor_time_offset";
+}
+
+std::optional<TimingEstimate> timing_from_extras(const std::vector<std::pair<std::string, double>>& extra,
+                                                 const RotorModel& rotors) {
+  TimingEstimate t;
+  t.time_constant = rotors.time_constant;
+  for (const auto& [name, v] : extra) {
+    if (!is_timing_extra(name)) continue;
+    if (!std::isfinite(v) || (name == "motor_time_constant" && v < 0.0))
+      throw InputError(fmt::format("{} = {}: not a {}", name, v,
+                                   name == "motor_time_constant" ? "time constant (s, >= 0)" : "finite offset (s)"));
+    if (name == "motor_time_constant") {
+      t.time_constant = v;
+      t.time_constant_estimated = true;
+    } else if (name == "gyro_time_offset") {
+      t.gyro_offset = v;
+      t.gyro_offset_estimated = true;
+    } else {
+      t.rotor_offset = v;
+      t.rotor_offset_estimated = true;
+    }
+  }
+  if (!t.any()) return std::nullopt;
+  return t;
+}
+
 }  // namespace quadid

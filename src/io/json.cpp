@@ -140,30 +140,37 @@ Params load_params(const std::string& spec) {
   return params_from_json(j, spec);
 }
 
-std::vector<std::pair<std::string, Params>> load_param_sets(const std::string& spec) {
+std::vector<NamedParams> load_param_sets(const std::string& spec) {
   for (const auto& n : Params::preset_names())
     if (spec == n) return {{spec, Params::preset(spec)}};
   if (!std::filesystem::exists(spec))
     throw InputError(fmt::format("parameters '{}': neither a preset ({}) nor an existing file", spec,
                                  fmt::join(Params::preset_names(), ", ")));
   const json j = read_json_file(spec);
-  std::vector<std::pair<std::string, Params>> sets;
+  std::vector<NamedParams> sets;
   if (j.contains("estimates")) {
     const json& e = j["estimates"];
     if (!e.is_object()) throw InputError(fmt::format("{}: \"estimates\" must be an object", spec));
+    auto add = [&](const std::string& key) {
+      const std::string where = fmt::format("{}: estimates.{}", spec, key);
+      NamedParams s{key, params_from_json(e[key], where, false)};
+      if (e[key].contains("extra")) {  // identify --vehicle's real-flight terms
+        const json& x = e[key]["extra"];
+        if (!x.is_object()) throw InputError(fmt::format("{}.extra: must be an object of term: value", where));
+        for (auto it = x.begin(); it != x.end(); ++it) s.terms.emplace_back(it.key(), number_field(x, it.key(), where + ".extra", true));
+      }
+      sets.push_back(std::move(s));
+    };
     // identify's order (its Table 3), then any other set by name.
     static constexpr std::array<const char*, 6> kOrder{"LS", "GD", "FMLS", "FMGD", "PC", "FMPC"};
     for (const char* key : kOrder)
-      if (e.contains(key)) sets.emplace_back(key, params_from_json(e[key], fmt::format("{}: estimates.{}", spec, key), false));
-    for (auto it = e.begin(); it != e.end(); ++it) {
-      const std::string& k = it.key();
-      if (std::find(kOrder.begin(), kOrder.end(), k) == kOrder.end())
-        sets.emplace_back(k, params_from_json(it.value(), fmt::format("{}: estimates.{}", spec, k), false));
-    }
+      if (e.contains(key)) add(key);
+    for (auto it = e.begin(); it != e.end(); ++it)
+      if (std::find(kOrder.begin(), kOrder.end(), it.key()) == kOrder.end()) add(it.key());
     if (sets.empty()) throw InputError(fmt::format("{}: \"estimates\" is empty", spec));
     return sets;
   }
-  sets.emplace_back(std::filesystem::path(spec).stem().string(), params_from_json(j, spec));
+  sets.push_back({std::filesystem::path(spec).stem().string(), params_from_json(j, spec)});
   return sets;
 }
 

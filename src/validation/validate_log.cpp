@@ -2,6 +2,9 @@
 // parameter sets, Table 4 by re-flying the log, Tables 5-12.
 #include "quadid/options_json.hpp"
 
+#include "quadid/extended.hpp"
+#include "quadid/timing.hpp"
+
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -10,6 +13,51 @@
 #include <stdexcept>
 
 namespace quadid {
+namespace {
+
+// Sets whose identification estimated the timing (motor time constant, gyro
+// and rotor offsets: the vehicle's and its logging's, not the flight's) are
+// judged on the log with that timing applied, as identify judged its own
+// flight: their rows of `pv` are replaced, against the same reference row.
+void judge_with_timing(const FlightLog& log, const std::vector<NamedParams>& sets, const NamedParams& reference,
+                       const PredictionValidationOptions& popt, const RotorModel& rotors, PredictionValidation& pv,
+                       const std::function<void(const std::string&)>& say) {
+  std::vector<std::pair<TimingEstimate, std::vector<size_t>>> groups;  // one timing, the sets that share it
+  for (size_t i = 0; i < sets.size(); ++i) {
+    const auto t = timing_from_extras(sets[i].terms, rotors);
+    if (!t) continue;
+    auto same = [&](const TimingEstimate& g) {
+      return g.time_constant == t->time_constant && g.gyro_offset == t->gyro_offset &&
+             g.rotor_offset == t->rotor_offset && g.gyro_offset_estimated == t->gyro_offset_estimated &&
+             g.rotor_offset_estimated == t->rotor_offset_estimated;
+    };
+    auto it = std::find_if(groups.begin(), groups.end(), [&](const auto& g) { return same(g.first); });
+    if (it == groups.end()) groups.push_back({*t, {i}});
+    else it->second.push_back(i);
+  }
+  for (const auto& [t, members] : groups) {
+    std::vector<NamedParams> group;
+    std::vector<std::string> names;
+    for (size_t i : members) {
+      group.push_back(sets[i]);
+      names.push_back(sets[i].name);
+    }
+    std::vector<std::string> what;
+    if (t.time_constant_estimated) what.push_back(fmt::format("motor time constant {:.1f} ms", 1e3 * t.time_constant));
+    if (t.gyro_offset_estimated) what.push_back(fmt::format("gyro offset {:+.1f} ms", 1e3 * t.gyro_offset));
+    if (t.rotor_offset_estimated) what.push_back(fmt::format("rotor offset {:+.1f} ms", 1e3 * t.rotor_offset));
+    say(fmt::format("{}: judged with the timing identify estimated ({})", fmt::join(names, ", "), fmt::join(what, ", ")));
+    const PredictionValidation timed = validate_prediction(apply_timing(log, rotors, t), group, reference, popt);
+    for (auto [table, from] : {std::pair{&pv.standard, &timed.standard}, std::pair{&pv.filtered, &timed.filtered}})
+      for (size_t j = 0; j < members.size(); ++j) {
+        PredictionErrorRow& row = table->rows[members[j]];
+        row.rms = from->rows[j].rms;
+        for (int c = 0; c < 4; ++c) row.improvement_pct(c) = improvement_pct(table->reference.rms(c), row.rms(c));
+      }
+  }
+}
+
+}  // namespace
 
 FlightLog load_validation_log(const std::string& path, const ValidateRequest& req) {
   IdentifyRequest load;
@@ -27,13 +75,13 @@ LogValidation validate_log(const FlightLog& log, const ValidateRequest& req,
   std::vector<NamedParams>& sets = v.sets;
   std::vector<std::string> source;  // each set's --params file, for names that repeat
   for (const auto& spec : req.params)
-    for (auto& [name, P] : load_param_sets(spec)) {
+    for (auto& set : load_param_sets(spec)) {
       try {
-        P.validate(name);
+        set.params.validate(set.name);
       } catch (const std::invalid_argument& e) {
         say(fmt::format("warning: {} (judged by prediction error only; it cannot be flown)", e.what()));
       }
-      sets.push_back({name, P});
+      sets.push_back(std::move(set));
       source.push_back(spec);
     }
   if (sets.empty()) throw std::invalid_argument("give at least one --params set");
@@ -97,7 +145,30 @@ LogValidation validate_log(const FlightLog& log, const ValidateRequest& req,
         "off the rotors' centre, a rotor's trim) belongs to the flight, not to the body");
   }
   v.torque_errors_centred = popt.centre_torque_errors;
+  // A set's real-flight terms (identify --vehicle): applied with the vehicle's
+  // rotor signals, those that belong to the vehicle; the paper's rows have no
+  // place for them.
+  popt.real_flight_terms = req.vehicle.has_value();
+  v.real_flight_terms = popt.real_flight_terms;
+  for (const auto& s : sets) {
+    if (s.terms.empty()) continue;
+    std::vector<std::string> used, own;
+    for (const auto& t : s.terms)
+      if (!is_timing_extra(t.first)) (term_carries_to_other_flights(t.first) ? used : own).push_back(t.first);
+    if (!req.vehicle) {
+      say(fmt::format("{}: its real-flight terms ({}) are not applied: the log's wrench is the paper's model; give "
+                      "--vehicle to judge it with them",
+                      s.name, fmt::join(used.empty() ? own : used, ", ")));
+      continue;
+    }
+    std::string line = used.empty() ? fmt::format("{}: no real-flight term to apply", s.name)
+                                    : fmt::format("{}: judged with its terms {}", s.name, fmt::join(used, ", "));
+    if (!own.empty())
+      line += fmt::format("; not {} (the identification flight's own: a trim, that day's wind)", fmt::join(own, ", "));
+    say(line);
+  }
   v.prediction = validate_prediction(log, sets, reference, popt);
+  if (req.vehicle) judge_with_timing(log, sets, reference, popt, req.vehicle->rotors, v.prediction, say);
   return v;
 }
 
@@ -106,11 +177,19 @@ nlohmann::json to_json(const LogValidation& v, const std::string& log_name) {
   j["log"] = log_name;
   j["reference"] = {{"name", v.reference.name}, {"params", to_json(v.reference.params)}};
   nlohmann::json js = nlohmann::json::object();
-  for (const auto& s : v.sets) js[s.name] = to_json(s.params);
+  for (const auto& s : v.sets) {
+    js[s.name] = to_json(s.params);
+    if (!s.terms.empty()) {
+      nlohmann::json x = nlohmann::json::object();
+      for (const auto& [n, val] : s.terms) x[n] = val;
+      js[s.name]["extra"] = x;
+    }
+  }
   j["sets"] = js;
   if (v.simulation) j["simulation"] = to_json(*v.simulation);
   j["prediction_error"] = {{"standard", to_json(v.prediction.standard)}, {"filtered", to_json(v.prediction.filtered)}};
   j["prediction_error"]["torque_errors_centred"] = v.torque_errors_centred;
+  j["prediction_error"]["real_flight_terms"] = v.real_flight_terms;
   return j;
 }
 

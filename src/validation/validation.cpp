@@ -1,5 +1,6 @@
 #include "quadid/validation.hpp"
 
+#include "quadid/extended.hpp"
 #include "quadid/report.hpp"
 
 #include <fmt/format.h>
@@ -236,9 +237,19 @@ PredictionErrorTable prediction_error_centred_torques(const Regression& reg, con
 PredictionValidation validate_prediction(const FlightLog& log, const std::vector<NamedParams>& sets,
                                          const NamedParams& reference, const PredictionValidationOptions& opt) {
   opt.validate();
+  PredictionValidation v;
+  if (opt.real_flight_terms) {
+    ExtendedOptions eo;
+    eo.processing = opt.processing;
+    eo.window = opt.window;
+    eo.lambda = opt.lambda;
+    eo.gd_variant = opt.gd_variant;
+    v.standard = real_flight_prediction_error(log, sets, reference, RegressionModel::Standard, eo, opt.centre_torque_errors);
+    v.filtered = real_flight_prediction_error(log, sets, reference, RegressionModel::Filtered, eo, opt.centre_torque_errors);
+    return v;
+  }
   const auto signals = process_log(log, opt.processing);
   const auto table = opt.centre_torque_errors ? prediction_error_centred_torques : prediction_error;
-  PredictionValidation v;
   v.standard = table(Regression(signals, RegressionModel::Standard, opt.window, opt.lambda, opt.gd_variant), sets,
                      reference);
   v.filtered = table(Regression(signals, RegressionModel::Filtered, opt.window, opt.lambda, opt.gd_variant), sets,
