@@ -117,8 +117,9 @@ void run(const IdentifyArgs& a) {
              gd.gain == GdGain::Paper ? fmt::format("sigma = {:g}", gd.sigma)
                                       : fmt::format("normalized gain, rate {:g}/s", gd.rate),
              a.gd_discretization, std::max(res.gd_step_gain_standard, res.gd_step_gain_filtered));
-  fmt::print("{}\n", format_prediction_table(res.errors_standard, "Table 5"));
-  fmt::print("{}", format_prediction_table(res.errors_filtered, "Table 6"));
+  const char* how = res.errors_real_flight ? " (each set with its real-flight terms, the torques' errors about their means)" : "";
+  fmt::print("{}\n", format_prediction_table(res.errors_standard, fmt::format("Table 5{}", how)));
+  fmt::print("{}", format_prediction_table(res.errors_filtered, fmt::format("Table 6{}", how)));
 }
 
 }  // namespace

@@ -338,6 +338,13 @@ struct IdentificationResult {
   double gd_step_gain_standard = 0.0, gd_step_gain_filtered = 0.0;  // max sigma T lambda_max
   Evolution evolution;
   PredictionErrorTable errors_standard, errors_filtered;  // Tables 5 and 6
+  /// With the real-flight regression (options.extended()), Tables 5-6 judge
+  /// each set with its real-flight terms (real_flight_prediction_error) and
+  /// the torque rows' errors about their means, as validate --vehicle does:
+  /// the paper's rows would judge a set found with a thrust scale by a force
+  /// row it was not fitted to, and a constant torque (a trim) by the sets'
+  /// bodies.
+  bool errors_real_flight = false;
   ProcessingSummary processing;
   TimeWindow window;            // estimation window used
   Eigen::Index window_samples = 0;

@@ -502,6 +502,28 @@ IdentificationResult identify(const FlightLog& log, const IdentificationOptions&
   if (errors_standard && errors_filtered) {
     res.errors_standard = std::move(*errors_standard);
     res.errors_filtered = std::move(*errors_filtered);
+  } else if (opt.extended()) {
+    ExtendedOptions eo = extended_options(opt);
+    eo.window = error_window;
+    auto with_terms = [&](int a, int b) {
+      std::vector<NamedParams> v = sets_of(a, b);
+      for (auto& set : v)
+        for (const auto& e : res.estimates)
+          if (e.name == set.name) set.terms = e.extra;
+      return v;
+    };
+    const std::vector<NamedParams> std_sets = with_terms(0, 1), filt_sets = with_terms(2, 3);
+    detail::run_both(
+        two,
+        [&] {
+          res.errors_standard =
+              real_flight_prediction_error(log, std_sets, opt.reference, RegressionModel::Standard, eo, true);
+        },
+        [&] {
+          res.errors_filtered =
+              real_flight_prediction_error(log, filt_sets, opt.reference, RegressionModel::Filtered, eo, true);
+        });
+    res.errors_real_flight = true;
   } else {
     const std::vector<NamedParams> std_sets = sets_of(0, 1), filt_sets = sets_of(2, 3);
     detail::run_both(

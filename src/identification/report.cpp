@@ -350,7 +350,11 @@ json to_json(const IdentificationResult& r) {
           {"recommended", {{"set", r.recommended.set}, {"reason", r.recommended.reason}}},
           {"input_checks", to_json(r.input_findings)},
           {"gradient_descent", gd},
-          {"prediction_error", {{"standard", to_json(r.errors_standard)}, {"filtered", to_json(r.errors_filtered)}}},
+          {"prediction_error",
+           {{"standard", to_json(r.errors_standard)},
+            {"filtered", to_json(r.errors_filtered)},
+            {"real_flight_terms", r.errors_real_flight},
+            {"torque_errors_centred", r.errors_real_flight}}},
           {"warnings", r.warnings}};
   if (r.extended) out["real_flight"] = to_json(*r.extended);
   return out;
