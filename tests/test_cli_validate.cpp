@@ -34,6 +34,26 @@ TEST_F(CliValidate, JudgesAnIdentifyResultAsFourSetsPlusFiles) {
   EXPECT_NE(t.out.find("filtered regression"), std::string::npos);
 }
 
+TEST_F(CliValidate, RealFlightTermsWithoutAVehicleAreNamedAsNotApplied) {
+  // A result identified with real-flight terms, judged on a log without a
+  // vehicle: the paper's rows have no place for them, so the sets are judged
+  // as bodies and stderr names the terms left out and what would apply them.
+  ASSERT_EQ(run("simulate --trajectory table2 --duration 14 --noise default -o " + path("log.csv")).rc, 0);
+  const CliRun id = run("identify " + path("log.csv") + " --window 4:14 --terms offsets,damping -o " + path("r.json"));
+  ASSERT_EQ(id.rc, 0) << id.err;
+  const CliRun r = run("validate --log " + path("log.csv") + " --params " + path("r.json") + " --no-simulation --json");
+  ASSERT_EQ(r.rc, 0) << r.err;
+  EXPECT_NE(r.err.find("LS: its real-flight terms (damping_x, damping_y, damping_z, offset_x, offset_y, offset_z) are "
+                       "not applied"),
+            std::string::npos)
+      << r.err;
+  EXPECT_NE(r.err.find("give the vehicle to judge it with them"), std::string::npos) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_FALSE(j["prediction_error"]["real_flight_terms"].get<bool>());
+  EXPECT_TRUE(j["sets"]["LS"]["extra"].contains("damping_x")) << j["sets"]["LS"].dump();
+  EXPECT_FALSE(j["sets"]["GD"].contains("extra"));
+}
+
 TEST_F(CliValidate, LogWithoutMetadataSkipsSimulationWithANote) {
   ASSERT_EQ(run("simulate --trajectory table2 --duration 6 -o " + path("log.csv")).rc, 0);
   // Strip the '#' metadata, as a log from another tool would have none.

@@ -156,9 +156,12 @@ LogValidation validate_log(const FlightLog& log, const ValidateRequest& req,
     for (const auto& t : s.terms)
       if (!is_timing_extra(t.first)) (term_carries_to_other_flights(t.first) ? used : own).push_back(t.first);
     if (!req.vehicle) {
-      say(fmt::format("{}: its real-flight terms ({}) are not applied: the log's wrench is the paper's model; give "
-                      "--vehicle to judge it with them",
-                      s.name, fmt::join(used.empty() ? own : used, ", ")));
+      std::vector<std::string> all = used;
+      all.insert(all.end(), own.begin(), own.end());
+      if (!all.empty())
+        say(fmt::format("{}: its real-flight terms ({}) are not applied: without --vehicle the sets are judged by the "
+                        "paper's rows; give the vehicle to judge it with them",
+                        s.name, fmt::join(all, ", ")));
       continue;
     }
     std::string line = used.empty() ? fmt::format("{}: no real-flight term to apply", s.name)
