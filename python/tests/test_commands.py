@@ -86,3 +86,18 @@ def test_vehicle_by_name_in_simulate_and_identify(tmp_path):
             assert res["estimates"][s][k] == pytest.approx(cli["estimates"][s][k], rel=1e-9)
         assert res["estimates"][s]["extra"]["thrust_scale"] == pytest.approx(
             cli["estimates"][s]["extra"]["thrust_scale"], rel=1e-9)
+
+
+def test_validate_with_a_vehicle_judges_the_sets_with_their_terms(tmp_path):
+    """validate(vehicle=...) equals `quadid validate --vehicle ... --json`, and
+    judges identify's sets with their real-flight terms, saying so."""
+    p, r = tmp_path / "log.csv", tmp_path / "r.json"
+    run_cli("simulate", "--trajectory", "table2", "--vehicle", "crazyflie21", "--duration", "20", "--seed", "5",
+            "-o", str(p))
+    run_cli("identify", str(p), "--vehicle", "crazyflie21", "--known-mass", "0.0347", "-o", str(r))
+    cli = cli_json("validate", "--log", str(p), "--vehicle", "crazyflie21", "--params", str(r))
+    with pytest.warns(UserWarning, match="LS: judged with its terms"):
+        res = quadid.validate(p, r, vehicle="crazyflie21")
+    assert res["prediction_error"]["real_flight_terms"] is True
+    assert "thrust_scale" in res["sets"]["LS"]["extra"]
+    assert_same(res, cli, 1e-12)
