@@ -354,6 +354,18 @@ TEST_F(CliVehicle, ValidateWithAVehicleJudgesSetsOnAHeldOutFlight) {
     EXPECT_NEAR(pc, truth, 0.05 * truth) << c;
     EXPECT_GT(rows["PC"]["improvement_pct"][c].get<double>(), 20.0) << c;
   }
+  // A result identified with another vehicle: its terms belong to that rotor
+  // model, and the warning says so.
+  nlohmann::json other = quadid::read_json_file(path("r1.json"));
+  ASSERT_EQ(other["vehicle"]["name"], "crazyflie21");
+  other["vehicle"]["name"] = "x500";
+  write("other.json", other.dump());
+  const CliRun o = run("validate --log " + path("held.csv") + " --vehicle crazyflie21 --params " + path("other.json"));
+  ASSERT_EQ(o.rc, 0) << o.err;
+  EXPECT_NE(o.err.find("was identified with the vehicle 'x500', this log is judged with 'crazyflie21'"),
+            std::string::npos)
+      << o.err;
+  EXPECT_EQ(v.err.find("was identified with the vehicle"), std::string::npos) << v.err;
   // Without the vehicle the log has no wrench: the message says what to pass.
   const CliRun nv = run("validate --log " + path("held.csv") + " --params " + path("r1.json"));
   EXPECT_NE(nv.rc, 0);

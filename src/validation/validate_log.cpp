@@ -74,7 +74,17 @@ LogValidation validate_log(const FlightLog& log, const ValidateRequest& req,
   LogValidation v;
   std::vector<NamedParams>& sets = v.sets;
   std::vector<std::string> source;  // each set's --params file, for names that repeat
-  for (const auto& spec : req.params)
+  for (const auto& spec : req.params) {
+    // An identify result records its vehicle: terms found for another one
+    // (its thrust scale, rotor inertia) would be judged on this one's rotors.
+    if (req.vehicle && std::filesystem::is_regular_file(spec)) {
+      const nlohmann::json j = read_json_file(spec);
+      if (j.is_object() && j.contains("vehicle") && j["vehicle"].is_object() && j["vehicle"].contains("name") &&
+          j["vehicle"]["name"].is_string() && j["vehicle"]["name"].get<std::string>() != req.vehicle->name)
+        say(fmt::format("warning: {} was identified with the vehicle '{}', this log is judged with '{}': its "
+                        "real-flight terms belong to the other rotor model",
+                        spec, j["vehicle"]["name"].get<std::string>(), req.vehicle->name));
+    }
     for (auto& set : load_param_sets(spec)) {
       try {
         set.params.validate(set.name);
@@ -84,6 +94,7 @@ LogValidation validate_log(const FlightLog& log, const ValidateRequest& req,
       sets.push_back(std::move(set));
       source.push_back(spec);
     }
+  }
   if (sets.empty()) throw std::invalid_argument("give at least one --params set");
   // Two identify results both hold an LS, ...: a repeated name takes its file's
   // name first ("flight1:LS"), and a number if that still repeats.
