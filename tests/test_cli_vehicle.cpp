@@ -216,6 +216,22 @@ TEST_F(CliVehicle, RotorModelThatDoesNotMatchTheLogIsAnInputError) {
   // The estimates then show the wrong sign, named by model-fit.
   EXPECT_NE(ri.err.find("input check model-fit: LS Izz = -"), std::string::npos) << ri.err;
   EXPECT_NE(ri.err.find("(ignored)"), std::string::npos) << ri.err;
+  // validate --vehicle checks the held-out log the same way: every set would
+  // be judged against wrong moments.
+  write("cf.json", R"({"m": 0.0347, "Ixx": 16.57e-6, "Iyy": 16.66e-6, "Izz": 29.26e-6, "Ixy": 0.83e-6, )"
+                   R"("Ixz": 0.72e-6, "Iyz": 1.80e-6})");
+  const CliRun v = run("validate --log " + path("rotated.csv") + " --vehicle crazyflie21 --params " + path("cf.json"));
+  EXPECT_NE(v.rc, 0);
+  EXPECT_NE(v.err.find(path("rotated.csv") + ": the log fails the input checks: rotor-mapping:"), std::string::npos)
+      << v.err;
+  EXPECT_NE(v.err.find(R"(columns = ["rpm.m4", "rpm.m1", "rpm.m2", "rpm.m3"])"), std::string::npos) << v.err;
+  const CliRun vi = run("validate --log " + path("rotated.csv") + " --vehicle crazyflie21 --params " + path("cf.json") +
+                        " --ignore-input-errors");
+  EXPECT_EQ(vi.rc, 0) << vi.err;
+  EXPECT_NE(vi.err.find("warning: input check rotor-mapping:"), std::string::npos) << vi.err;
+  const CliRun vg = run("validate --log " + path("good.csv") + " --vehicle crazyflie21 --params " + path("cf.json"));
+  EXPECT_EQ(vg.rc, 0) << vg.err;
+  EXPECT_EQ(vg.err.find("rotor-mapping"), std::string::npos) << vg.err;
 
   // The + layout for the X vehicle: the positions turned by -45 deg fit, and
   // so do the columns rotated with the positions turned by +45 deg (the same

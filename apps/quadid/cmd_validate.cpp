@@ -24,6 +24,7 @@ struct ValidateArgs {
   std::string error_window;
   bool no_simulation = false;
   bool with_noise = false;
+  bool ignore_input_errors = false;
   ProcessingArgs proc;
   std::string out;
   bool json = false;
@@ -36,6 +37,7 @@ void run(const ValidateArgs& a) {
   if (!a.vehicle.empty()) req.vehicle = load_vehicle(a.vehicle);
   req.trajectory = a.trajectory;
   req.no_simulation = a.no_simulation;
+  req.ignore_input_errors = a.ignore_input_errors;
   req.prediction.processing = a.proc.processing();
   req.prediction.lambda = a.proc.lambda;
   req.prediction.gd_variant = a.proc.gd_variant();
@@ -103,6 +105,9 @@ void register_validate(CLI::App& app) {
   sub->add_option("--error-window", a->error_window, "window of the prediction error (default: the whole log)");
   sub->add_flag("--no-simulation", a->no_simulation, "skip the simulation comparison");
   sub->add_flag("--with-noise", a->with_noise, "re-fly with the log's sensor noise and seed (default: noise-free)");
+  sub->add_flag("--ignore-input-errors", a->ignore_input_errors,
+                "with --vehicle: a rotor-mapping mismatch (the log's rotor columns against the vehicle file's "
+                "arrangement, as identify checks it) is a warning instead of an error");
   a->proc.add_to(sub);
   sub->add_option("-o,--out", a->out, "write the results as JSON");
   sub->add_flag("--json", a->json, "print the results as JSON on stdout (nothing else there)");

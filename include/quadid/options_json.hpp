@@ -174,6 +174,10 @@ struct ValidateRequest {
   std::optional<Vehicle> vehicle;
   std::string trajectory;              // empty: the one the log records
   bool no_simulation = false;
+  /// --ignore-input-errors: with a vehicle, a rotor-mapping mismatch (the
+  /// log's rotor columns against the file's arrangement) is a warning, not an
+  /// error.
+  bool ignore_input_errors = false;
   PredictionValidationOptions prediction;
   SimulationComparisonOptions simulation;
   CsvReadOptions csv;
@@ -181,7 +185,10 @@ struct ValidateRequest {
 ValidateRequest validate_options_from_json(const nlohmann::json& j);
 
 /// The log of a validation: any format (load_any_log); with req.vehicle, the
-/// wrench computed from the rotor columns (load_identification_log's way).
+/// wrench computed from the rotor columns (load_identification_log's way),
+/// after identify's rotor-mapping check: a mismatch is an InputError naming
+/// the file and the arrangement that fits, unless req.ignore_input_errors
+/// (validate_log then warns).
 FlightLog load_validation_log(const std::string& path, const ValidateRequest& req);
 
 /// What `quadid validate` computes on one log.

@@ -171,6 +171,8 @@ const std::vector<OptionSpec>& validate_specs() {
           {"error-window", K::String, "window of the prediction error (default: the whole log)"},
           {"no-simulation", K::Flag, "skip the simulation comparison"},
           {"with-noise", K::Flag, "re-fly with the log's sensor noise and seed"},
+          {"ignore-input-errors", K::Flag,
+           "with a vehicle: a rotor-mapping mismatch is a warning, not an error"},
       },
       processing_specs());
   return s;
@@ -907,6 +909,7 @@ ValidateRequest validate_options_from_json(const nlohmann::json& j) {
     req.prediction.window = r.with_option("error-window", [&] { return TimeWindow::parse(*ew); });
   req.no_simulation = r.flag("no-simulation");
   req.simulation.with_noise = r.flag("with-noise");
+  req.ignore_input_errors = r.flag("ignore-input-errors");
   Processing p = read_processing(r);
   req.prediction.processing = p.processing;
   req.prediction.lambda = p.lambda;

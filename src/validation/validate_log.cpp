@@ -4,12 +4,14 @@
 
 #include "quadid/extended.hpp"
 #include "quadid/timing.hpp"
+#include "quadid/vehicle.hpp"
 
 #include <fmt/format.h>
 
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <optional>
 #include <stdexcept>
 
 namespace quadid {
@@ -57,13 +59,28 @@ void judge_with_timing(const FlightLog& log, const std::vector<NamedParams>& set
   }
 }
 
+// identify's rotor-mapping check (options_json.cpp): a wrong order or layout
+// of the rotor columns would judge every set against wrong moments.
+std::optional<std::string> rotor_mapping_finding(const FlightLog& log, const ValidateRequest& req) {
+  if (!req.vehicle) return std::nullopt;
+  const RotorMappingCheck rm = check_rotor_mapping(log, req.vehicle->rotors, req.prediction.processing.lowpass.cutoff_hz);
+  if (!rm.mismatch) return std::nullopt;
+  return rm.describe();
+}
+
 }  // namespace
 
 FlightLog load_validation_log(const std::string& path, const ValidateRequest& req) {
   IdentifyRequest load;
   load.csv = req.csv;
   load.vehicle = req.vehicle;
-  return load_identification_log(path, load);
+  FlightLog log = load_identification_log(path, load);
+  if (!req.ignore_input_errors)
+    if (const auto f = rotor_mapping_finding(log, req))
+      throw InputError(fmt::format("{}: the log fails the input checks: rotor-mapping: {}; if the log and the vehicle "
+                                   "file are right, ignore the checks (--ignore-input-errors)",
+                                   path, *f));
+  return log;
 }
 
 LogValidation validate_log(const FlightLog& log, const ValidateRequest& req,
@@ -149,6 +166,8 @@ LogValidation validate_log(const FlightLog& log, const ValidateRequest& req,
       sim = compare_simulations(log, *traj, base, sets, reference, req.simulation);
     }
   }
+  if (req.ignore_input_errors)
+    if (const auto f = rotor_mapping_finding(log, req)) say("warning: input check rotor-mapping: " + *f + " (ignored)");
   PredictionValidationOptions popt = req.prediction;
   if (req.vehicle) {
     popt.centre_torque_errors = true;
