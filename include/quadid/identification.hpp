@@ -198,6 +198,13 @@ std::string improvement_undefined(double rms_ref, double rms_set);
 PredictionErrorTable prediction_error(const Regression& reg, const std::vector<NamedParams>& sets,
                                       const NamedParams& reference);
 
+/// The table of the sums of squared errors `sse` over `samples` samples:
+/// names[0] and sse[0] are the reference's, then one row per set (RMS and
+/// P_imp% against the reference). The one place PredictionErrorSums and
+/// real_flight_prediction_error turn sums into a table.
+PredictionErrorTable prediction_error_table(const std::vector<std::string>& names, const std::vector<Vec4>& sse,
+                                            RegressionModel model, const TimeWindow& window, Eigen::Index samples);
+
 /// prediction_error's sums one sample at a time, for a pass over the
 /// regression that does other work too (identify() adds them during the
 /// pass for the LS intervals). The same arithmetic, in the same order.

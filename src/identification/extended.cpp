@@ -1098,20 +1098,10 @@ PredictionErrorTable real_flight_prediction_error(const FlightLog& log, const st
     assemble(d.DA.row(k).data(), d.BV.row(k).data(), G, Y);
     for (size_t i = 0; i < all.size(); ++i) ss[i] += (G * x[i] - s[i] * Y - mean[i]).cwiseAbs2();
   }
-  PredictionErrorTable t;
-  t.model = model;
-  t.window = {static_cast<double>(k0) * raw.T, static_cast<double>(k1 - 1) * raw.T};
-  t.samples = k1 - k0;
-  t.reference.name = reference.name;
-  t.reference.rms = (ss[0] / n).cwiseSqrt();
-  for (size_t i = 1; i < all.size(); ++i) {
-    PredictionErrorRow row;
-    row.name = all[i]->name;
-    row.rms = (ss[i] / n).cwiseSqrt();
-    for (int c = 0; c < 4; ++c) row.improvement_pct(c) = improvement_pct(t.reference.rms(c), row.rms(c));
-    t.rows.push_back(row);
-  }
-  return t;
+  std::vector<std::string> names;
+  for (const auto* p : all) names.push_back(p->name);
+  return prediction_error_table(names, ss, model, {static_cast<double>(k0) * raw.T, static_cast<double>(k1 - 1) * raw.T},
+                                k1 - k0);
 }
 
 }  // namespace quadid

@@ -492,11 +492,14 @@ IdentificationResult identify(const FlightLog& log, const IdentificationOptions&
   }
 
   // Tables 5-6: each model with its own sets and the reference.
+  // With their real-flight terms (LS and FMLS of the real-flight regression;
+  // the paper's prediction_error does not read them).
   auto sets_of = [&](int a, int b) {
     std::vector<NamedParams> v;
-    for (int i : {a, b})
-      if (res.estimates[static_cast<size_t>(i)].valid)
-        v.push_back({res.estimates[static_cast<size_t>(i)].name, res.estimates[static_cast<size_t>(i)].params()});
+    for (int i : {a, b}) {
+      const SetEstimate& e = res.estimates[static_cast<size_t>(i)];
+      if (e.valid) v.push_back({e.name, e.params(), e.extra});
+    }
     return v;
   };
   if (errors_standard && errors_filtered) {
@@ -505,14 +508,7 @@ IdentificationResult identify(const FlightLog& log, const IdentificationOptions&
   } else if (opt.extended()) {
     ExtendedOptions eo = extended_options(opt);
     eo.window = error_window;
-    auto with_terms = [&](int a, int b) {
-      std::vector<NamedParams> v = sets_of(a, b);
-      for (auto& set : v)
-        for (const auto& e : res.estimates)
-          if (e.name == set.name) set.terms = e.extra;
-      return v;
-    };
-    const std::vector<NamedParams> std_sets = with_terms(0, 1), filt_sets = with_terms(2, 3);
+    const std::vector<NamedParams> std_sets = sets_of(0, 1), filt_sets = sets_of(2, 3);
     detail::run_both(
         two,
         [&] {

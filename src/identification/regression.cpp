@@ -129,22 +129,27 @@ PredictionErrorSums::PredictionErrorSums(const std::vector<NamedParams>& sets, c
   sse_.assign(theta_.size(), Vec4::Zero());
 }
 
-PredictionErrorTable PredictionErrorSums::table(const Regression& reg) const {
-  const double n = static_cast<double>(reg.size());
+PredictionErrorTable prediction_error_table(const std::vector<std::string>& names, const std::vector<Vec4>& sse,
+                                            RegressionModel model, const TimeWindow& window, Eigen::Index samples) {
+  const double n = static_cast<double>(samples);
   PredictionErrorTable t;
-  t.model = reg.model();
-  t.window = reg.window();
-  t.samples = reg.size();
-  t.reference.name = names_[0];
-  t.reference.rms = (sse_[0] / n).cwiseSqrt();
-  for (size_t i = 1; i < names_.size(); ++i) {
+  t.model = model;
+  t.window = window;
+  t.samples = samples;
+  t.reference.name = names[0];
+  t.reference.rms = (sse[0] / n).cwiseSqrt();
+  for (size_t i = 1; i < names.size(); ++i) {
     PredictionErrorRow row;
-    row.name = names_[i];
-    row.rms = (sse_[i] / n).cwiseSqrt();
+    row.name = names[i];
+    row.rms = (sse[i] / n).cwiseSqrt();
     for (int c = 0; c < 4; ++c) row.improvement_pct(c) = improvement_pct(t.reference.rms(c), row.rms(c));
     t.rows.push_back(row);
   }
   return t;
+}
+
+PredictionErrorTable PredictionErrorSums::table(const Regression& reg) const {
+  return prediction_error_table(names_, sse_, reg.model(), reg.window(), reg.size());
 }
 
 PredictionErrorTable prediction_error(const Regression& reg, const std::vector<NamedParams>& sets,
