@@ -3,12 +3,16 @@
 // that log, failing logs reported without stopping the others, exit codes.
 #include "cli_fixture.hpp"
 #include "quadid/batch.hpp"
+#include "quadid/estimation.hpp"
 #include "quadid/io.hpp"
 #include "quadid/simulation.hpp"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <array>
+#include <cmath>
 #include <map>
 #include <mutex>
 #include <sstream>
@@ -163,4 +167,153 @@ TEST(IdentifyBatch, SinkSeesInputOrderWhateverTheCompletionOrder) {
   EXPECT_EQ(s.ok, 1u);
   EXPECT_EQ(s.failed, 9u);
   EXPECT_EQ(s.threads, 3);
+}
+
+namespace {
+
+// A batch record as to_json(BatchRecord) writes it, with the LS set `theta`
+// (m, Ixx, Ixy, Ixz, Iyy, Iyz, Izz), its standard errors `se`, and PC = LS.
+nlohmann::json record(const std::string& path, const std::array<double, 7>& theta, double se,
+                      const std::string& recommended = "PC") {
+  nlohmann::json est = nlohmann::json::object(), unc = nlohmann::json::object();
+  for (size_t j = 0; j < 7; ++j) {
+    est[quadid::kThetaNames[j]] = theta[j];
+    unc[quadid::kThetaNames[j]] = {{"std_error", se}, {"ci95", {theta[j] - 2 * se, theta[j] + 2 * se}}};
+  }
+  return {{"path", path},
+          {"ok", true},
+          {"estimates", {{"LS", est}, {"PC", est}}},
+          {"uncertainty", {{"LS", unc}, {"FMLS", unc}}},
+          {"recommended", {{"set", recommended}, {"reason", "test"}}}};
+}
+
+std::array<double, 7> body(double m) { return {m, 0.012, -0.0008, 0.0001, 0.015, -0.0006, 0.083}; }
+
+}  // namespace
+
+// Six flights (set LS); only the mass varies, the sixth carries a 30 % payload. Against
+// the other five (mean 1.0, sd sqrt(6.25e-5)), its t is 0.3 / (sd sqrt(1 + 1/5))
+// = 34.64 (closed form), beyond the critical value for 6 tests at 1 % with 4
+// degrees of freedom; each other flight, judged against a sample that holds
+// the heavy one, is far inside it. The critical value is where the two-sided
+// tail equals 0.01 / 6 (to the bisection's 1e-12 relative).
+TEST(FleetSummary, LeaveOneOutTFlagsThePayloadFlightOnly) {
+  const std::vector<double> masses = {1.0, 1.01, 0.99, 1.005, 0.995, 1.3};
+  std::vector<nlohmann::json> recs;
+  for (size_t i = 0; i < masses.size(); ++i) recs.push_back(record(fmt::format("f{}", i), body(masses[i]), 1e-4));
+  quadid::FleetSummaryOptions ls;
+  ls.set = "LS";
+  const quadid::FleetSummary s = quadid::summarize_fleet(recs, ls);
+  EXPECT_EQ(s.flights, 6u);
+  EXPECT_EQ(s.parameters[0].median_std_error, 1e-4);
+  ASSERT_EQ(s.parameters.size(), 7u);
+  EXPECT_FALSE(s.parameters[0].fixed);
+  for (size_t j = 1; j < 7; ++j) EXPECT_TRUE(s.parameters[j].fixed) << j;
+  EXPECT_NEAR(s.parameters[0].mean, 6.3 / 6.0, 1e-15);
+  EXPECT_NEAR(1.0 - quadid::student_t_two_sided_cdf(s.critical_t, 4), 0.01 / 6.0, 1e-12 * 0.01);
+  ASSERT_EQ(s.outliers.size(), 1u) << s.table();
+  EXPECT_EQ(s.outliers[0].path, "f5");
+  EXPECT_EQ(s.outliers[0].parameter, "m");
+  EXPECT_NEAR(s.outliers[0].others_mean, 1.0, 1e-14);
+  EXPECT_NEAR(s.outliers[0].t, 0.3 / (std::sqrt(6.25e-5) * std::sqrt(1.2)), 1e-9);
+  // The note: the flights spread far beyond their standard errors (1e-4).
+  ASSERT_FALSE(s.notes.empty());
+  EXPECT_NE(s.notes.back().find("m: the flights' standard deviation is"), std::string::npos) << s.notes.back();
+  const std::string table = s.table();
+  EXPECT_NE(table.find("f5"), std::string::npos) << table;
+  EXPECT_NE(table.find("fixed"), std::string::npos) << table;
+  const nlohmann::json j = quadid::to_json(s);
+  EXPECT_EQ(j["outliers"][0]["path"], "f5");
+  EXPECT_EQ(j["parameters"]["Ixx"]["fixed"], true);
+  // The recommended set here is PC: the same flags, but no standard errors
+  // (LS's do not stand for the projection's), so no note about them.
+  const quadid::FleetSummary pc = quadid::summarize_fleet(recs);
+  ASSERT_EQ(pc.outliers.size(), 1u);
+  EXPECT_TRUE(std::isnan(pc.parameters[0].median_std_error));
+  EXPECT_TRUE(pc.notes.empty()) << pc.notes.front();
+  EXPECT_TRUE(quadid::to_json(pc)["parameters"]["m"]["median_std_error"].is_null());
+}
+
+// Four flights that scatter by 1-2 %: no flight is flagged (flight 0's t is
+// 1.24, the critical value 49). A robust rule with a fixed threshold,
+// |x - median| > 4 x 1.4826 MAD of the others, flags flight 0 at 67: two of
+// the other three agree to 1e-4, so their MAD is 1e-4 (bench/fleet_outliers.py:
+// such a rule flags some flight of nearly every fleet of 4).
+TEST(FleetSummary, FewFlightsThatAgreeLooselyAreNotFlagged) {
+  const std::vector<double> masses = {1.01, 1.0, 1.0001, 0.98};
+  std::vector<nlohmann::json> recs;
+  for (size_t i = 0; i < masses.size(); ++i) recs.push_back(record(fmt::format("f{}", i), body(masses[i]), 1e-4));
+  const quadid::FleetSummary s = quadid::summarize_fleet(recs);
+  EXPECT_TRUE(s.outliers.empty()) << s.table();
+  EXPECT_NE(s.table().find("No flight departs from the others"), std::string::npos);
+}
+
+TEST(FleetSummary, FailedAndIncompleteRecordsAreSkippedAndSmallOrMixedFleetsNoted) {
+  std::vector<nlohmann::json> recs = {record("a", body(1.0), 1e-4), record("b", body(1.01), 1e-4, "FMPC"),
+                                      {{"path", "c"}, {"ok", false}, {"error", "bad"}}};
+  nlohmann::json no_fm = record("d", body(1.0), 1e-4, "FMPC");
+  recs.push_back(no_fm);  // recommends FMPC but has no such estimate
+  recs[1]["estimates"]["FMPC"] = recs[1]["estimates"]["PC"];
+  const quadid::FleetSummary s = quadid::summarize_fleet(recs);
+  EXPECT_EQ(s.flights, 2u);
+  ASSERT_EQ(s.skipped.size(), 2u);
+  EXPECT_EQ(s.skipped[0], "c: not identified");
+  EXPECT_NE(s.skipped[1].find("d: no FMPC estimate"), std::string::npos) << s.skipped[1];
+  const std::string notes = nlohmann::json(s.notes).dump();
+  EXPECT_NE(notes.find("recommended sets differ (FMPC 1, PC 1)"), std::string::npos) << notes;
+  EXPECT_NE(notes.find("2 flights: outliers need 3 or more"), std::string::npos) << notes;
+  EXPECT_TRUE(s.outliers.empty());
+  EXPECT_TRUE(std::isnan(s.critical_t));
+  // One set on every flight: d's LS counts.
+  quadid::FleetSummaryOptions ls;
+  ls.set = "LS";
+  EXPECT_EQ(quadid::summarize_fleet(recs, ls).flights, 3u);
+}
+
+TEST(FleetSummary, BadOptionsNameTheirFlag) {
+  quadid::FleetSummaryOptions o;
+  o.set = "XY";
+  EXPECT_THROW(
+      try { quadid::summarize_fleet({}, o); } catch (const std::invalid_argument& e) {
+        EXPECT_NE(std::string(e.what()).find("--summary-set XY"), std::string::npos) << e.what();
+        throw;
+      },
+      std::invalid_argument);
+  o = {};
+  o.level = 0.0;
+  EXPECT_THROW(quadid::summarize_fleet({}, o), std::invalid_argument);
+}
+
+TEST_F(CliBatch, BadSummaryOptionsFailBeforeAnyLogIsRead) {
+  auto r = run("batch --outlier-level 2 " + path("a.csv"));
+  EXPECT_EQ(r.rc, 1);
+  EXPECT_EQ(r.out, "");
+  EXPECT_NE(r.err.find("--outlier-level 2"), std::string::npos) << r.err;
+  r = run("batch --summary-set best " + path("a.csv"));
+  EXPECT_EQ(r.rc, 1);
+  EXPECT_NE(r.err.find("--summary-set best: expected recommended, LS"), std::string::npos) << r.err;
+}
+
+// The command line end to end: four simulated flights of the QBall, the
+// fourth with 10 % more mass in the plant. The table goes to stderr, the JSON
+// to --summary; the heavy flight is flagged on m and no other flight is.
+TEST_F(CliBatch, ComparesTheFlightsAndFlagsTheHeavyOne) {
+  quadid::write_flight_log(flight(3), path("c.csv"));
+  quadid::SimulationOptions o;
+  o.record_truth = false;
+  o.duration = 12.0;
+  o.sensors.seed = 4;
+  o.plant.m *= 1.1;
+  quadid::write_flight_log(quadid::simulate(quadid::FourierTrajectory::table2(), o).log, path("heavy.csv"));
+  const auto r = run("batch --window " + std::string(kWindow) + " --summary " + path("summary.json") + " " +
+                     path("a.csv") + " " + path("b.csv") + " " + path("c.csv") + " " + path("heavy.csv") + " -o " +
+                     path("out.jsonl"));
+  ASSERT_EQ(r.rc, 0) << r.err;
+  EXPECT_NE(r.err.find("Flights compared: 4 flights, set recommended"), std::string::npos) << r.err;
+  const nlohmann::json s = nlohmann::json::parse(quadid::read_file(path("summary.json")));
+  EXPECT_EQ(s["flights"], 4);
+  ASSERT_EQ(s["outliers"].size(), 1u) << s.dump(1);
+  EXPECT_EQ(s["outliers"][0]["path"], path("heavy.csv"));
+  EXPECT_EQ(s["outliers"][0]["parameter"], "m");
+  EXPECT_NEAR(s["outliers"][0]["value"].get<double>() / s["outliers"][0]["others_mean"].get<double>(), 1.1, 0.01);
 }

@@ -26,6 +26,8 @@ struct BatchArgs {
   std::string out;
   int threads = 0;
   bool quiet = false;
+  std::string summary;  // --summary FILE: the flights compared, as JSON
+  FleetSummaryOptions summary_opt;
   // identify options as typed, by long name (numbers stay text: the library parses them)
   std::map<std::string, std::string> values;
   std::map<std::string, bool> flags;
@@ -47,6 +49,7 @@ void run(const BatchArgs& a) {
   BatchOptions bopt;
   bopt.threads = a.threads;
   bopt.validate();
+  a.summary_opt.validate();  // before any log is read
 
   std::vector<std::string> paths = a.logs;
   if (!a.list.empty()) {
@@ -61,8 +64,14 @@ void run(const BatchArgs& a) {
   // Lines go to stdout as soon as every earlier log is done; with -o they are
   // collected and the file is written once, atomically, at the end.
   std::string collected;
+  std::vector<nlohmann::json> records;  // for the flights' comparison
   const BatchSink sink = [&](std::size_t, const BatchRecord& r) {
-    const std::string line = to_json(r).dump() + "\n";
+    nlohmann::json j = to_json(r);
+    const std::string line = j.dump() + "\n";
+    nlohmann::json kept = nlohmann::json::object();  // what the comparison reads, not the whole result
+    for (const char* key : {"path", "ok", "estimates", "uncertainty", "recommended"})
+      if (j.contains(key)) kept[key] = std::move(j[key]);
+    records.push_back(std::move(kept));
     if (a.out.empty()) {
       std::fputs(line.c_str(), stdout);
       std::fflush(stdout);
@@ -78,6 +87,12 @@ void run(const BatchArgs& a) {
     };
   const BatchSummary s = identify_batch(paths, req, bopt, sink, progress);
   if (!a.out.empty()) write_file_atomic(a.out, collected);
+  const bool table = !a.quiet && s.ok >= 2;
+  if (table || !a.summary.empty()) {
+    const FleetSummary fs = summarize_fleet(records, a.summary_opt);
+    if (!a.summary.empty()) write_file_atomic(a.summary, to_json(fs).dump(2) + "\n");
+    if (table) fmt::print(stderr, "{}", fs.table());
+  }
   if (!a.quiet)
     fmt::print(stderr, "quadid batch: {} logs, {} ok, {} failed in {:.2f} s ({:.3g} logs/s, {} threads){}\n", s.total,
                s.ok, s.failed, s.seconds, s.seconds > 0 ? static_cast<double>(s.total) / s.seconds : 0.0, s.threads,
@@ -98,6 +113,10 @@ void register_batch(CLI::App& app) {
       "others go on). Progress on stderr.\n"
       "Exit status: 0 every log identified; 2 some logs failed (all lines written, theirs say why);\n"
       "1 nothing ran (bad option, unreadable list, no logs).\n\n"
+      "With two logs or more identified, a table on stderr (and, with --summary FILE, as JSON) compares\n"
+      "the flights: each parameter's mean and standard deviation over the flights beside the flights'\n"
+      "own standard errors, and the flights that depart from the others (a payload, a damaged vehicle,\n"
+      "a log with a wrong column): a leave-one-out t test, at most --outlier-level chance of any false flag.\n\n"
       "Examples:\n"
       "  quadid batch logs/*.csv > results.jsonl\n"
       "  find logs -name '*.csv' | quadid batch --list - --threads 2 --cutoff 3 -o results.jsonl\n"
@@ -106,7 +125,17 @@ void register_batch(CLI::App& app) {
   sub->add_option("--list", a->list, "file with one log path per line ('-' = stdin; '#' comments)");
   sub->add_option("-o,--out", a->out, "write the JSON Lines here (atomically, at the end) instead of stdout");
   sub->add_option("--threads", a->threads, "worker threads; 0 = one per core")->capture_default_str();
-  sub->add_flag("-q,--quiet", a->quiet, "no progress on stderr");
+  sub->add_flag("-q,--quiet", a->quiet, "no progress and no comparison of the flights on stderr");
+  sub->add_option("--summary", a->summary,
+                  "write the comparison of the flights here as JSON (atomically): per parameter median, spread, "
+                  "standard errors; the flights that depart from the others");
+  sub->add_option("--summary-set", a->summary_opt.set,
+                  "the set compared across the flights: recommended (each flight's) or LS, GD, FMLS, FMGD, PC, FMPC")
+      ->capture_default_str();
+  sub->add_option("--outlier-level", a->summary_opt.level,
+                  "the chance that the comparison flags any flight when all are of one vehicle (a flight is flagged "
+                  "on a parameter when its leave-one-out t against the others is beyond the critical value)")
+      ->capture_default_str();
   for (const auto& spec : command_option_specs("identify")) {
     const std::string flag = "--" + spec.name;
     switch (spec.kind) {

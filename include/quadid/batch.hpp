@@ -10,6 +10,7 @@
 
 #include <cstddef>
 #include <functional>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -64,5 +65,68 @@ BatchSummary identify_batch(const std::vector<std::string>& paths, const Identif
 /// A list of logs: one path per line; blank lines and lines starting with '#'
 /// are skipped, surrounding spaces trimmed. `source` names the list in messages.
 std::vector<std::string> parse_path_list(const std::string& text, const std::string& source);
+
+}  // namespace quadid
+
+namespace quadid {
+
+/// Options of summarize_fleet (docs/fleet.md, "Comparing the flights").
+struct FleetSummaryOptions {
+  /// The set compared across the flights: "recommended" (each flight's
+  /// recommended set) or one of LS, GD, FMLS, FMGD, PC, FMPC.
+  std::string set = "recommended";
+  /// The probability that the table flags any flight when every flight is of
+  /// the same vehicle (normal scatter): 1 %. Each flight is compared with the
+  /// others by a leave-one-out t statistic; the critical value is Bonferroni's
+  /// over the flights x the parameters that vary.
+  double level = 0.01;
+  void validate() const;  // throws std::invalid_argument naming --summary-set / --outlier-level
+};
+
+/// One parameter over the flights that have it.
+struct FleetParameter {
+  std::string name;         // m, Ixx, Ixy, Ixz, Iyy, Iyz, Izz
+  std::size_t flights = 0;  // flights with a value
+  double mean = 0.0;        // kg or kg m^2
+  double std_dev = 0.0;     // over the flights (n - 1 in the denominator); NaN for one flight
+  double min = 0.0, max = 0.0;
+  /// The flights' own (HAC) standard errors, median; NaN when none has one
+  /// (only LS and FMLS have them).
+  double median_std_error = 0.0;
+  bool fixed = false;       // every flight has the same value (a weighed mass, --known-mass)
+};
+
+/// A flight whose value departs from the others'.
+struct FleetOutlier {
+  std::string path;
+  std::string parameter;
+  double value = 0.0;
+  double others_mean = 0.0;  // the mean of the other flights
+  /// |value - others_mean| / (sd_others sqrt(1 + 1/(n-1))): Student's t with
+  /// n - 2 degrees of freedom when the flights scatter normally about one
+  /// value; infinite when the others agree exactly.
+  double t = 0.0;
+};
+
+struct FleetSummary {
+  std::string set;                   // as asked ("recommended" or a set name)
+  double level = 0.0;                // FleetSummaryOptions::level
+  std::size_t flights = 0;           // records that were identified and have the set
+  double critical_t = std::numeric_limits<double>::quiet_NaN();  // flag when t exceeds it (NaN: no test)
+  std::vector<std::string> skipped;  // "path: why" for records left out
+  std::vector<FleetParameter> parameters;  // m, Ixx, ..., Izz
+  std::vector<FleetOutlier> outliers;
+  std::vector<std::string> notes;  // what a reader should know (too few flights, spread beyond the standard errors)
+  std::string table() const;       // a table a person reads
+};
+nlohmann::json to_json(const FleetSummary& s);
+
+/// Compares the flights of a batch: for each parameter its median and spread
+/// over the flights, the flights' own standard errors beside it, and the
+/// flights that depart from the others. `records` are batch records as
+/// to_json(BatchRecord) writes them (or the Python fleet runner's dicts);
+/// failed records and those without the set are listed in `skipped`. Outliers
+/// need 3 flights or more (the others' mean and spread need 2).
+FleetSummary summarize_fleet(const std::vector<nlohmann::json>& records, const FleetSummaryOptions& opt = {});
 
 }  // namespace quadid

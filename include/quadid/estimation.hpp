@@ -234,6 +234,10 @@ void attach_uncertainty(LeastSquaresSolution& sol, const LeastSquaresUncertainty
 /// Student-t quantile (Cornish-Fisher expansion, A&S 26.7.5: error < 1e-3 for
 /// nu >= 5, exact normal quantile for infinite nu). 0 < p < 1, nu >= 1.
 double student_t_quantile(double p, double nu);
+/// P(|T| <= t) for Student's t with nu >= 1 degrees of freedom: Abramowitz &
+/// Stegun 26.7.3-4, a finite sum, exact for integer nu at any t (unlike
+/// student_t_quantile's expansion, which is for nu of tens and more).
+double student_t_two_sided_cdf(double t, int nu);
 
 // --- Physical consistency (docs/uncertainty.md) -----------------------------------
 

@@ -9,6 +9,8 @@ Each record is one line of `quadid batch`: {"path", "ok": True, ...the dict of
 `quadid identify --json`...} or {"path", "ok": False, "error": "..."} for a
 log that failed (bad file, bad data, a worker that died); the others go on.
 Records come back in the order of `paths`.
+
+    summary = quadid.fleet.summarize(records)   # the flights compared, as `quadid batch --summary`
 """
 
 from __future__ import annotations
@@ -18,7 +20,7 @@ import functools
 import os
 from typing import Any, Iterable
 
-__all__ = ["identify_one", "identify_many"]
+__all__ = ["identify_one", "identify_many", "summarize"]
 
 
 def identify_one(path, options: dict | None = None, keep_evolution: bool = False) -> dict:
@@ -86,3 +88,22 @@ def identify_many(
             except Exception as e:  # noqa: BLE001 - a crashed worker process (BrokenProcessPool)
                 out.append(_failure(p, e))
         return out
+
+
+def summarize(records: Iterable[dict], set: str = "recommended", level: float = 0.01) -> dict:
+    """Compare the flights of `records` (identify_many's, or `quadid batch`'s lines read back).
+
+    The dict `quadid batch --summary FILE` writes: per parameter the mean and
+    standard deviation over the flights beside their own standard errors, and
+    the flights that depart from the others (leave-one-out t test; `level` is
+    the chance of any false flag when all are of one vehicle). set:
+    "recommended" (each flight's) or LS, GD, FMLS, FMGD, PC, FMPC. A failed
+    record is listed under "skipped". A bad set or level raises ValueError.
+    """
+    import json
+
+    import quadid
+
+    keys = ("path", "ok", "estimates", "uncertainty", "recommended")  # what the comparison reads
+    kept = [{k: r[k] for k in keys if k in r} for r in records]
+    return quadid._quadid.summarize_fleet(json.dumps(kept), set, float(level))

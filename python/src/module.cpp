@@ -301,4 +301,14 @@ PYBIND11_MODULE(_quadid, m) {
       [](const py::dict& opts) { (void)quadid::identify_options_from_json(options_json(opts)); },
       py::arg("options"), "raises ValueError for an option identify would reject");
   m.def("normalize_option_key", &quadid::normalize_option_key, py::arg("key"));
+  m.def(
+      "summarize_fleet",
+      [](const std::string& records_json, const std::string& set, double level) {
+        quadid::FleetSummaryOptions opt;
+        opt.set = set;
+        opt.level = level;
+        const json records = json::parse(records_json);  // written by quadid.fleet.summarize (json.dumps)
+        return to_py(quadid::to_json(quadid::summarize_fleet(records.get<std::vector<json>>(), opt)));
+      },
+      py::arg("records_json"), py::arg("set"), py::arg("level"));
 }

@@ -46,3 +46,24 @@ def test_identify_many_on_local_processes(fleet):
 def test_a_bad_option_fails_at_once_not_per_log(logs):
     with pytest.raises(ValueError, match="cutof"):
         quadid.fleet.identify_many(logs, cutof=3)
+
+
+def test_summarize_equals_the_batch_summary(fleet, tmp_path):
+    """quadid.fleet.summarize on identify_many's records == `quadid batch --summary` on the same logs."""
+    import json
+
+    from conftest import run_cli
+
+    paths, _ = fleet
+    records = quadid.fleet.identify_many(paths, max_workers=2, window=WINDOW)
+    out = tmp_path / "summary.json"
+    run_cli("batch", "-q", "--window", WINDOW, "--summary-set", "LS", "--summary", str(out),
+            *[str(p) for p in paths], check=False)  # exit 2: the corrupt log
+    cli = json.loads(out.read_text())
+    py = quadid.fleet.summarize(records, set="LS")
+    assert py["flights"] == 3 and len(py["skipped"]) == 1 and "corrupt.csv" in py["skipped"][0]
+    assert_same(py, cli, 1e-12)
+    with pytest.raises(ValueError, match="--summary-set"):
+        quadid.fleet.summarize(records, set="XY")
+    with pytest.raises(ValueError, match="--outlier-level"):
+        quadid.fleet.summarize(records, level=1.5)

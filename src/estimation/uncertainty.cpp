@@ -238,6 +238,30 @@ double student_t_quantile(double p, double nu) {
   return z + g1 / nu + g2 / (nu * nu) + g3 / (nu * nu * nu) + g4 / (nu * nu * nu * nu);
 }
 
+double student_t_two_sided_cdf(double t, int nu) {
+  if (nu < 1) throw std::invalid_argument(fmt::format("student_t_two_sided_cdf: nu={} must be >= 1", nu));
+  if (std::isnan(t)) return kNaN;
+  if (std::isinf(t)) return 1.0;
+  // Abramowitz & Stegun 26.7.3-26.7.4: A(t|nu) = P(|T| <= t) as a finite sum
+  // in powers of cos(theta), theta = atan(|t| / sqrt(nu)).
+  const double th = std::atan(std::abs(t) / std::sqrt(static_cast<double>(nu)));
+  const double c2 = std::cos(th) * std::cos(th), sn = std::sin(th);
+  double sum = 1.0, term = 1.0;
+  if (nu % 2 == 0) {
+    for (int k = 2; k <= nu - 2; k += 2) {  // 1 + (1/2) c^2 + (1 3)/(2 4) c^4 + ...
+      term *= c2 * static_cast<double>(k - 1) / static_cast<double>(k);
+      sum += term;
+    }
+    return sn * sum;
+  }
+  if (nu == 1) return 2.0 * th / std::numbers::pi;
+  for (int k = 3; k <= nu - 2; k += 2) {  // 1 + (2/3) c^2 + (2 4)/(3 5) c^4 + ...
+    term *= c2 * static_cast<double>(k - 1) / static_cast<double>(k);
+    sum += term;
+  }
+  return 2.0 / std::numbers::pi * (th + sn * std::cos(th) * sum);
+}
+
 InfluenceAccumulator::InfluenceAccumulator(const LeastSquaresSolution& sol)
     : theta_(sol.theta), pinv_(sol.normal_pinv) {}
 
