@@ -127,8 +127,8 @@ void register_batch(CLI::App& app) {
   sub->add_option("--threads", a->threads, "worker threads; 0 = one per core")->capture_default_str();
   sub->add_flag("-q,--quiet", a->quiet, "no progress and no comparison of the flights on stderr");
   sub->add_option("--summary", a->summary,
-                  "write the comparison of the flights here as JSON (atomically): per parameter median, spread, "
-                  "standard errors; the flights that depart from the others");
+                  "write the comparison of the flights here as JSON (atomically): per parameter mean, standard "
+                  "deviation, standard errors; the flights that depart from the others");
   sub->add_option("--summary-set", a->summary_opt.set,
                   "the set compared across the flights: recommended (each flight's) or LS, GD, FMLS, FMGD, PC, FMPC")
       ->capture_default_str();
