@@ -31,9 +31,10 @@ constexpr double kSpreadNoteRatio = 3.0;
 const char* const kSets[] = {"LS", "GD", "FMLS", "FMGD", "PC", "FMPC"};
 
 // Only the least-squares sets have standard errors (HAC). LS's do not stand
-// for PC's: where LS lies far outside the physical sets, the projection moves
-// along directions the data barely constrain, and on the virtual QBall 2 PC
-// scatters over noise seeds 15-50 times LS's standard errors (docs/fleet.md).
+// for PC's: where LS lies far outside the physical sets, where the projection
+// lands depends on its metric, which each flight's noise changes; on the
+// virtual QBall 2 PC scatters over noise seeds 15-23 times LS's standard
+// errors (docs/fleet.md).
 bool has_std_errors(const std::string& set) { return set == "LS" || set == "FMLS"; }
 
 double number_or_nan(const nlohmann::json& j) { return j.is_number() ? j.get<double>() : kNaN; }
