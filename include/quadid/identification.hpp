@@ -31,6 +31,51 @@ struct TimeWindow {
   std::string to_string() const;
 };
 
+// --- The part of a log in the air ------------------------------------------
+
+/// Options of airborne_part (docs/real-flights.md, "On the ground").
+struct AirborneOptions {
+  /// In the air while the thrust, averaged over `smoothing_s`, is at least this
+  /// fraction of the hover thrust. The hover thrust is the flight's own (the
+  /// median of the averaged thrust over the samples above half its 95th
+  /// percentile): no mass is needed, so a wrong reference set cannot move it.
+  /// On the ground the motors are stopped or idle (PX4: 10-30 % of hover).
+  double thrust_fraction = 0.6;
+  double smoothing_s = 0.5;
+  /// Left out after take-off and before touchdown: the climb's transient and
+  /// the ground effect.
+  double margin_s = 1.0;
+  /// Low thrust at an end of the log shorter than this is not the ground.
+  double min_ground_s = 0.5;
+  void validate() const;  // std::invalid_argument naming the field
+};
+
+/// What airborne_part found.
+struct AirbornePart {
+  TimeWindow window;           // seconds from the log's start: in the air, less the margins
+  double ground_before = 0.0;  // s of low thrust before take-off (0: none at the start)
+  double ground_after = 0.0;   // s of low thrust after touchdown (0: none at the end)
+  double hover_thrust = 0.0;   // N
+  double threshold = 0.0;      // N: thrust_fraction x hover_thrust
+  /// Low-thrust stretches between take-off and touchdown longer than
+  /// min_ground_s: (start, duration), s (a landing and a second take-off?).
+  std::vector<std::pair<double, double>> drops;
+  bool trimmed() const { return ground_before > 0.0 || ground_after > 0.0; }
+  /// "on the ground (thrust below 0.204 N, 60 % of the hover thrust) for the first 6 s and the last 3.1 s"
+  std::string describe() const;
+};
+
+/// The part of a flight log in the air, from its thrust column Fz (a rotor
+/// model's, or the log's own). Before take-off and after landing the thrust is
+/// below the weight and the ground carries the rest, a force the rigid-body
+/// model has no term for: left in, those samples pull the mass (or the thrust
+/// scale) down by their share of the log. nullopt when the log has no Fz or
+/// no thrust at all.
+std::optional<AirbornePart> airborne_part(const FlightLog& log, const AirborneOptions& opt = {});
+
+/// The rows of `log` whose time lies in `w` (seconds from the log's start).
+FlightLog rows_in(const FlightLog& log, const TimeWindow& w);
+
 // --- Processing (section II-C) -----------------------------------------------
 
 struct ProcessingOptions {

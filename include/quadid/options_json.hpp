@@ -178,6 +178,10 @@ struct ValidateRequest {
   /// log's rotor columns against the file's arrangement) is a warning, not an
   /// error.
   bool ignore_input_errors = false;
+  /// --error-window given: the tables cover it. Not given: the whole log, or
+  /// its part in the air when the vehicle sits on the ground at an end
+  /// (airborne_part).
+  bool error_window_given = false;
   PredictionValidationOptions prediction;
   SimulationComparisonOptions simulation;
   CsvReadOptions csv;

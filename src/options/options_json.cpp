@@ -638,6 +638,46 @@ std::vector<std::string> source_rate_findings(const logs::ImportReport& report,
   return out;
 }
 
+namespace {
+
+// Keeps the estimation window in the air (airborne_part): a default window is
+// cut to the airborne part, a given one that reaches the ground is warned
+// about, and a low-thrust stretch inside the flight is named.
+void keep_to_the_air(const std::optional<AirbornePart>& air, bool given, TimeWindow& window,
+                     std::vector<std::string>& warnings) {
+  if (!air) return;
+  for (const auto& [at, len] : air->drops)
+    warnings.push_back(fmt::format(
+        "window: the thrust stays below {:.3g} N ({:.0f} % of the hover thrust) for {:.3g} s from {:.4g} s: a landing? "
+        "The ground's force is not in the model: identify a window without it (--window)",
+        air->threshold, 100.0 * air->threshold / air->hover_thrust, len, at));
+  if (!air->trimmed()) return;
+  if (given) {
+    const bool early = air->ground_before > 0.0 && window.t0 < air->ground_before;
+    const bool late = air->ground_after > 0.0 && window.t1 > air->window.t1;
+    if (early || late)
+      warnings.push_back(fmt::format("window {}: the log is {}: the window reaches the ground, whose force the model "
+                                     "lacks; the default window is {}",
+                                     window.to_string(), air->describe(), air->window.to_string()));
+    return;
+  }
+  TimeWindow w = window;
+  w.t0 = std::max(w.t0, air->window.t0);
+  w.t1 = std::min(w.t1, air->window.t1);
+  if (w.t0 == window.t0 && w.t1 == window.t1) return;  // already clear of the ground
+  if (!(w.t1 > w.t0))
+    throw InputError(fmt::format("the log is {}: no time in the air is left clear of take-off and landing", air->describe()));
+  const char* ends = air->ground_before > 0.0 && air->ground_after > 0.0 ? "take-off and touchdown"
+                     : air->ground_before > 0.0                          ? "take-off"
+                                                                         : "touchdown";
+  warnings.push_back(fmt::format("window {}: the log is {}; the window keeps {:g} s clear of {} (--window T0:T1 to "
+                                 "choose)",
+                                 w.to_string(), air->describe(), AirborneOptions{}.margin_s, ends));
+  window = w;
+}
+
+}  // namespace
+
 TimeWindow fit_paper_window(const TimeWindow& paper, double duration, double period, std::string* note) {
   if (!std::isfinite(paper.t1) || paper.t1 <= duration + 1.5 * period) return paper;
   const bool keep_start = duration - paper.t0 >= paper.t0;
@@ -689,6 +729,7 @@ IdentificationInput prepare_identification(const std::string& path, const Identi
       in.options.window = fit_paper_window(in.options.window, in.log, &note);
       if (!note.empty()) in.warnings.push_back(note);
     }
+    keep_to_the_air(airborne_part(in.log), req.real.window_given, in.options.window, in.warnings);
     return in;
   }
   in.wrench_source = from_log ? req.vehicle->source : fmt::format("the rotor model of vehicle {}", req.vehicle->source);
@@ -703,12 +744,25 @@ IdentificationInput prepare_identification(const std::string& path, const Identi
   logs::ImportReport report;
   const FlightLog raw = logs::load_any_log(path, load, &report);
   try {
+    // The airborne part, from the rotor model's thrust (a log whose rotor
+    // columns the model refuses fails below, with the model's message).
+    std::optional<AirbornePart> air;
+    std::optional<FlightLog> wrench;
+    try {
+      wrench = with_rotor_wrench(raw, rotors);
+      air = airborne_part(*wrench);
+    } catch (const InputError&) {
+    }
     if (from_log) {
-      // The reference set from the log itself (rough_nominal), then the defaults a --vehicle gets.
-      req.vehicle->nominal = rough_nominal(with_rotor_wrench(raw, rotors), rotors, req.options.processing.g);
+      // The reference set from the log itself (rough_nominal: the mean thrust
+      // in the air), then the defaults a --vehicle gets.
+      if (!wrench) wrench = with_rotor_wrench(raw, rotors);
+      req.vehicle->nominal = rough_nominal(air && air->trimmed() ? rows_in(*wrench, air->window) : *wrench, rotors,
+                                           req.options.processing.g);
       apply_real_flight(req, req.real);
     }
     in.options = req.options;
+    keep_to_the_air(air, req.real.window_given, in.options.window, in.warnings);
     // An autopilot log's topics at their own rates: one too slow for the
     // rows' cutoffs is an input error (the checks' rule: --ignore-input-errors
     // makes it a warning).
@@ -905,8 +959,10 @@ ValidateRequest validate_options_from_json(const nlohmann::json& j) {
   req.trajectory = r.string("trajectory").value_or("");
   req.simulation.window =
       r.with_option("window", [&] { return TimeWindow::parse(r.string("window").value_or("10:50")); });
-  if (const auto ew = r.string("error-window"))
+  if (const auto ew = r.string("error-window")) {
     req.prediction.window = r.with_option("error-window", [&] { return TimeWindow::parse(*ew); });
+    req.error_window_given = true;
+  }
   req.no_simulation = r.flag("no-simulation");
   req.simulation.with_noise = r.flag("with-noise");
   req.ignore_input_errors = r.flag("ignore-input-errors");

@@ -200,6 +200,14 @@ LogValidation validate_log(const FlightLog& log, const ValidateRequest& req,
       line += fmt::format("; not {} (the identification flight's own: a trim, that day's wind)", fmt::join(own, ", "));
     say(line);
   }
+  // On the ground at an end of the log the ground carries part of the weight,
+  // which no set's model holds: the tables cover the part in the air.
+  if (!req.error_window_given)
+    if (const auto air = airborne_part(log); air && air->trimmed()) {
+      popt.window = air->window;
+      say(fmt::format("prediction error over {}: the log is {} (--error-window T0:T1 to choose)",
+                      air->window.to_string(), air->describe()));
+    }
   v.prediction = validate_prediction(log, sets, reference, popt);
   if (req.vehicle) judge_with_timing(log, sets, reference, popt, req.vehicle->rotors, v.prediction, say);
   return v;
