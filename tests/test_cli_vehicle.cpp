@@ -387,3 +387,58 @@ TEST_F(CliVehicle, ValidateWithAVehicleJudgesSetsOnAHeldOutFlight) {
   EXPECT_NE(nv.rc, 0);
   EXPECT_NE(nv.err.find("Fz"), std::string::npos) << nv.err;
 }
+
+// A log from arming to disarming: the crazyflie21's simulated flight (rotor
+// columns only) with 6 s on the ground before it (2 s stopped, 4 s at an idle
+// of 6000 rpm, 9 % of the hover thrust) and 5 s after it at idle. On the
+// ground z'' = 0 while the thrust is below the weight: the ground carries the
+// rest. Identified over the whole log, LS's mass is 22 % low (measured: 0.0269
+// against 0.0347 kg); by default the window is the part in the air, 1 s clear
+// of take-off and touchdown, and the mass is within 0.5 % (the simulated
+// flight alone gives 0.0347 to 4 digits), with a warning that says why. A
+// window the user gives that reaches the ground is kept, with a warning;
+// validate's tables cover the part in the air.
+TEST_F(CliVehicle, GroundAtTheEndsOfTheLogIsLeftOutOfTheWindow) {
+  const CliRun sim = run("simulate --vehicle crazyflie21 --trajectory table2 --duration 30 -o " + path("sim.csv"));
+  ASSERT_EQ(sim.rc, 0) << sim.err;
+  quadid::CsvReadOptions csv;
+  csv.required = {"t"};
+  const quadid::FlightLog flight = drop_wrench(quadid::read_flight_log(path("sim.csv"), csv));
+  const double T = flight.data(1, 0) - flight.data(0, 0);
+  const auto before = static_cast<Eigen::Index>(std::llround(6.0 / T)), after = static_cast<Eigen::Index>(std::llround(5.0 / T));
+  quadid::FlightLog log;
+  log.columns = flight.columns;
+  log.data.resize(before + flight.rows() + after, flight.data.cols());
+  auto ground = [&](Eigen::Index row, const Eigen::RowVectorXd& like, double rpm) {
+    log.data.row(row) = like;
+    for (const char* c : {"phi", "theta", "p", "q", "r"}) log.data(row, log.find(c)) = 0.0;
+    for (int i = 1; i <= 4; ++i) log.data(row, log.find(fmt::format("rpm.m{}", i))) = rpm;
+  };
+  for (Eigen::Index k = 0; k < before; ++k) ground(k, flight.data.row(0), k * T < 2.0 ? 0.0 : 6000.0);
+  log.data.middleRows(before, flight.rows()) = flight.data;
+  for (Eigen::Index k = 0; k < after; ++k) ground(before + flight.rows() + k, flight.data.row(flight.rows() - 1), 6000.0);
+  for (Eigen::Index k = 0; k < log.rows(); ++k) log.data(k, 0) = static_cast<double>(k) * T;
+  quadid::write_flight_log(log, path("armed.csv"));
+
+  const CliRun all = run("identify " + path("armed.csv") + " --vehicle crazyflie21 --window 0: --json");
+  ASSERT_EQ(all.rc, 0) << all.err;
+  const double m_all = nlohmann::json::parse(all.out)["estimates"]["LS"]["m"].get<double>();
+  EXPECT_LT(m_all, 0.0347 * 0.9) << "the ground's force no longer biases the whole log: the test shows nothing";
+  EXPECT_NE(all.err.find("window 0 s-end: the log is on the ground"), std::string::npos) << all.err;
+  EXPECT_NE(all.err.find("the window reaches the ground"), std::string::npos) << all.err;
+
+  const CliRun r = run("identify " + path("armed.csv") + " --vehicle crazyflie21 --json -o " + path("r.json"));
+  ASSERT_EQ(r.rc, 0) << r.err;
+  const nlohmann::json j = nlohmann::json::parse(r.out);
+  EXPECT_NEAR(j["estimates"]["LS"]["m"].get<double>(), 0.0347, 0.005 * 0.0347) << r.err;
+  EXPECT_NEAR(j["window"]["t0"].get<double>(), 7.0, 0.3);  // 6 s on the ground, 1 s margin
+  EXPECT_NEAR(j["window"]["t1"].get<double>(), 6.0 + 30.0 - 1.0, 0.3);
+  EXPECT_NE(r.err.find("the log is on the ground (thrust below"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("for the first 6"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("input check saturation"), std::string::npos) << "the checks read the part in the air\n" << r.err;
+
+  const CliRun v = run("validate --log " + path("armed.csv") + " --vehicle crazyflie21 --params " + path("r.json") +
+                       " --json");
+  ASSERT_EQ(v.rc, 0) << v.err;
+  EXPECT_NE(v.err.find("prediction error over 7"), std::string::npos) << v.err;
+}

@@ -18,6 +18,7 @@
 #include <fmt/format.h>
 
 #include <cmath>
+#include <functional>
 #include <random>
 
 using namespace quadid;
@@ -648,4 +649,87 @@ TEST(Identification, WorksOnAThirtyGramQuadrotor) {
   expect_ls_accuracy(r, micro, 0.005, 0.03, "30 g quad");
   EXPECT_NEAR(r.estimate("LS").theta(2), micro.I(0, 1), 1e-7);  // Ixy = -1e-6 (measured within 1e-9)
   std::cout << "30 g quadrotor, default noise:\n" << error_table(r, micro);
+}
+
+namespace {
+
+// A thrust log at 100 Hz: Fz(t) from `f`, nothing else but t.
+quadid::FlightLog thrust_log(double duration, const std::function<double(double)>& f) {
+  quadid::FlightLog log;
+  log.columns = {"t", "Fz"};
+  const auto n = static_cast<Eigen::Index>(std::llround(duration * 100.0)) + 1;
+  log.data.resize(n, 2);
+  for (Eigen::Index k = 0; k < n; ++k) {
+    const double t = 0.01 * static_cast<double>(k);
+    log.data(k, 0) = t;
+    log.data(k, 1) = f(t);
+  }
+  return log;
+}
+
+}  // namespace
+
+// Arming to disarming: stopped 2 s, idle (20 % of hover) 3 s, a 1 s ramp to
+// hover, 40 s of flight whose thrust swings +-30 % (and dips to 45 % for
+// 0.3 s, a quick descent, shorter than the 0.5 s mean), a 1 s ramp down,
+// idle 4 s. The hover thrust is the flight's median (1.0 N within 2 %: the
+// swing is symmetric, the ramps pull it down a little); the 0.5 s mean of a
+// ramp is the ramp, so it crosses the threshold (60 % of the hover thrust)
+// at 5 + (threshold - 0.2) / 0.8 s and as long before 51 - 4 - 1 s on the
+// way down (to the 0.01 s sample: 0.011 s); the window is 1 s inside.
+TEST(Airborne, GroundAtBothEndsFromTheThrustAlone) {
+  const auto f = [](double t) {
+    if (t < 2.0) return 0.0;
+    if (t < 5.0) return 0.2;
+    if (t < 6.0) return 0.2 + 0.8 * (t - 5.0);
+    if (t < 46.0) return (t > 20.0 && t < 20.3) ? 0.45 : 1.0 + 0.3 * std::sin(2.0 * M_PI * 0.7 * t);
+    if (t < 47.0) return 1.0 - 0.8 * (t - 46.0);
+    return 0.2;
+  };
+  const auto air = quadid::airborne_part(thrust_log(51.0, f));
+  ASSERT_TRUE(air.has_value());
+  EXPECT_NEAR(air->hover_thrust, 1.0, 0.02);
+  EXPECT_NEAR(air->threshold, 0.6 * air->hover_thrust, 1e-15);
+  const double into_ramp = (air->threshold - 0.2) / 0.8;
+  EXPECT_NEAR(air->ground_before, 5.0 + into_ramp, 0.011);
+  EXPECT_NEAR(air->ground_after, 51.0 - (47.0 - into_ramp), 0.011);
+  EXPECT_NEAR(air->window.t0, air->ground_before + 1.0, 1e-12);
+  EXPECT_NEAR(air->window.t1, 51.0 - air->ground_after - 1.0, 1e-12);
+  EXPECT_TRUE(air->drops.empty()) << air->drops.front().first;  // the 0.3 s dip is no landing
+  EXPECT_NE(air->describe().find(fmt::format("for the first {:.3g} s and the last {:.3g} s", air->ground_before,
+                                              air->ground_after)),
+            std::string::npos)
+      << air->describe();
+  // The rows of the window, by time.
+  const quadid::FlightLog in = quadid::rows_in(thrust_log(51.0, f), air->window);
+  EXPECT_GE(in.data(0, 0), air->window.t0);
+  EXPECT_LE(in.data(in.rows() - 1, 0), air->window.t1);
+  EXPECT_LT(in.data(0, 0) - air->window.t0, 0.01 + 1e-12);
+}
+
+// A flight that starts in the air (a simulator's) is left whole; a 2 s stretch
+// at 30 % of hover inside the flight (a landing and a second take-off) is named.
+TEST(Airborne, AFlightWithoutGroundIsLeftWholeAndALandingInsideIsNamed) {
+  const auto hover = quadid::airborne_part(thrust_log(30.0, [](double t) { return 1.0 + 0.2 * std::sin(t); }));
+  ASSERT_TRUE(hover.has_value());
+  EXPECT_FALSE(hover->trimmed());
+  EXPECT_EQ(hover->window.t0, 0.0);
+  EXPECT_TRUE(std::isinf(hover->window.t1));
+  EXPECT_TRUE(hover->drops.empty());
+  const auto landed =
+      quadid::airborne_part(thrust_log(30.0, [](double t) { return (t > 12.0 && t < 14.0) ? 0.3 : 1.0; }));
+  ASSERT_TRUE(landed.has_value());
+  EXPECT_FALSE(landed->trimmed());
+  ASSERT_EQ(landed->drops.size(), 1u);
+  // The 0.5 s mean falls below 0.6 when 0.4 / 0.7 of its window is in the
+  // stretch: at 11.75 + 0.5 x 0.571 = 12.036 s, and rises again as long
+  // before 14.25 s (duration 1.929 s). Tolerance: the mean is over 51
+  // samples, each 1/51 of it, so it crosses up to 0.02 s late at each end.
+  EXPECT_NEAR(landed->drops[0].first, 11.75 + 0.5 * 0.4 / 0.7, 0.02);
+  EXPECT_NEAR(landed->drops[0].second, 2.5 - 2.0 * 0.5 * 0.4 / 0.7, 0.04);
+  // No thrust at all (a log from the bench): nothing to find.
+  EXPECT_FALSE(quadid::airborne_part(thrust_log(10.0, [](double) { return 0.0; })).has_value());
+  quadid::AirborneOptions bad;
+  bad.thrust_fraction = 1.5;
+  EXPECT_THROW(quadid::airborne_part(thrust_log(10.0, [](double) { return 1.0; }), bad), std::invalid_argument);
 }
