@@ -65,8 +65,10 @@ const std::vector<OptionSpec>& identify_specs() {
       {
           {"window", K::String,
            "estimation window T0:T1, seconds from the log's start (default 10:50; on a shorter log 10 s to its end, "
-           "all of it under 20 s; with a vehicle the whole log)"},
-          {"error-window", K::String, "window of the prediction-error tables (default: the whole log)"},
+           "all of it under 20 s; with a vehicle the whole log; either kept to the part in the air when the log has "
+           "the vehicle on the ground at an end)"},
+          {"error-window", K::String,
+           "window of the prediction-error tables (default: the whole log, or its part in the air)"},
           {"sigma", K::Number, "gradient-descent gain of eq. (41) with gd-gain paper (default 30)"},
           {"gd-gain", K::String, "auto (normalized with a vehicle, else paper), paper (sigma) or normalized (gd-rate)"},
           {"gd-rate", K::Number, "normalized gradient descent: rate of a fully excited direction, 1/s (default 0.5)"},
@@ -168,7 +170,9 @@ const std::vector<OptionSpec>& validate_specs() {
            "comparison"},
           {"trajectory", K::String, "reference to re-fly (default: the one the log records)"},
           {"window", K::String, "window of the simulation comparison (default 10:50)"},
-          {"error-window", K::String, "window of the prediction error (default: the whole log)"},
+          {"error-window", K::String,
+           "window of the prediction error (default: the whole log, or its part in the air when the vehicle sits on "
+           "the ground at an end)"},
           {"no-simulation", K::Flag, "skip the simulation comparison"},
           {"with-noise", K::Flag, "re-fly with the log's sensor noise and seed"},
           {"ignore-input-errors", K::Flag,
@@ -642,10 +646,14 @@ namespace {
 
 // Keeps the estimation window in the air (airborne_part): a default window is
 // cut to the airborne part, a given one that reaches the ground is warned
-// about, and a low-thrust stretch inside the flight is named.
-void keep_to_the_air(const std::optional<AirbornePart>& air, bool given, TimeWindow& window,
+// about, and a low-thrust stretch inside the flight is named. A default
+// error window (Tables 5-6) is the airborne part too.
+void keep_to_the_air(const std::optional<AirbornePart>& air, bool given, IdentificationOptions& opt,
                      std::vector<std::string>& warnings) {
   if (!air) return;
+  // Tables 5-6 too: the ground's force is in no set's model.
+  if (air->trimmed() && !opt.error_window) opt.error_window = air->window;
+  TimeWindow& window = opt.window;
   for (const auto& [at, len] : air->drops)
     warnings.push_back(fmt::format(
         "window: the thrust stays below {:.3g} N ({:.0f} % of the hover thrust) for {:.3g} s from {:.4g} s: a landing? "
@@ -729,7 +737,7 @@ IdentificationInput prepare_identification(const std::string& path, const Identi
       in.options.window = fit_paper_window(in.options.window, in.log, &note);
       if (!note.empty()) in.warnings.push_back(note);
     }
-    keep_to_the_air(airborne_part(in.log), req.real.window_given, in.options.window, in.warnings);
+    keep_to_the_air(airborne_part(in.log), req.real.window_given, in.options, in.warnings);
     return in;
   }
   in.wrench_source = from_log ? req.vehicle->source : fmt::format("the rotor model of vehicle {}", req.vehicle->source);
@@ -762,7 +770,7 @@ IdentificationInput prepare_identification(const std::string& path, const Identi
       apply_real_flight(req, req.real);
     }
     in.options = req.options;
-    keep_to_the_air(air, req.real.window_given, in.options.window, in.warnings);
+    keep_to_the_air(air, req.real.window_given, in.options, in.warnings);
     // An autopilot log's topics at their own rates: one too slow for the
     // rows' cutoffs is an input error (the checks' rule: --ignore-input-errors
     // makes it a warning).
