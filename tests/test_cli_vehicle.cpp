@@ -43,6 +43,15 @@ quadid::FlightLog drop_wrench(const quadid::FlightLog& log) {
 
 class CliVehicle : public quadid::testing::CliTest {
  protected:
+  // 30 s of table2 flown by the crazyflie21 (default noise): its log with the
+  // rotor columns only, the wrench left for a rotor model to compute.
+  quadid::FlightLog crazyflie_rotor_log() {
+    const CliRun sim = run("simulate --vehicle crazyflie21 --trajectory table2 --duration 30 -o " + path("sim.csv"));
+    EXPECT_EQ(sim.rc, 0) << sim.err;
+    quadid::CsvReadOptions csv;
+    csv.required = {"t"};
+    return drop_wrench(quadid::read_flight_log(path("sim.csv"), csv));
+  }
   // Flies `vehicle` (30 s of table2, default noise), identifies it from the rotor columns
   // only and checks every LS/FMLS estimate against the vehicle's [nominal] (the simulated truth).
   void fly_and_identify(const std::string& vehicle) {
@@ -177,11 +186,7 @@ TEST_F(CliVehicle, RotorModelThatDoesNotMatchTheLogIsAnInputError) {
   // Izz; Ixx and Iyy 27 % low without a warning). Now the rotor-mapping
   // check names the arrangement that fits, and --ignore-input-errors turns it
   // and the model-fit findings into warnings.
-  const CliRun sim = run("simulate --vehicle crazyflie21 --trajectory table2 --duration 30 -o " + path("log.csv"));
-  ASSERT_EQ(sim.rc, 0) << sim.err;
-  quadid::CsvReadOptions csv;
-  csv.required = {"t"};
-  const quadid::FlightLog rotors = drop_wrench(quadid::read_flight_log(path("log.csv"), csv));
+  const quadid::FlightLog rotors = crazyflie_rotor_log();
   quadid::write_flight_log(rotors, path("good.csv"));
   quadid::FlightLog rotated = rotors;  // column rpm.m(i) holds rotor i + 1's speed
   for (int i = 0; i < 4; ++i)
@@ -282,11 +287,7 @@ TEST_F(CliVehicle, IdentifyTablesJudgeEachSetWithItsTerms) {
   // so LS's force row explains what the reference's cannot. By the paper's
   // rows LS would have the reference's force error exactly: the same weighed
   // mass, and the thrust scale left out.
-  const CliRun sim = run("simulate --vehicle crazyflie21 --trajectory table2 --duration 30 -o " + path("sim.csv"));
-  ASSERT_EQ(sim.rc, 0) << sim.err;
-  quadid::CsvReadOptions csv;
-  csv.required = {"t"};
-  quadid::write_flight_log(drop_wrench(quadid::read_flight_log(path("sim.csv"), csv)), path("rotors.csv"));
+  quadid::write_flight_log(crazyflie_rotor_log(), path("rotors.csv"));
   std::string strong;
   for (const auto& b : quadid::detail::builtin_vehicles())
     if (b.name == "crazyflie21") strong = std::string(b.text);
@@ -399,11 +400,7 @@ TEST_F(CliVehicle, ValidateWithAVehicleJudgesSetsOnAHeldOutFlight) {
 // window the user gives that reaches the ground is kept, with a warning;
 // validate's tables cover the part in the air.
 TEST_F(CliVehicle, GroundAtTheEndsOfTheLogIsLeftOutOfTheWindow) {
-  const CliRun sim = run("simulate --vehicle crazyflie21 --trajectory table2 --duration 30 -o " + path("sim.csv"));
-  ASSERT_EQ(sim.rc, 0) << sim.err;
-  quadid::CsvReadOptions csv;
-  csv.required = {"t"};
-  const quadid::FlightLog flight = drop_wrench(quadid::read_flight_log(path("sim.csv"), csv));
+  const quadid::FlightLog flight = crazyflie_rotor_log();
   const double T = flight.data(1, 0) - flight.data(0, 0);
   const auto before = static_cast<Eigen::Index>(std::llround(6.0 / T)), after = static_cast<Eigen::Index>(std::llround(5.0 / T));
   quadid::FlightLog log;
