@@ -109,6 +109,14 @@ TimeWindow fit_paper_window(const TimeWindow& paper, double duration, double per
 /// window unchanged when it has none, or fewer than 2 samples).
 TimeWindow fit_paper_window(const TimeWindow& paper, const FlightLog& log, std::string* note = nullptr);
 
+/// The windows of identify on a log that holds its wrench (no rotor model):
+/// a default estimation window is the paper's fitted to the log
+/// (fit_paper_window), and kept to the part in the air when the vehicle sits
+/// on the ground at an end (airborne_part; Tables 5-6 too); a given one that
+/// reaches the ground, or a landing inside, is warned about in `warnings`.
+void fit_windows(const FlightLog& log, const IdentifyRequest& req, IdentificationOptions& opt,
+                 std::vector<std::string>& warnings);
+
 /// Reads the log of an identification: any format (load_any_log); with a
 /// vehicle, the rotor columns instead of the wrench, which the rotor model
 /// computes (with_rotor_wrench). InputError names the file.

@@ -168,10 +168,10 @@ py::dict identify(const py::object& log, const py::dict& opts) {
     const quadid::FlightLog fl = log_from_mapping(log, req.csv);
     py::gil_scoped_release nogil;
     quadid::IdentificationOptions options = req.options;
-    std::string note;  // the paper's window on a shorter log, as for a file
-    if (!req.real.window_given) options.window = quadid::fit_paper_window(options.window, fl, &note);
+    std::vector<std::string> notes;  // the windows as for a file: the paper's fitted, kept in the air
+    quadid::fit_windows(fl, req, options, notes);
     quadid::IdentificationResult res = quadid::identify(fl, options);
-    if (!note.empty()) res.warnings.insert(res.warnings.begin(), note);
+    res.warnings.insert(res.warnings.begin(), notes.begin(), notes.end());
     j = quadid::to_json(res);
     j["log"] = nullptr;  // the command's "log" is the file's name; a mapping has none
     evo = std::move(res.evolution);

@@ -55,6 +55,32 @@ def test_short_log_without_window_fits_it_as_the_command_line(logs):
     assert_same(without(from_path, "evolution"), cli, REL)
 
 
+def test_ground_at_the_start_is_left_out_of_arrays_as_of_the_file(logs, tmp_path):
+    # 12 s on the ground (motors idle at 15 % of the hover thrust, z still)
+    # before a 20 s flight: the paper's default window (10 s to the end on this
+    # log) is cut to 1 s after take-off for arrays, path and command line alike.
+    log = {k: np.array(v) for k, v in quadid.read_log(logs[0]).items()}
+    T = log["t"][1] - log["t"][0]
+    n = int(round(12.0 / T))
+    ground = {k: np.full(n, v[0]) for k, v in log.items()}
+    for k in ("phi", "theta", "p", "q", "r", "tau_phi", "tau_theta", "tau_psi"):
+        ground[k][:] = 0.0
+    ground["Fz"][:] = 0.15 * log["Fz"].mean()
+    armed = {k: np.concatenate([ground[k], log[k]]) for k in log}
+    armed["t"] = np.arange(len(armed["t"])) * T
+    path = tmp_path / "armed.csv"
+    with open(path, "w") as f:
+        f.write(",".join(armed) + "\n")
+        for row in zip(*armed.values()):
+            f.write(",".join(repr(float(v)) for v in row) + "\n")
+    cli = cli_json("identify", str(path))
+    assert abs(cli["window"]["t0"] - 13.0) < 0.3, cli["window"]
+    assert any("on the ground" in w for w in cli["warnings"]), cli["warnings"]
+    with pytest.warns(UserWarning, match="on the ground"):
+        res = quadid.identify(armed)
+    assert_same(without(res, "evolution", "log"), without(cli, "log"), REL)
+
+
 def test_identify_on_a_path_equals_the_command_line_with_options(logs):
     args = ["--window", WINDOW, "--cutoff", "3", "--lambda", "20", "--order", "2", "--sigma", "10"]
     cli = cli_json("identify", str(logs[1]), *args)

@@ -704,6 +704,16 @@ TimeWindow fit_paper_window(const TimeWindow& paper, const FlightLog& log, std::
   return fit_paper_window(paper, duration, duration / static_cast<double>(t.size() - 1), note);
 }
 
+void fit_windows(const FlightLog& log, const IdentifyRequest& req, IdentificationOptions& opt,
+                 std::vector<std::string>& warnings) {
+  if (!req.real.window_given) {  // an error would only ask for the obvious: the paper's window fitted
+    std::string note;
+    opt.window = fit_paper_window(opt.window, log, &note);
+    if (!note.empty()) warnings.push_back(note);
+  }
+  keep_to_the_air(airborne_part(log), req.real.window_given, opt, warnings);
+}
+
 IdentificationInput prepare_identification(const std::string& path, const IdentifyRequest& req_in) {
   IdentifyRequest req = req_in;
   IdentificationInput in;
@@ -732,12 +742,7 @@ IdentificationInput prepare_identification(const std::string& path, const Identi
   if (!req.vehicle) {
     in.log = load_identification_log(path, req);
     in.options = req.options;
-    if (!req.real.window_given) {  // an error would only ask for the obvious: the paper's window fitted
-      std::string note;
-      in.options.window = fit_paper_window(in.options.window, in.log, &note);
-      if (!note.empty()) in.warnings.push_back(note);
-    }
-    keep_to_the_air(airborne_part(in.log), req.real.window_given, in.options, in.warnings);
+    fit_windows(in.log, req, in.options, in.warnings);
     return in;
   }
   in.wrench_source = from_log ? req.vehicle->source : fmt::format("the rotor model of vehicle {}", req.vehicle->source);
