@@ -662,7 +662,7 @@ void keep_to_the_air(const std::optional<AirbornePart>& air, bool given, Identif
   if (!air->trimmed()) return;
   if (given) {
     const bool early = air->ground_before > 0.0 && window.t0 < air->ground_before;
-    const bool late = air->ground_after > 0.0 && window.t1 > air->window.t1;
+    const bool late = air->ground_after > 0.0 && window.t1 > air->window.t1 + AirborneOptions{}.margin_s;  // touchdown
     if (early || late)
       warnings.push_back(fmt::format("window {}: the log is {}: the window reaches the ground, whose force the model "
                                      "lacks; the default window is {}",
