@@ -693,8 +693,10 @@ TEST(Airborne, GroundAtBothEndsFromTheThrustAlone) {
   const double into_ramp = (air->threshold - 0.2) / 0.8;
   EXPECT_NEAR(air->ground_before, 5.0 + into_ramp, 0.011);
   EXPECT_NEAR(air->ground_after, 51.0 - (47.0 - into_ramp), 0.011);
-  EXPECT_NEAR(air->window.t0, air->ground_before + 1.0, 1e-12);
-  EXPECT_NEAR(air->window.t1, 51.0 - air->ground_after - 1.0, 1e-12);
+  EXPECT_NEAR(air->in_air.t0, air->ground_before, 1e-12);
+  EXPECT_NEAR(air->in_air.t1, 51.0 - air->ground_after, 1e-12);
+  EXPECT_NEAR(air->window.t0, air->in_air.t0 + 1.0, 1e-12);
+  EXPECT_NEAR(air->window.t1, air->in_air.t1 - 1.0, 1e-12);
   EXPECT_TRUE(air->drops.empty()) << air->drops.front().first;  // the 0.3 s dip is no landing
   EXPECT_NE(air->describe().find(fmt::format("for the first {:.3g} s and the last {:.3g} s", air->ground_before,
                                               air->ground_after)),
@@ -715,6 +717,8 @@ TEST(Airborne, AFlightWithoutGroundIsLeftWholeAndALandingInsideIsNamed) {
   EXPECT_FALSE(hover->trimmed());
   EXPECT_EQ(hover->window.t0, 0.0);
   EXPECT_TRUE(std::isinf(hover->window.t1));
+  EXPECT_EQ(hover->in_air.t0, 0.0);
+  EXPECT_TRUE(std::isinf(hover->in_air.t1));
   EXPECT_TRUE(hover->drops.empty());
   const auto landed =
       quadid::airborne_part(thrust_log(30.0, [](double t) { return (t > 12.0 && t < 14.0) ? 0.3 : 1.0; }));

@@ -53,6 +53,9 @@ struct AirborneOptions {
 /// What airborne_part found.
 struct AirbornePart {
   TimeWindow window;           // seconds from the log's start: in the air, less the margins
+  /// Take-off and touchdown, seconds from the log's start: the whole log when
+  /// it starts or ends in the air (0, infinity).
+  TimeWindow in_air;
   double ground_before = 0.0;  // s of low thrust before take-off (0: none at the start)
   double ground_after = 0.0;   // s of low thrust after touchdown (0: none at the end)
   double hover_thrust = 0.0;   // N

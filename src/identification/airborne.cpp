@@ -67,11 +67,13 @@ std::optional<AirbornePart> airborne_part(const FlightLog& log, const AirborneOp
   const double duration = t(n - 1) - t(0);
   if (const double before = t(i0) - t(0); before >= opt.min_ground_s) {
     a.ground_before = before;
+    a.in_air.t0 = before;
     a.window.t0 = std::min(before + opt.margin_s, duration);
   }
   if (const double after = t(n - 1) - t(i1); after >= opt.min_ground_s) {
     a.ground_after = after;
-    a.window.t1 = std::max(t(i1) - t(0) - opt.margin_s, a.window.t0);
+    a.in_air.t1 = t(i1) - t(0);
+    a.window.t1 = std::max(a.in_air.t1 - opt.margin_s, a.window.t0);
   }
   const auto min_run = static_cast<Eigen::Index>(std::ceil(opt.min_ground_s / T));
   for (Eigen::Index k = i0; k <= i1;) {

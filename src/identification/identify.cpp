@@ -231,12 +231,7 @@ IdentificationResult identify(const FlightLog& log, const IdentificationOptions&
     // checked in the air: on the ground the thrust sits at idle or 0 and the
     // vertical acceleration has nothing to do with it, which the saturation
     // and z-direction checks would report as faults of the log.
-    if (const auto air = airborne_part(log); air && air->trimmed()) {
-      TimeWindow in_air;
-      in_air.t0 = air->ground_before;
-      if (air->ground_after > 0.0) in_air.t1 = air->window.t1 + AirborneOptions{}.margin_s;
-      return check_input(rows_in(log, in_air), ic);
-    }
+    if (const auto air = airborne_part(log); air && air->trimmed()) return check_input(rows_in(log, air->in_air), ic);
     return check_input(log, ic);
   };
   std::future<std::vector<InputFinding>> checks;

@@ -661,9 +661,7 @@ void keep_to_the_air(const std::optional<AirbornePart>& air, bool given, Identif
         air->threshold, 100.0 * air->threshold / air->hover_thrust, len, at));
   if (!air->trimmed()) return;
   if (given) {
-    const bool early = air->ground_before > 0.0 && window.t0 < air->ground_before;
-    const bool late = air->ground_after > 0.0 && window.t1 > air->window.t1 + AirborneOptions{}.margin_s;  // touchdown
-    if (early || late)
+    if (window.t0 < air->in_air.t0 || window.t1 > air->in_air.t1)
       warnings.push_back(fmt::format("window {}: the log is {}: the window reaches the ground, whose force the model "
                                      "lacks; the default window is {}",
                                      window.to_string(), air->describe(), air->window.to_string()));
