@@ -248,6 +248,22 @@ TEST(FleetSummary, FewFlightsThatAgreeLooselyAreNotFlagged) {
   EXPECT_NE(s.table().find("No flight departs from the others"), std::string::npos);
 }
 
+// A far outlier holds nearly all of the sum of squares: the others' spread
+// (sd 1e-9 about 1.0) is then summed again, not taken as a difference of two
+// sums that cancel to 1e-16 relative. Closed form: the others are 1 - 1e-9,
+// 1, 1 + 1e-9, 1 (mean 1, sd sqrt(2e-18 / 3)), t = 999 / (sd sqrt(1 + 1/4)).
+TEST(FleetSummary, AFarOutlierKeepsTheOthersSpreadExact) {
+  const std::vector<double> masses = {1.0 - 1e-9, 1.0, 1.0 + 1e-9, 1.0, 1000.0};
+  std::vector<nlohmann::json> recs;
+  for (size_t i = 0; i < masses.size(); ++i) recs.push_back(record(fmt::format("f{}", i), body(masses[i]), 1e-4));
+  const quadid::FleetSummary s = quadid::summarize_fleet(recs);
+  ASSERT_EQ(s.outliers.size(), 1u) << s.table();
+  EXPECT_EQ(s.outliers[0].path, "f4");
+  EXPECT_NEAR(s.outliers[0].others_mean, 1.0, 1e-15);
+  const double expected = 999.0 / (std::sqrt(2e-18 / 3.0) * std::sqrt(1.25));
+  EXPECT_NEAR(s.outliers[0].t / expected, 1.0, 1e-6);  // the 1e-9 steps are exact only to ~1e-7 of themselves
+}
+
 TEST(FleetSummary, FailedAndIncompleteRecordsAreSkippedAndSmallOrMixedFleetsNoted) {
   std::vector<nlohmann::json> recs = {record("a", body(1.0), 1e-4), record("b", body(1.01), 1e-4, "FMPC"),
                                       {{"path", "c"}, {"ok", false}, {"error", "bad"}}};

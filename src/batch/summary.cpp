@@ -179,9 +179,21 @@ FleetSummary summarize_fleet(const std::vector<nlohmann::json>& records, const F
     const double ss_all = p.std_dev * p.std_dev * (nd - 1.0);
     for (std::size_t i = 0; i < n; ++i) {
       const double x = flights[i].value[j], d = x - p.mean;
-      // The others' mean and sum of squares from the whole sample's, without flight i.
-      const double m_o = p.mean - d / (nd - 1.0);
-      const double ss_o = std::max(0.0, ss_all - d * d * nd / (nd - 1.0));
+      // The others' mean and sum of squares from the whole sample's, without
+      // flight i (O(1) each). When flight i holds nearly all of the sum of
+      // squares (a far outlier), that difference cancels: then both are
+      // summed again over the others, in two passes.
+      double m_o = p.mean - d / (nd - 1.0);
+      double ss_o = ss_all - d * d * nd / (nd - 1.0);
+      if (!(ss_o > 1e-6 * ss_all)) {
+        double sum = 0.0;
+        for (std::size_t k = 0; k < n; ++k)
+          if (k != i) sum += flights[k].value[j];
+        m_o = sum / (nd - 1.0);
+        ss_o = 0.0;
+        for (std::size_t k = 0; k < n; ++k)
+          if (k != i) ss_o += (flights[k].value[j] - m_o) * (flights[k].value[j] - m_o);
+      }
       const double sd_o = std::sqrt(ss_o / (nd - 2.0));
       const double diff = std::abs(x - m_o), scale = sd_o * std::sqrt(1.0 + 1.0 / (nd - 1.0));
       // The others agree exactly: any difference is one.
