@@ -138,10 +138,13 @@ void register_identify(CLI::App& app) {
   a->window_opt = sub->add_option("--window", a->window,
                                   "estimation window T0:T1, seconds from the log's start ('T0:' = to the end); "
                                   "default with --vehicle: the whole log; without, on a log shorter than 50 s: 10 s "
-                                  "to its end (the whole log under 20 s)")
+                                  "to its end (the whole log under 20 s); a default kept to the part in the air, 1 s "
+                                  "clear of take-off and touchdown, when the log has the vehicle on the ground at an "
+                                  "end (docs/real-flights.md)")
                       ->capture_default_str();
   sub->add_option("--error-window", a->error_window,
-                  "window of the prediction-error tables (default: the whole log, as the paper's 0-50 s)");
+                  "window of the prediction-error tables (default: the whole log, as the paper's 0-50 s, or its "
+                  "part in the air)");
   sub->add_option("--sigma", a->sigma, "gradient-descent gain of eq. (41), with --gd-gain paper")->capture_default_str();
   sub->add_option("--gd-gain", a->real.gd_gain,
                   "gradient-descent gain: auto (normalized with --vehicle, else paper), paper (--sigma, the paper's "

@@ -102,7 +102,8 @@ void register_validate(CLI::App& app) {
                   "reference to re-fly (table2, circle1..3, or a trajectory JSON); default: the one the log records");
   sub->add_option("--window", a->window, "window of the simulation comparison, seconds from the log's start")
       ->capture_default_str();
-  sub->add_option("--error-window", a->error_window, "window of the prediction error (default: the whole log)");
+  sub->add_option("--error-window", a->error_window, "window of the prediction error (default: the whole log, or its part in the air when the log has "
+                  "the vehicle on the ground at an end)");
   sub->add_flag("--no-simulation", a->no_simulation, "skip the simulation comparison");
   sub->add_flag("--with-noise", a->with_noise, "re-fly with the log's sensor noise and seed (default: noise-free)");
   sub->add_flag("--ignore-input-errors", a->ignore_input_errors,
