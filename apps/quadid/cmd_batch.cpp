@@ -64,14 +64,17 @@ void run(const BatchArgs& a) {
   // Lines go to stdout as soon as every earlier log is done; with -o they are
   // collected and the file is written once, atomically, at the end.
   std::string collected;
-  std::vector<nlohmann::json> records;  // for the flights' comparison
+  const bool compare = !a.quiet || !a.summary.empty();  // the flights' comparison is printed or written
+  std::vector<nlohmann::json> records;                 // what it reads of each result, when it is
   const BatchSink sink = [&](std::size_t, const BatchRecord& r) {
     nlohmann::json j = to_json(r);
     const std::string line = j.dump() + "\n";
-    nlohmann::json kept = nlohmann::json::object();  // what the comparison reads, not the whole result
-    for (const char* key : {"path", "ok", "estimates", "uncertainty", "recommended"})
-      if (j.contains(key)) kept[key] = std::move(j[key]);
-    records.push_back(std::move(kept));
+    if (compare) {
+      nlohmann::json kept = nlohmann::json::object();
+      for (const char* key : {"path", "ok", "estimates", "uncertainty", "recommended"})
+        if (j.contains(key)) kept[key] = std::move(j[key]);
+      records.push_back(std::move(kept));
+    }
     if (a.out.empty()) {
       std::fputs(line.c_str(), stdout);
       std::fflush(stdout);

@@ -4,7 +4,8 @@
 // Each flight is judged against the others without it (leave one out), by a
 // t statistic whose distribution is known for any number of flights: a robust
 // scale (the MAD) of a few flights is so often near 0 that a fixed threshold
-// on it flags a quarter of the flights of a fleet of 4 (bench/fleet_outliers.py).
+// on it falsely flags some flight in nearly every fleet of 3 to 5
+// (bench/fleet_outliers.py).
 #include "quadid/batch.hpp"
 
 #include "quadid/estimation.hpp"
@@ -165,7 +166,7 @@ FleetSummary summarize_fleet(const std::vector<nlohmann::json>& records, const F
   if (tests == 0) return s;
   const int nu = static_cast<int>(n - 2);
   const double per_test = opt.level / static_cast<double>(tests);
-  double lo = 0.0, hi = 1.0;
+  double lo = 0.0, hi = 1.0;  // bisection on the exact CDF: the tail falls monotonically in t
   while (1.0 - student_t_two_sided_cdf(hi, nu) > per_test && hi < 1e300) hi *= 2.0;
   for (int it = 0; it < 200 && hi - lo > 1e-12 * hi; ++it) {
     const double mid = 0.5 * (lo + hi);
