@@ -22,7 +22,7 @@ reproduce: build
 bench:
 	cmake --preset release -DQUADID_BUILD_BENCH=ON
 	cmake --build build -j $(JOBS)
-	for b in build/bench/*; do $$b; done
+	for b in build/bench/bench_*; do $$b; done
 asan:
 	cmake --preset asan
 	cmake --build build-asan -j $(JOBS)
