@@ -16,17 +16,55 @@ using namespace quadid;
 
 namespace {
 
-// Quantiles from tests/data/student_t_quantiles.py (scipy.stats).
-TEST(Uncertainty, StudentQuantilesMatchScipy) {
+// Quantiles from tests/data/student_t_quantiles.py (scipy.stats, printed to 9
+// decimals) and the closed forms for nu = 1 (Cauchy: tan(pi (p - 1/2))) and
+// nu = 2 ((2p - 1) / sqrt(2 p (1 - p))). Integer nu is exact; other nu take
+// the Cornish-Fisher expansion (3e-4 at nu = 5.5, far less above).
+// Tolerances: 2e-9 against scipy, whose t(0.975, 5) = 2.5705818366 is itself
+// 1.0e-9 above the root 2.5705818356 that three independent computations of
+// the tail agree on (A&S 26.7.3's sum, Simpson's rule on the density, and the
+// closed form 2/B(5/2,1/2) * (3 phi/8 - sin 2phi/4 + sin 4phi/32), sin^2 phi =
+// 5/(5 + t^2): all give 0.05 - 5.9e-11 at scipy's value); against the closed
+// forms 1e-13 relative plus what the CDF's absolute rounding (~2e-16) leaves
+// of a tail alpha: 4e-16 / alpha relative for these densities.
+TEST(Uncertainty, StudentQuantilesMatchScipyAndTheClosedForms) {
   EXPECT_NEAR(student_t_quantile(0.975, INFINITY), 1.959963984540, 1e-12);
   EXPECT_NEAR(student_t_quantile(0.995, INFINITY), 2.575829303549, 1e-12);
-  // Cornish-Fisher to nu^-4: 3e-4 at nu = 5, far less above.
-  EXPECT_NEAR(student_t_quantile(0.975, 5), 2.570581837, 1e-3);
-  EXPECT_NEAR(student_t_quantile(0.975, 10), 2.228138852, 1e-4);
-  EXPECT_NEAR(student_t_quantile(0.975, 30), 2.042272456, 1e-5);
-  EXPECT_NEAR(student_t_quantile(0.975, 100), 1.983971518, 1e-6);
-  EXPECT_NEAR(student_t_quantile(0.95, 20), 1.724718243, 1e-5);
+  EXPECT_NEAR(student_t_quantile(0.975, 5), 2.570581837, 2e-9);
+  EXPECT_NEAR(student_t_quantile(0.975, 10), 2.228138852, 2e-9);
+  EXPECT_NEAR(student_t_quantile(0.975, 30), 2.042272456, 2e-9);
+  EXPECT_NEAR(student_t_quantile(0.975, 100), 1.983971518, 2e-9);
+  EXPECT_NEAR(student_t_quantile(0.95, 20), 1.724718243, 2e-9);
+  EXPECT_NEAR(student_t_quantile(0.025, 10), -2.228138852, 2e-9);  // symmetric
+  EXPECT_EQ(student_t_quantile(0.5, 3), 0.0);
+  for (double p : {0.6, 0.9, 0.975, 0.995, 0.9999, 0.1, 0.001}) {
+    const double cauchy = std::tan(M_PI * (p - 0.5));
+    const double two = (2.0 * p - 1.0) / std::sqrt(2.0 * p * (1.0 - p));
+    const double rel = 1e-13 + 4e-16 / (2.0 * std::min(p, 1.0 - p));
+    EXPECT_NEAR(student_t_quantile(p, 1), cauchy, rel * std::abs(cauchy)) << p;
+    EXPECT_NEAR(student_t_quantile(p, 2), two, rel * std::abs(two)) << p;
+  }
+  // The expansion between the integers, and beyond 1000 (error O(nu^-5)).
+  EXPECT_GT(student_t_quantile(0.975, 5.5), student_t_quantile(0.975, 6));
+  EXPECT_LT(student_t_quantile(0.975, 5.5), student_t_quantile(0.975, 5));
+  EXPECT_NEAR(student_t_quantile(0.975, 1000), student_t_quantile(0.975, 1000.5), 1e-5);
   EXPECT_THROW(student_t_quantile(1.0, 5), std::invalid_argument);
+  EXPECT_THROW(student_t_quantile(0.9, 0.5), std::invalid_argument);
+}
+
+// The critical value inverts the CDF: its tail is alpha, from the fleet
+// summary's Bonferroni levels (1e-2 / 28) to the intervals' 0.05, over 1-50 dof.
+TEST(Uncertainty, StudentTwoSidedCriticalInvertsTheCdf) {
+  for (int nu : {1, 2, 3, 8, 49})
+    for (double alpha : {0.05, 0.01 / 28.0, 1e-6}) {
+      const double t = student_t_two_sided_critical(alpha, nu);
+      // 1e-12 relative, or the CDF's absolute rounding (~2e-16) where that is
+      // more: 1 - CDF cannot resolve a tail of 1e-6 better than that.
+      EXPECT_NEAR(1.0 - student_t_two_sided_cdf(t, nu), alpha, std::max(1e-12 * alpha, 4e-16)) << nu << " " << alpha;
+    }
+  EXPECT_NEAR(student_t_two_sided_critical(0.05, 5), 2.5705818356363137, 1e-13);  // the root above
+  EXPECT_THROW(student_t_two_sided_critical(0.0, 5), std::invalid_argument);
+  EXPECT_THROW(student_t_two_sided_critical(0.05, 0), std::invalid_argument);
 }
 
 // P(|T| <= t) against independent references: scipy's quantiles above (the

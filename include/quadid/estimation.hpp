@@ -231,13 +231,18 @@ void judge_poorly_determined(LeastSquaresSolution& sol, const Theta& prior, cons
 void attach_uncertainty(LeastSquaresSolution& sol, const LeastSquaresUncertainty& u, const Theta& prior,
                         const LeastSquaresOptions& opt = {});
 
-/// Student-t quantile (Cornish-Fisher expansion, A&S 26.7.5: error < 1e-3 for
-/// nu >= 5, exact normal quantile for infinite nu). 0 < p < 1, nu >= 1.
+/// Student-t quantile, 0 < p < 1, nu >= 1: exact for integer nu up to 1000
+/// (student_t_two_sided_critical), else the Cornish-Fisher expansion (A&S
+/// 26.7.5, error O(nu^-5): < 1e-13 above 1000) or, for infinite nu, the
+/// normal quantile.
 double student_t_quantile(double p, double nu);
 /// P(|T| <= t) for Student's t with nu >= 1 degrees of freedom: Abramowitz &
-/// Stegun 26.7.3-4, a finite sum, exact for integer nu at any t (unlike
-/// student_t_quantile's expansion, which is for nu of tens and more).
+/// Stegun 26.7.3-4, a finite sum, exact for integer nu at any t.
 double student_t_two_sided_cdf(double t, int nu);
+/// The two-sided critical value: the t > 0 with P(|T| > t) = alpha, 0 < alpha < 1,
+/// by bisection on student_t_two_sided_cdf to 1e-15 relative (the CDF's own
+/// rounding limits it further where 1 - alpha is within ~1e-16 of 1).
+double student_t_two_sided_critical(double alpha, int nu);
 
 // --- Physical consistency (docs/uncertainty.md) -----------------------------------
 

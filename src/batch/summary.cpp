@@ -166,13 +166,7 @@ FleetSummary summarize_fleet(const std::vector<nlohmann::json>& records, const F
   if (tests == 0) return s;
   const int nu = static_cast<int>(n - 2);
   const double per_test = opt.level / static_cast<double>(tests);
-  double lo = 0.0, hi = 1.0;  // bisection on the exact CDF: the tail falls monotonically in t
-  while (1.0 - student_t_two_sided_cdf(hi, nu) > per_test && hi < 1e300) hi *= 2.0;
-  for (int it = 0; it < 200 && hi - lo > 1e-12 * hi; ++it) {
-    const double mid = 0.5 * (lo + hi);
-    (1.0 - student_t_two_sided_cdf(mid, nu) > per_test ? lo : hi) = mid;
-  }
-  s.critical_t = hi;
+  s.critical_t = student_t_two_sided_critical(per_test, nu);
   const double nd = static_cast<double>(n);
   for (std::size_t j = 0; j < 7; ++j) {
     const FleetParameter& p = s.parameters[j];

@@ -224,9 +224,18 @@ Eigen::MatrixXd jackknife_covariance(const std::vector<Eigen::VectorXd>& leave_o
   return C * (static_cast<double>(K - 1) / static_cast<double>(K));
 }
 
+// Integer degrees of freedom up to this many take the exact quantile (the CDF
+// costs nu / 2 terms); above it the expansion's error, O(nu^-5), is below 1e-13.
+constexpr double kExactQuantileMaxDof = 1000.0;
+
 double student_t_quantile(double p, double nu) {
   if (!(p > 0.0 && p < 1.0)) throw std::invalid_argument(fmt::format("student_t_quantile: p={} must be in (0, 1)", p));
   if (!(nu >= 1.0)) throw std::invalid_argument(fmt::format("student_t_quantile: nu={} must be >= 1", nu));
+  if (nu <= kExactQuantileMaxDof && nu == std::floor(nu)) {
+    if (p == 0.5) return 0.0;
+    const double t = student_t_two_sided_critical(2.0 * std::min(p, 1.0 - p), static_cast<int>(nu));
+    return p > 0.5 ? t : -t;
+  }
   const double z = normal_quantile(p);
   if (!std::isfinite(nu)) return z;
   // Abramowitz & Stegun 26.7.5, terms up to nu^-4.
@@ -236,6 +245,22 @@ double student_t_quantile(double p, double nu) {
   const double g3 = (3.0 * z7 + 19.0 * z5 + 17.0 * z3 - 15.0 * z) / 384.0;
   const double g4 = (79.0 * z9 + 776.0 * z7 + 1482.0 * z5 - 1920.0 * z3 - 945.0 * z) / 92160.0;
   return z + g1 / nu + g2 / (nu * nu) + g3 / (nu * nu * nu) + g4 / (nu * nu * nu * nu);
+}
+
+double student_t_two_sided_critical(double alpha, int nu) {
+  if (!(alpha > 0.0 && alpha < 1.0))
+    throw std::invalid_argument(fmt::format("student_t_two_sided_critical: alpha={} must be in (0, 1)", alpha));
+  if (nu < 1) throw std::invalid_argument(fmt::format("student_t_two_sided_critical: nu={} must be >= 1", nu));
+  // Bisection on the exact CDF: the tail P(|T| > t) falls monotonically in t.
+  // Slower than Newton, but needs no density and cannot leave the bracket.
+  const auto tail = [nu](double t) { return 1.0 - student_t_two_sided_cdf(t, nu); };
+  double lo = 0.0, hi = 1.0;
+  while (tail(hi) > alpha && hi < 1e300) hi *= 2.0;
+  for (int it = 0; it < 200 && hi - lo > 1e-15 * hi; ++it) {
+    const double mid = 0.5 * (lo + hi);
+    (tail(mid) > alpha ? lo : hi) = mid;
+  }
+  return 0.5 * (lo + hi);
 }
 
 double student_t_two_sided_cdf(double t, int nu) {
