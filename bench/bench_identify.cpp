@@ -64,24 +64,22 @@ void BM_Identify50s_FromCsv(benchmark::State& state) {
       benchmark::Counter(static_cast<double>(f.log.rows() * state.iterations()), benchmark::Counter::kIsRate);
 }
 
+// Runs cmd through the shell once per iteration (wall clock); stops on failure.
+void run_process(benchmark::State& state, const std::string& cmd) {
+  for (auto _ : state)
+    if (std::system(cmd.c_str()) != 0) return state.SkipWithError(("failed: " + cmd).c_str());
+}
+
 // The whole process as a user runs it (wall clock: start-up, reading, the six
 // sets with intervals, Tables 3, 5, 6 printed), through the shell.
 void BM_IdentifyProcess50s(benchmark::State& state) {
-  const auto& f = fixture();
-  const std::string cmd = std::string("\"") + program() + "\" identify \"" + f.csv.string() + "\" > /dev/null";
-  for (auto _ : state)
-    if (std::system(cmd.c_str()) != 0) return state.SkipWithError("quadid identify failed");
+  run_process(state, std::string("\"") + program() + "\" identify \"" + fixture().csv.string() + "\" > /dev/null");
 }
 
 // The floors under BM_IdentifyProcess50s (issue 13): a process that starts as
 // quadid does and reads the same CSV as identify reads it, then exits; and
 // one that only starts. Like BM_IdentifyProcess50s they run through the
-// shell (std::system), which each pays alike. The 15 ms target cannot be
-// under the first.
-void run_process(benchmark::State& state, const std::string& cmd) {
-  for (auto _ : state)
-    if (std::system(cmd.c_str()) != 0) return state.SkipWithError("the helper process failed");
-}
+// shell, which each pays alike. The 15 ms target cannot be under the first.
 void BM_ReadCsvProcess50s(benchmark::State& state) {
   run_process(state, std::string("\"") + QUADID_READ_CSV_PROCESS + "\" \"" + fixture().csv.string() + "\" > /dev/null");
 }
