@@ -10,7 +10,7 @@
 
 #include "quadid/logs.hpp"
 #include "quadid/simulation.hpp"
-#include "quadid/timing.hpp"
+#include "quadid/identification/timing.hpp"
 #include "quadid/trajectory.hpp"
 #include "quadid/vehicle.hpp"
 

@@ -4,7 +4,7 @@
 // 2 kg x500 that meet every limit on a 1 ms grid and fly without a saturated
 // rotor in the simulator.
 #include "quadid/design.hpp"
-#include "quadid/regressor.hpp"
+#include "quadid/model/regressor.hpp"
 #include "quadid/simulation.hpp"
 #include "quadid/vehicle.hpp"
 

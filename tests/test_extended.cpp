@@ -2,8 +2,8 @@
 // logs (tests/perfect_log.hpp) whose logged wrench is altered by known terms:
 // the rotor model's thrust scale, torque offsets, the blade-flapping moment,
 // rate damping and the rotor inertia, computed here from the exact reference.
-#include "quadid/extended.hpp"
-#include "quadid/qr_least_squares.hpp"
+#include "quadid/identification/extended.hpp"
+#include "quadid/estimation/qr_least_squares.hpp"
 #include "quadid/signal.hpp"
 
 #include "perfect_log.hpp"

@@ -7,7 +7,7 @@
 //    position and yaw held at 30 Hz like the motion capture;
 //  - closed-loop flights of the simulator (simulation.hpp).
 #include "quadid/identification.hpp"
-#include "quadid/regressor.hpp"
+#include "quadid/model/regressor.hpp"
 #include "quadid/simulation.hpp"
 #include "quadid/trajectory.hpp"
 #include "perfect_log.hpp"

@@ -4,7 +4,7 @@
 // struct + zlib) for the real Crazyflie logs, CRC-32's published check value,
 // and closed-form signals written with our writer.
 #include "quadid/logs.hpp"
-#include "quadid/options_json.hpp"
+#include "quadid/pipeline.hpp"
 
 #include "cli_fixture.hpp"
 

@@ -1,6 +1,6 @@
 // Model and regressors: physical identities (docs/method.md, "Corrections to the printed paper").
 #include "quadid/model.hpp"
-#include "quadid/regressor.hpp"
+#include "quadid/model/regressor.hpp"
 #include "quadid/trajectory.hpp"
 #include "random_model.hpp"
 

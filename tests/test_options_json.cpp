@@ -2,7 +2,7 @@
 // declared option is read, names are the CLI's, defaults are the CLI's, and bad
 // keys or values name the option.
 #include "cli_fixture.hpp"
-#include "quadid/options_json.hpp"
+#include "quadid/pipeline.hpp"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>

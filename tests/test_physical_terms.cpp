@@ -4,7 +4,7 @@
 // free term), and the closed form of a quadratic with one entry held at 0
 // (Lagrange: v = x - C e_k x_k / C_kk), neither of which goes through the
 // conditional-mean algebra the code uses.
-#include "quadid/extended.hpp"
+#include "quadid/identification/extended.hpp"
 
 #include <gtest/gtest.h>
 

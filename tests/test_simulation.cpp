@@ -318,8 +318,8 @@ TEST(Simulation, TrajectoryRoundTripsThroughLogMetadata) {
   FlightLog real;
   real.comments = {"recorded on the QBall 2"};
   EXPECT_THROW(trajectory_from_log(real), InputError);
-  EXPECT_THROW(trajectory_from_spec("circle radius=0.5"), InputError);
-  EXPECT_THROW(trajectory_from_spec("circle radius=x altitude=1"), InputError);
+  EXPECT_THROW(load_trajectory("circle radius=0.5"), InputError);
+  EXPECT_THROW(load_trajectory("circle radius=x altitude=1"), InputError);
 }
 
 TEST(Simulation, OptionsRoundTripThroughLogMetadata) {

@@ -2,10 +2,10 @@
 // parameters (vehicle.hpp), on simulated PX4 flights of known vehicles
 // (tests/px4_sim_log.hpp): the own simulator's rotor-level flight, written in
 // PX4's topics, frames and motor order, commands leading the rotors by the lag.
-#include "quadid/extended.hpp"
+#include "quadid/identification/extended.hpp"
 #include "quadid/logs.hpp"
-#include "quadid/options_json.hpp"
-#include "quadid/timing.hpp"
+#include "quadid/pipeline.hpp"
+#include "quadid/identification/timing.hpp"
 #include "quadid/vehicle.hpp"
 
 #include "cli_fixture.hpp"

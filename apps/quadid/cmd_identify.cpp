@@ -1,10 +1,10 @@
 // quadid identify LOG: Table 3 and Tables 5-6 from a flight log (docs/identify.md).
 #include "commands.hpp"
 #include "common.hpp"
-#include "quadid/extended.hpp"
+#include "quadid/identification/extended.hpp"
 #include "quadid/identification.hpp"
 #include "quadid/io.hpp"
-#include "quadid/options_json.hpp"
+#include "quadid/pipeline.hpp"
 
 #include <fmt/format.h>
 

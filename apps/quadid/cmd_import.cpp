@@ -2,7 +2,7 @@
 // -> flight log CSV (docs/import.md).
 #include "commands.hpp"
 #include "quadid/logs.hpp"
-#include "quadid/options_json.hpp"
+#include "quadid/pipeline.hpp"
 
 #include <fmt/format.h>
 

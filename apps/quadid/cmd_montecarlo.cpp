@@ -3,7 +3,7 @@
 #include "common.hpp"
 #include "quadid/io.hpp"
 #include "quadid/montecarlo.hpp"
-#include "quadid/options_json.hpp"
+#include "quadid/pipeline.hpp"
 #include "quadid/report.hpp"
 #include "quadid/vehicle.hpp"
 

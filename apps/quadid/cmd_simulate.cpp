@@ -67,7 +67,7 @@ std::unique_ptr<Trajectory> make_trajectory(const SimulateArgs& a) {
   }
   if (a.radius || a.altitude)
     throw std::invalid_argument("--radius and --altitude only apply to --trajectory circle");
-  auto t = trajectory_from_spec(a.trajectory);
+  auto t = load_trajectory(a.trajectory);
   if (a.speedup == 1.0) return t;
   return time_scaled(*t, a.speedup);
 }

@@ -3,7 +3,7 @@
 #include "commands.hpp"
 #include "common.hpp"
 #include "quadid/logs.hpp"
-#include "quadid/options_json.hpp"
+#include "quadid/pipeline.hpp"
 #include "quadid/validation.hpp"
 #include "quadid/vehicle.hpp"
 

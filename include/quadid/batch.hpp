@@ -4,7 +4,7 @@
 // delivered in input order. A failed log is a record, not an exception.
 #pragma once
 
-#include "quadid/options_json.hpp"
+#include "quadid/pipeline.hpp"
 
 #include <nlohmann/json.hpp>
 

@@ -1,11 +1,13 @@
-// quadid checks: plausibility checks of a flight log before any estimate
-// (units, frames, aliasing, saturation, time gaps). Each finding says what it
-// saw and what to do. See docs/input-checks.md.
+// quadid checks: what a flight log is before any estimate -- the part in the
+// air, plausibility checks (units, frames, aliasing, saturation, time gaps)
+// and whether its rotor columns belong to the vehicle file's rotors. Each
+// finding says what it saw and what to do. See docs/input-checks.md.
 #pragma once
 
 #include "quadid/io.hpp"
 #include "quadid/model.hpp"
 #include "quadid/signal.hpp"
+#include "quadid/vehicle.hpp"
 
 #include <nlohmann/json.hpp>
 
@@ -68,5 +70,76 @@ nlohmann::json to_json(const InputFinding& f);
 nlohmann::json to_json(const std::vector<InputFinding>& f);
 /// "error: angle-units: ... -> ..." lines.
 std::string format_findings(const std::vector<InputFinding>& f);
+
+// --- The part of a log in the air ------------------------------------------
+
+/// Options of airborne_part (docs/real-flights.md, "On the ground").
+struct AirborneOptions {
+  /// In the air while the thrust, averaged over `smoothing_s`, is at least this
+  /// fraction of the hover thrust. The hover thrust is the flight's own (the
+  /// median of the averaged thrust over the samples above half its 95th
+  /// percentile): no mass is needed, so a wrong reference set cannot move it.
+  /// On the ground the motors are stopped or idle (PX4: 10-30 % of hover).
+  double thrust_fraction = 0.6;
+  double smoothing_s = 0.5;
+  /// Left out after take-off and before touchdown: the climb's transient and
+  /// the ground effect.
+  double margin_s = 1.0;
+  /// Low thrust at an end of the log shorter than this is not the ground.
+  double min_ground_s = 0.5;
+  void validate() const;  // std::invalid_argument naming the field
+};
+
+/// What airborne_part found.
+struct AirbornePart {
+  TimeWindow window;           // seconds from the log's start: in the air, less the margins
+  /// Take-off and touchdown, seconds from the log's start: the whole log when
+  /// it starts or ends in the air (0, infinity).
+  TimeWindow in_air;
+  double ground_before = 0.0;  // s of low thrust before take-off (0: none at the start)
+  double ground_after = 0.0;   // s of low thrust after touchdown (0: none at the end)
+  double hover_thrust = 0.0;   // N
+  double threshold = 0.0;      // N: thrust_fraction x hover_thrust
+  /// Low-thrust stretches between take-off and touchdown longer than
+  /// min_ground_s: (start, duration), s (a landing and a second take-off?).
+  std::vector<std::pair<double, double>> drops;
+  bool trimmed() const { return ground_before > 0.0 || ground_after > 0.0; }
+  /// "on the ground (thrust below 0.204 N, 60 % of the hover thrust) for the first 6 s and the last 3.1 s"
+  std::string describe() const;
+};
+
+/// The part of a flight log in the air, from its thrust column Fz (a rotor
+/// model's, or the log's own). Before take-off and after landing the thrust is
+/// below the weight and the ground carries the rest, a force the rigid-body
+/// model has no term for: left in, those samples pull the mass (or the thrust
+/// scale) down by their share of the log. nullopt when the log has no Fz or
+/// no thrust at all.
+std::optional<AirbornePart> airborne_part(const FlightLog& log, const AirborneOptions& opt = {});
+
+/// The rows of `log` whose time lies in `w` (seconds from the log's start).
+FlightLog rows_in(const FlightLog& log, const TimeWindow& w);
+
+// --- Rotor mapping ----------------------------------------------------------
+
+/// Whether the log's rotor columns drive the rotors as the vehicle file
+/// arranges them: the moment rows of the rigid body (eq. 10, six inertias and
+/// a constant torque per row, low-passed at `cutoff_hz`) fitted with the
+/// torques of the file's arrangement and of every other (the columns
+/// permuted, the positions turned by +-45 deg about z). A mistake in the file
+/// fits far worse than the right arrangement; noise in the rotor speeds
+/// leaves every arrangement alike (docs/input-checks.md, "Rotor mapping").
+struct RotorMappingCheck {
+  static constexpr int kMaxPermutedRotors = 6;   // 720 permutations x 3 turns: a few ms
+  static constexpr double kFactor = 0.5, kMargin = 0.1;  // the mismatch rule below
+  bool checked = false;            // false: too short a log, or a rotor count outside 3-6
+  double unexplained = 0.0;        // the file's arrangement: share of the moment rows' variance left
+  double best_unexplained = 0.0;   // the best arrangement's (the file's when none is better)
+  std::vector<std::string> best_columns;  // its [rotors] columns, empty when the file's order is best
+  double best_turn_deg = 0.0;             // its positions' turn about z
+  /// best_unexplained below kFactor x unexplained and at least kMargin below it.
+  bool mismatch = false;
+  std::string describe() const;    // the finding, with the fix, in words
+};
+RotorMappingCheck check_rotor_mapping(const FlightLog& log, const RotorModel& rotors, double cutoff_hz);
 
 }  // namespace quadid

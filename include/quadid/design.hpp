@@ -7,8 +7,10 @@
 // only when they print for people.
 #pragma once
 
+#include "quadid/core.hpp"
 #include "quadid/model.hpp"
 #include "quadid/trajectory.hpp"
+#include "quadid/vehicle.hpp"
 
 #include <nlohmann/json.hpp>
 
@@ -22,9 +24,6 @@
 #include <vector>
 
 namespace quadid {
-
-inline constexpr double kDeg = M_PI / 180.0;
-inline constexpr double kInf = std::numeric_limits<double>::infinity();
 
 /// Limits on the desired trajectory, eqs. (22)-(25) with the values of
 /// section III-B as defaults. An infinite limit means "no constraint".
@@ -278,6 +277,9 @@ class ExcitationProblem {
 
 // --- JSON and text ------------------------------------------------------------
 
+/// The limits a designed trajectory file records (its "constraints"), or
+/// nothing for a built-in name or a file without them.
+std::optional<Constraints> saved_trajectory_limits(const std::string& spec);
 nlohmann::json to_json(const Constraints& c);
 /// Inverse of to_json(Constraints): the "constraints" a designed trajectory file
 /// records (null = unbounded; absent fields keep `defaults`). Throws InputError
@@ -290,5 +292,23 @@ nlohmann::json to_json(const StartSummary& s);
 nlohmann::json design_to_json(const DesignResult& r, const DesignOptions& opt);
 /// Human-readable tables (degrees for angles, units in the column titles).
 std::string format_check_report(const CheckReport& r);
+
+// --- Limits of a vehicle (design --vehicle, docs/fly-it.md) ---------------------
+
+/// The limits for flying `v` (design --vehicle, docs/fly-it.md): `base` (the room
+/// and the limits given as options) with the vehicle's [limits] where they are
+/// tighter, and the per-rotor thrust limits: every rotor's thrust for the wrench
+/// of eq. (11) of the nominal parameters within [thrust_min, 1 - thrust_margin]
+/// of rotors.thrust_max. Throws std::invalid_argument when the vehicle cannot
+/// hover within them (naming the keys).
+Constraints vehicle_constraints(const Vehicle& v, Constraints base);
+
+/// The frequency of the highest harmonic, N wf, for `v`, rad/s: the paper's
+/// pi rad/s (N = 5, wf = 36 deg/s) scaled by the natural frequency
+/// sqrt(Kpp / m) of the vehicle's position loop (vehicle_gains, slowest axis)
+/// over the QBall 2's, and at most 0.2 / time_constant so that the motor lag
+/// does not shape the excitation. Gains that keep the QBall 2's closed-loop
+/// poles (vehicle_gains without a [controller] table) give pi rad/s.
+double vehicle_excitation_frequency(const Vehicle& v);
 
 }  // namespace quadid

@@ -4,7 +4,7 @@
 #pragma once
 
 #include "quadid/model.hpp"
-#include "quadid/regressor.hpp"
+#include "quadid/model/regressor.hpp"
 
 #include <algorithm>
 #include <array>
@@ -13,9 +13,6 @@
 #include <vector>
 
 namespace quadid {
-
-using Vec4 = Eigen::Vector4d;
-using Mat7 = Eigen::Matrix<double, 7, 7>;
 
 /// Running sums of eq. (40): A = sum Gamma^T Gamma, b = sum Gamma^T Upsilon,
 /// and sum |Upsilon|^2 (for the residual). O(1) memory, one rank-4 update per sample.

@@ -76,33 +76,6 @@ class FlightPlan final : public Trajectory {
   std::vector<Segment> segments_;
 };
 
-/// A piecewise polynomial of degree 7 in x, y, z, yaw (the Crazyflie's poly4d).
-struct PolyPiece {
-  double duration = 0.0;  // s
-  /// coeffs[axis](i): coefficient of tau^i, tau = time since the piece's start; axes x, y, z, yaw.
-  std::array<Eigen::Matrix<double, 8, 1>, 4> coeffs{};
-};
-
-class PolynomialTrajectory final : public Trajectory {
- public:
-  explicit PolynomialTrajectory(std::vector<PolyPiece> pieces);
-  FlatOutput eval(double t) const override;  // held at the last piece's end after it
-  std::string describe() const override;
-  double period() const override { return total_; }
-  const std::vector<PolyPiece>& pieces() const { return pieces_; }
-
- private:
-  std::vector<PolyPiece> pieces_;
-  std::vector<double> starts_;
-  double total_ = 0.0;
-};
-
-/// {"type": "poly4d", "pieces": [[duration, x^0..x^7, y^0.., z^0.., yaw^0..yaw^7], ...]}: the
-/// one-line spec a simulated log records for a polynomial trajectory (simulate
-/// --trajectory FILE.poly.csv), and back (InputError naming `source`).
-nlohmann::json to_json(const PolynomialTrajectory& p);
-PolynomialTrajectory polynomial_from_json(const nlohmann::json& j, const std::string& source);
-
 /// Fits the flight with degree-7 pieces: each polynomial segment is one piece (exact),
 /// the excitation is cut into pieces of at most `piece` seconds, each the Hermite
 /// interpolant matching position, velocity, acceleration and jerk at both ends
@@ -130,8 +103,6 @@ long setpoint_count(const FlightPlan& plan, double rate);
 std::string setpoints_csv(const FlightPlan& plan, double rate, const std::vector<std::string>& comments = {});
 /// Crazyswarm's layout: header Duration,x^0,...,yaw^7, one piece per row.
 std::string crazyflie_poly_csv(const std::vector<PolyPiece>& pieces);
-/// Reads crazyflie_poly_csv's layout; InputError naming the file, line and column.
-std::vector<PolyPiece> read_crazyflie_poly_csv(const std::filesystem::path& path);
 /// A MAVSDK-Python script flying the setpoint CSV `csv_name` (a path relative to the
 /// script's folder, or absolute) in PX4 offboard mode.
 std::string mavsdk_script(const std::string& csv_name);

@@ -3,10 +3,9 @@
 // converts between files and the library's types.
 #pragma once
 
-#include "quadid/design.hpp"
+#include "quadid/core.hpp"
 #include "quadid/model.hpp"
 #include "quadid/signal.hpp"
-#include "quadid/trajectory.hpp"
 
 #include <filesystem>
 #include <map>
@@ -19,12 +18,6 @@
 #include <vector>
 
 namespace quadid {
-
-/// An error in an input file; what() names the file (and line/column where known).
-class InputError : public std::runtime_error {
- public:
-  using std::runtime_error::runtime_error;
-};
 
 /// A flight log: named columns of equal length, one row per sample.
 /// The standard columns (docs/file-formats.md) are t x y z phi theta psi p q r Fz tau_phi tau_theta tau_psi.
@@ -111,15 +104,6 @@ nlohmann::json to_json(const Params& P);
 /// judged by its prediction error). `source` names the origin in messages.
 Params params_from_json(const nlohmann::json& j, const std::string& source, bool physical = true);
 
-nlohmann::json to_json(const FourierTrajectory& traj);
-/// Reads the trajectory JSON of docs/file-formats.md; the error names the field that is wrong.
-FourierTrajectory trajectory_from_json(const nlohmann::json& j, const std::string& source);
-
-/// The limits a designed trajectory file records (its "constraints"), or
-/// nothing for a built-in name or a file without them.
-std::optional<Constraints> saved_trajectory_limits(const std::string& spec);
-/// A trajectory from a built-in name (table2, circle1..3) or a JSON file.
-std::unique_ptr<Trajectory> load_trajectory(const std::string& spec);
 /// The name a parameter set goes by in tables: "nom" for the QBall 2 nominal
 /// preset (the paper's), another preset's own name, or a file's name without
 /// its extension.
@@ -132,6 +116,15 @@ Params load_params(const std::string& spec);
 /// result are not required to be physical (see params_from_json). A set's
 /// "extra" object (identify --vehicle's real-flight terms) becomes its terms.
 std::vector<NamedParams> load_param_sets(const std::string& spec);
+
+/// A finite number field `key` of object j: InputError naming `where` and the
+/// key when it is missing (if required), not a number, or not finite;
+/// `fallback` when it is absent and not required. The one field reader of the
+/// library's JSON inputs.
+double json_number(const nlohmann::json& j, const std::string& key, const std::string& where, bool required,
+                   double fallback = 0.0);
+/// An array of numbers `key` of object j; InputError naming `where` and the key otherwise.
+Eigen::VectorXd json_number_array(const nlohmann::json& j, const std::string& key, const std::string& where);
 
 /// Parses a JSON file; InputError names the file, line and column of a syntax error.
 nlohmann::json read_json_file(const std::filesystem::path& path);

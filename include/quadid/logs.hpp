@@ -10,6 +10,7 @@
 #pragma once
 
 #include "quadid/io.hpp"
+#include "quadid/vehicle.hpp"
 
 #include <Eigen/Dense>
 
@@ -395,3 +396,29 @@ FlightLog load_any_log(const std::filesystem::path& path, const LoadOptions& opt
                        ImportReport* report = nullptr);
 
 }  // namespace quadid::logs
+
+namespace quadid {
+
+// --- PX4's rotor model from its control-allocation parameters (docs/import.md) ---------
+
+/// The rotor model PX4's CA_ROTOR* parameters describe (logs::px4_rotor_geometry):
+/// input "command" on the columns actuator_motors.control[0..n-1] (motor n+1 = CA_ROTORn),
+/// thrust_max = CA_ROTORn_CT (PX4's allocation is linear in the normalised thrust
+/// setpoint u = actuator_motors.control: T = CT u in steady state; THR_MDL_FAC maps u
+/// to the ESC signal after the log), torque_ratio = |CA_ROTORn_KM|, spin ccw for
+/// KM > 0, positions CA_ROTORn_PX/PY/PZ in FLU, time_constant 0 (PX4 does not log
+/// it). InputError naming the parameter when the rotors differ in CT or KM
+/// magnitude by more than 1 % (one coefficient per model) or a rotor is tilted
+/// more than 5 degrees from the body z axis.
+RotorModel px4_rotor_model(const logs::RotorGeometry& g);
+/// The other way: the CA_ROTOR* geometry of a rotor model that takes commands
+/// (thrust axes along body z, CT = thrust_max, KM = torque_ratio), e.g. to write a
+/// simulated flight as a PX4 ULog (logs::px4_ulog_from_flight_log). InputError
+/// unless the input is "command".
+logs::RotorGeometry px4_geometry(const RotorModel& m);
+/// A vehicle known only from a ULog: px4_rotor_model(px4_rotor_geometry(log)) and a
+/// rough nominal set (rough_nominal, filled in once the log's wrench is known;
+/// until then a placeholder of 1 kg). `source` names the log.
+Vehicle px4_vehicle(const logs::ULog& log, const std::string& source);
+
+}  // namespace quadid

@@ -21,6 +21,8 @@ using Vec3 = Eigen::Vector3d;
 using Mat3 = Eigen::Matrix3d;
 /// Theta = [m, Ixx, Ixy, Ixz, Iyy, Iyz, Izz] (paper eq. 12), always in this order.
 using Theta = Eigen::Matrix<double, 7, 1>;
+using Vec4 = Eigen::Vector4d;                 // F = [Fz, tau_phi, tau_theta, tau_psi]
+using Mat7 = Eigen::Matrix<double, 7, 7>;     // a 7x7 matrix over Theta (covariance, metric)
 
 inline constexpr double kDefaultGravity = 9.81;  // m/s^2, the paper's value
 

@@ -23,7 +23,7 @@ struct MonteCarloOptions {
   int threads = 0;
   std::uint64_t seed = 1;
   /// Reference flown: "table2", "circle1".."circle3", or a trajectory JSON file
-  /// (trajectory_from_spec).
+  /// (load_trajectory).
   std::string trajectory = "table2";
   /// The flight: simulation.plant is the truth; simulation.sensors.noise the
   /// noise (its seed is replaced per run); simulation.duration the length.

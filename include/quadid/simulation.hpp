@@ -254,12 +254,7 @@ State initial_state_at_rest(const Trajectory& traj);
 
 // --- Log metadata ----------------------------------------------------------------
 
-/// A one-line spec that rebuilds the trajectory: "table2", "circle1".."circle3",
-/// "circle radius=R altitude=A [period=P psi_amplitude=RAD]", or the one-line JSON
-/// of a Fourier trajectory.
-std::string trajectory_spec(const Trajectory& traj);
-/// Inverse of trajectory_spec; also accepts a trajectory JSON file name. Throws InputError.
-std::unique_ptr<Trajectory> trajectory_from_spec(std::string_view spec);
+// trajectory_spec and load_trajectory (trajectory.hpp) write and read the log's trajectory line.
 
 /// The header comment lines a simulated log carries (without the leading '#').
 std::vector<std::string> simulation_log_comments(const Trajectory& traj, const SimulationOptions& opt);

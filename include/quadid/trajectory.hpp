@@ -3,8 +3,13 @@
 // reference (eqs. 26-27 and the kinematic relations below eq. 20).
 #pragma once
 
-#include "quadid/dual.hpp"
+#include "quadid/core.hpp"
+#include "quadid/model/dual.hpp"
 #include "quadid/model.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
 
 #include <array>
 #include <memory>
@@ -168,5 +173,61 @@ ReferenceT<S> reference_from_flat(const Eigen::Matrix<S, 4, 5>& d, double g = kD
 
 /// Convenience: the reference of a trajectory at time t.
 Reference reference_at(const Trajectory& traj, double t, double g = kDefaultGravity);
+
+// --- Piecewise polynomials (the Crazyflie's poly4d) -----------------------------
+
+/// Falling factorial i!/(i-k)! (the k-th derivative's factor of tau^i).
+inline double falling_factorial(int i, int k) {
+  double r = 1.0;
+  for (int j = 0; j < k; ++j) r *= static_cast<double>(i - j);
+  return r;
+}
+
+/// A piecewise polynomial of degree 7 in x, y, z, yaw (the Crazyflie's poly4d).
+struct PolyPiece {
+  double duration = 0.0;  // s
+  /// coeffs[axis](i): coefficient of tau^i, tau = time since the piece's start; axes x, y, z, yaw.
+  std::array<Eigen::Matrix<double, 8, 1>, 4> coeffs{};
+};
+
+class PolynomialTrajectory final : public Trajectory {
+ public:
+  explicit PolynomialTrajectory(std::vector<PolyPiece> pieces);
+  FlatOutput eval(double t) const override;  // held at the last piece's end after it
+  std::string describe() const override;
+  double period() const override { return total_; }
+  const std::vector<PolyPiece>& pieces() const { return pieces_; }
+
+ private:
+  std::vector<PolyPiece> pieces_;
+  std::vector<double> starts_;
+  double total_ = 0.0;
+};
+
+/// {"type": "poly4d", "pieces": [[duration, x^0..x^7, y^0.., z^0.., yaw^0..yaw^7], ...]}: the
+/// one-line spec a simulated log records for a polynomial trajectory (simulate
+/// --trajectory FILE.poly.csv), and back (InputError naming `source`).
+nlohmann::json to_json(const PolynomialTrajectory& p);
+PolynomialTrajectory polynomial_from_json(const nlohmann::json& j, const std::string& source);
+
+/// Reads crazyflie_poly_csv's layout; InputError naming the file, line and column.
+std::vector<PolyPiece> read_crazyflie_poly_csv(const std::filesystem::path& path);
+
+// --- Trajectories as text: files, specs, JSON ------------------------------------
+
+nlohmann::json to_json(const FourierTrajectory& traj);
+/// Reads the trajectory JSON of docs/file-formats.md; the error names the field that is wrong.
+FourierTrajectory trajectory_from_json(const nlohmann::json& j, const std::string& source);
+
+/// The one-line spec of a trajectory (a built-in name, "circle radius=R
+/// altitude=A ...", or its JSON) that a simulated log records and
+/// load_trajectory reads back. Throws std::invalid_argument for a trajectory
+/// that has none.
+std::string trajectory_spec(const Trajectory& traj);
+/// The one loader of trajectories: a built-in name (table2, circle1..3), a
+/// circle spec, an inline JSON spec (Fourier or poly4d), a Crazyswarm
+/// polynomial CSV (*.poly.csv) or a trajectory JSON file (from `quadid design`).
+/// InputError names the spec or file.
+std::unique_ptr<Trajectory> load_trajectory(std::string_view spec);
 
 }  // namespace quadid

@@ -34,11 +34,6 @@
 
 namespace quadid {
 
-namespace logs {
-struct ULog;
-struct RotorGeometry;
-}  // namespace logs
-
 /// What a log holds per rotor.
 enum class RotorInput {
   kSpeed,    // rotor speed, rad/s
@@ -159,22 +154,6 @@ struct Vehicle {
 /// moment, I_ii / I_ii(QBall 2 nominal, Table 1). A QBall 2 gets the paper's gains unchanged.
 PidGains vehicle_gains(const Vehicle& v);
 
-/// The limits for flying `v` (design --vehicle, docs/fly-it.md): `base` (the room
-/// and the limits given as options) with the vehicle's [limits] where they are
-/// tighter, and the per-rotor thrust limits: every rotor's thrust for the wrench
-/// of eq. (11) of the nominal parameters within [thrust_min, 1 - thrust_margin]
-/// of rotors.thrust_max. Throws std::invalid_argument when the vehicle cannot
-/// hover within them (naming the keys).
-Constraints vehicle_constraints(const Vehicle& v, Constraints base);
-
-/// The frequency of the highest harmonic, N wf, for `v`, rad/s: the paper's
-/// pi rad/s (N = 5, wf = 36 deg/s) scaled by the natural frequency
-/// sqrt(Kpp / m) of the vehicle's position loop (vehicle_gains, slowest axis)
-/// over the QBall 2's, and at most 0.2 / time_constant so that the motor lag
-/// does not shape the excitation. Gains that keep the QBall 2's closed-loop
-/// poles (vehicle_gains without a [controller] table) give pi rad/s.
-double vehicle_excitation_frequency(const Vehicle& v);
-
 /// Parses the TOML text of a vehicle file. `source` names it in messages
 /// ("FILE:LINE:COLUMN: key: problem"). Unknown keys, missing required keys,
 /// wrong types, a rotor count not matching `columns`, negative coefficients and
@@ -202,48 +181,6 @@ double log_sample_period(const FlightLog& log);
 /// rotor model (replacing them when present, appended otherwise).
 FlightLog with_rotor_wrench(const FlightLog& log, const RotorModel& rotors);
 
-/// Whether the log's rotor columns drive the rotors as the vehicle file
-/// arranges them: the moment rows of the rigid body (eq. 10, six inertias and
-/// a constant torque per row, low-passed at `cutoff_hz`) fitted with the
-/// torques of the file's arrangement and of every other (the columns
-/// permuted, the positions turned by +-45 deg about z). A mistake in the file
-/// fits far worse than the right arrangement; noise in the rotor speeds
-/// leaves every arrangement alike (docs/input-checks.md, "Rotor mapping").
-struct RotorMappingCheck {
-  static constexpr int kMaxPermutedRotors = 6;   // 720 permutations x 3 turns: a few ms
-  static constexpr double kFactor = 0.5, kMargin = 0.1;  // the mismatch rule below
-  bool checked = false;            // false: too short a log, or a rotor count outside 3-6
-  double unexplained = 0.0;        // the file's arrangement: share of the moment rows' variance left
-  double best_unexplained = 0.0;   // the best arrangement's (the file's when none is better)
-  std::vector<std::string> best_columns;  // its [rotors] columns, empty when the file's order is best
-  double best_turn_deg = 0.0;             // its positions' turn about z
-  /// best_unexplained below kFactor x unexplained and at least kMargin below it.
-  bool mismatch = false;
-  std::string describe() const;    // the finding, with the fix, in words
-};
-RotorMappingCheck check_rotor_mapping(const FlightLog& log, const RotorModel& rotors, double cutoff_hz);
-
-// --- PX4's rotor model from its control-allocation parameters (docs/import.md) ---------
-
-/// The rotor model PX4's CA_ROTOR* parameters describe (logs::px4_rotor_geometry):
-/// input "command" on the columns actuator_motors.control[0..n-1] (motor n+1 = CA_ROTORn),
-/// thrust_max = CA_ROTORn_CT (PX4's allocation is linear in the normalised thrust
-/// setpoint u = actuator_motors.control: T = CT u in steady state; THR_MDL_FAC maps u
-/// to the ESC signal after the log), torque_ratio = |CA_ROTORn_KM|, spin ccw for
-/// KM > 0, positions CA_ROTORn_PX/PY/PZ in FLU, time_constant 0 (PX4 does not log
-/// it). InputError naming the parameter when the rotors differ in CT or KM
-/// magnitude by more than 1 % (one coefficient per model) or a rotor is tilted
-/// more than 5 degrees from the body z axis.
-RotorModel px4_rotor_model(const logs::RotorGeometry& g);
-/// The other way: the CA_ROTOR* geometry of a rotor model that takes commands
-/// (thrust axes along body z, CT = thrust_max, KM = torque_ratio), e.g. to write a
-/// simulated flight as a PX4 ULog (logs::px4_ulog_from_flight_log). InputError
-/// unless the input is "command".
-logs::RotorGeometry px4_geometry(const RotorModel& m);
-/// A vehicle known only from a ULog: px4_rotor_model(px4_rotor_geometry(log)) and a
-/// rough nominal set (rough_nominal, filled in once the log's wrench is known;
-/// until then a placeholder of 1 kg). `source` names the log.
-Vehicle px4_vehicle(const logs::ULog& log, const std::string& source);
 /// A rough reference set for a vehicle known only by its rotors: m = mean Fz / g over
 /// `log` (its wrench columns: hover-dominated flights give the weight), Ixx = Iyy =
 /// m r^2 / 4 and Izz = m r^2 / 2 with r the mean rotor distance from the centre of mass
@@ -251,5 +188,6 @@ Vehicle px4_vehicle(const logs::ULog& log, const std::string& source);
 /// gradient descent's start and the prediction tables' reference; never a prior
 /// unless the data leave a direction undetermined.
 Params rough_nominal(const FlightLog& log, const RotorModel& rotors, double g);
+
 
 }  // namespace quadid

@@ -9,7 +9,7 @@
 #include "quadid/design.hpp"
 #include "quadid/identification.hpp"
 #include "quadid/io.hpp"
-#include "quadid/options_json.hpp"
+#include "quadid/pipeline.hpp"
 #include "quadid/simulation.hpp"
 
 #include <fmt/format.h>

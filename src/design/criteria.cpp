@@ -10,7 +10,7 @@
 // coefficients is a product with the precomputed basis.
 #include "design_internal.hpp"
 
-#include "quadid/regressor.hpp"
+#include "quadid/model/regressor.hpp"
 
 #include <Eigen/Eigenvalues>
 #include <fmt/format.h>

@@ -5,7 +5,7 @@
 #pragma once
 
 #include "quadid/design.hpp"
-#include "quadid/dual.hpp"
+#include "quadid/model/dual.hpp"
 
 #include <Eigen/Core>
 #include <array>

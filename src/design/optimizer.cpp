@@ -18,8 +18,8 @@
 //   thread runs, and each start is deterministic, so the result does not
 //   depend on the number of threads.
 #include "design_internal.hpp"
-#include "../common/nlopt_status.hpp"
-#include "../common/parallel.hpp"
+#include "quadid/core.hpp"
+#include "quadid/core/parallel.hpp"
 
 #include <Eigen/QR>
 #include <fmt/format.h>
@@ -599,7 +599,7 @@ StartSummary run_start(const Setup& s, int index, Eigen::VectorXd y, Eigen::Vect
     std::vector<double> yv(y.data(), y.data() + y.size());
     double f = 0.0;
     try {
-      sum.status = detail::nlopt_status(o.optimize(yv, f));
+      sum.status = nlopt_status(static_cast<int>(o.optimize(yv, f)));
     } catch (const nlopt::forced_stop&) {
       sum.status = "converged";
     } catch (const nlopt::roundoff_limited&) {

@@ -6,7 +6,7 @@
 // tr(I)/2 1 - I is PSD, which contains the triangle inequalities of the
 // principal moments (Ixx + Iyy - Izz = 2 Sigma_zz >= 0 in any axes).
 #include "quadid/estimation.hpp"
-#include "../common/nlopt_status.hpp"
+#include "quadid/core.hpp"
 
 #include <fmt/format.h>
 
@@ -211,7 +211,7 @@ PhysicalProjection closest_physical(const Mat7& F, const Theta& theta_ls, const 
   o.set_maxeval(opt.max_evaluations);
   double f = 0.0;
   try {
-    out.status = detail::nlopt_status(o.optimize(x, f));
+    out.status = nlopt_status(static_cast<int>(o.optimize(x, f)));
   } catch (const nlopt::roundoff_limited&) {
     out.status = "roundoff limited";  // at the optimum to machine precision
   } catch (const std::exception& e) {

@@ -1,5 +1,5 @@
-// Streaming QR least squares (see include/quadid/qr_least_squares.hpp).
-#include "quadid/qr_least_squares.hpp"
+// Streaming QR least squares (see include/quadid/estimation/qr_least_squares.hpp).
+#include "quadid/estimation/qr_least_squares.hpp"
 
 #include <fmt/format.h>
 

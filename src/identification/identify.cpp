@@ -3,9 +3,9 @@
 // prediction errors (Tables 5-6).
 #include "quadid/identification.hpp"
 
-#include "quadid/extended.hpp"
+#include "quadid/identification/extended.hpp"
 
-#include "../common/parallel.hpp"
+#include "quadid/core/parallel.hpp"
 
 #include <fmt/format.h>
 

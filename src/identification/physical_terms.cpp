@@ -6,7 +6,7 @@
 // the rigid body and the conditional mean of the terms given it. A term held
 // at its bound (0) is one more condition: the rest is then conditioned on it
 // first.
-#include "quadid/extended.hpp"
+#include "quadid/identification/extended.hpp"
 
 #include <fmt/format.h>
 

@@ -1,7 +1,7 @@
 // Which set to use (include/quadid/identification.hpp, recommend_set).
 #include "quadid/identification.hpp"
 
-#include "quadid/extended.hpp"
+#include "quadid/identification/extended.hpp"
 
 #include <fmt/format.h>
 

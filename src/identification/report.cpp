@@ -2,7 +2,7 @@
 #include "quadid/identification.hpp"
 #include "quadid/report.hpp"
 
-#include "quadid/extended.hpp"
+#include "quadid/identification/extended.hpp"
 
 #include <fmt/format.h>
 

@@ -1,6 +1,6 @@
 // Motor time constant and time offsets between signal groups
-// (include/quadid/timing.hpp, docs/real-flights.md "Timing").
-#include "quadid/timing.hpp"
+// (include/quadid/identification/timing.hpp, docs/real-flights.md "Timing").
+#include "quadid/identification/timing.hpp"
 
 #include "quadid/model.hpp"
 #include "quadid/signal.hpp"

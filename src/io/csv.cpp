@@ -10,7 +10,7 @@
 // each half into its own rows. Skipped columns are not parsed, only counted.
 #include "quadid/io.hpp"
 
-#include "../common/parallel.hpp"
+#include "quadid/core/parallel.hpp"
 
 #include <fmt/format.h>
 

@@ -1,7 +1,7 @@
 // Monte Carlo identification flights on a thread pool (docs/montecarlo.md).
 #include "quadid/montecarlo.hpp"
 #include "quadid/vehicle.hpp"
-#include "../common/parallel.hpp"
+#include "quadid/core/parallel.hpp"
 
 #include <fmt/format.h>
 
@@ -132,7 +132,7 @@ std::vector<MonteCarloSetStats> montecarlo_statistics(const std::vector<MonteCar
 
 MonteCarloResult run_montecarlo(const MonteCarloOptions& options, const std::function<void(int, int)>& progress) {
   options.validate();
-  const auto traj = trajectory_from_spec(options.trajectory);
+  const auto traj = load_trajectory(options.trajectory);
   MonteCarloResult res;
   res.options = options;
   res.truth = options.simulation.plant.theta();

@@ -19,10 +19,10 @@
 // with a block per held sensor sample.
 #include "quadid/precision.hpp"
 
-#include "quadid/extended.hpp"
-#include "quadid/regressor.hpp"
+#include "quadid/identification/extended.hpp"
+#include "quadid/model/regressor.hpp"
 #include "quadid/signal.hpp"
-#include "../common/parallel.hpp"
+#include "quadid/core/parallel.hpp"
 
 #include <fmt/format.h>
 

@@ -1,6 +1,6 @@
 #include "quadid/reproduce.hpp"
 
-#include "../common/parallel.hpp"
+#include "quadid/core/parallel.hpp"
 
 #include <fmt/format.h>
 

@@ -1,7 +1,6 @@
 // Metadata of simulated logs: trajectory specs and the options as JSON, so a
 // log can be re-flown (quadid validate) from its own header.
 #include "quadid/simulation.hpp"
-#include "quadid/export.hpp"
 
 #include <fmt/format.h>
 
@@ -12,100 +11,6 @@
 namespace quadid {
 
 using nlohmann::json;
-
-namespace {
-
-constexpr double kDefaultCirclePeriod = 5.0;
-constexpr double kDefaultPsiAmplitude = 15.0 * M_PI / 180.0;
-
-bool same_trajectory(const FourierTrajectory& a, const FourierTrajectory& b) {
-  return a.wf() == b.wf() && a.harmonics() == b.harmonics() && a.coefficients() == b.coefficients();
-}
-
-// psi_d = A sin(2 pi t / P) (eq. 44), so A is psi_d at a quarter period.
-double circle_psi_amplitude(const CircleTrajectory& c) { return c.eval(c.period() / 4.0)(kPsi, 0); }
-
-}  // namespace
-
-std::string trajectory_spec(const Trajectory& traj) {
-  if (const auto* f = dynamic_cast<const FourierTrajectory*>(&traj)) {
-    if (same_trajectory(*f, FourierTrajectory::table2())) return "table2";
-    return to_json(*f).dump();
-  }
-  if (const auto* c = dynamic_cast<const CircleTrajectory*>(&traj)) {
-    const double amp = circle_psi_amplitude(*c);
-    const bool default_shape = c->period() == kDefaultCirclePeriod && std::abs(amp - kDefaultPsiAmplitude) < 1e-15;
-    for (int k = 1; k <= 3; ++k) {
-      const auto e = CircleTrajectory::experiment(k);
-      if (default_shape && c->radius() == e.radius() && c->rho() == e.rho()) return fmt::format("circle{}", k);
-    }
-    std::string s = fmt::format("circle radius={} altitude={}", c->radius(), c->rho());
-    if (!default_shape) s += fmt::format(" period={} psi_amplitude={}", c->period(), amp);
-    return s;
-  }
-  if (const auto* p = dynamic_cast<const PolynomialTrajectory*>(&traj)) return to_json(*p).dump();  // export.hpp
-  throw std::invalid_argument(fmt::format("trajectory '{}' has no spec (only Fourier and circle trajectories do)",
-                                          traj.describe()));
-}
-
-namespace {
-
-std::unique_ptr<Trajectory> circle_from_spec(std::string_view spec) {
-  // "circle radius=R altitude=A [period=P] [psi_amplitude=RAD]"
-  double radius = NAN, altitude = NAN, period = kDefaultCirclePeriod, amp = kDefaultPsiAmplitude;
-  std::string_view rest = spec.substr(6);
-  while (!rest.empty()) {
-    const size_t b = rest.find_first_not_of(' ');
-    if (b == std::string_view::npos) break;
-    rest.remove_prefix(b);
-    const size_t e = std::min(rest.find(' '), rest.size());
-    const std::string_view item = rest.substr(0, e);
-    rest.remove_prefix(e);
-    const size_t eq = item.find('=');
-    double val = 0.0;
-    const char* vb = item.data() + (eq == std::string_view::npos ? item.size() : eq + 1);
-    const char* ve = item.data() + item.size();
-    const auto [ptr, ec] = std::from_chars(vb, ve, val);
-    if (eq == std::string_view::npos || ec != std::errc() || ptr != ve || !std::isfinite(val))
-      throw InputError(fmt::format("trajectory spec '{}': '{}' is not KEY=NUMBER", spec, item));
-    const std::string_view key = item.substr(0, eq);
-    if (key == "radius") radius = val;
-    else if (key == "altitude") altitude = val;
-    else if (key == "period") period = val;
-    else if (key == "psi_amplitude") amp = val;
-    else
-      throw InputError(fmt::format("trajectory spec '{}': unknown key '{}' (radius, altitude, period, psi_amplitude)",
-                                   spec, key));
-  }
-  if (std::isnan(radius) || std::isnan(altitude))
-    throw InputError(fmt::format("trajectory spec '{}': needs radius=R and altitude=A (metres)", spec));
-  try {
-    return std::make_unique<CircleTrajectory>(radius, altitude, period, amp);
-  } catch (const std::invalid_argument& e) {
-    throw InputError(fmt::format("trajectory spec '{}': {}", spec, e.what()));
-  }
-}
-
-}  // namespace
-
-std::unique_ptr<Trajectory> trajectory_from_spec(std::string_view spec) {
-  if (auto t = builtin_trajectory(spec)) return t;
-  if (spec.rfind("circle ", 0) == 0) return circle_from_spec(spec);
-  if (!spec.empty() && spec.front() == '{') {
-    json j;
-    try {
-      j = json::parse(spec);
-    } catch (const json::parse_error& e) {
-      throw InputError(fmt::format("trajectory spec: invalid JSON ({})", e.what()));
-    }
-    if (j.is_object() && j.value("type", "") == "poly4d")  // an exported Crazyflie polynomial (export.hpp)
-      return std::make_unique<PolynomialTrajectory>(polynomial_from_json(j, "trajectory spec"));
-    return std::make_unique<FourierTrajectory>(trajectory_from_json(j, "trajectory spec"));
-  }
-  if (spec.size() > 9 && spec.substr(spec.size() - 9) == ".poly.csv")
-    return std::make_unique<PolynomialTrajectory>(read_crazyflie_poly_csv(std::string(spec)));
-  return load_trajectory(std::string(spec));
-}
 
 // --- options <-> JSON ---------------------------------------------------------
 
@@ -411,7 +316,7 @@ std::unique_ptr<Trajectory> trajectory_from_log(const FlightLog& log) {
   std::string spec;
   if (!find_comment(log, "trajectory", spec))
     throw InputError("flight log metadata: no '# trajectory:' line naming the reference");
-  return trajectory_from_spec(spec);
+  return load_trajectory(spec);
 }
 
 SimulationOptions simulation_options_from_log(const FlightLog& log) {

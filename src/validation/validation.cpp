@@ -1,6 +1,6 @@
 #include "quadid/validation.hpp"
 
-#include "quadid/extended.hpp"
+#include "quadid/identification/extended.hpp"
 #include "quadid/report.hpp"
 
 #include <fmt/format.h>

@@ -245,4 +245,19 @@ FlightLog with_rotor_wrench(const FlightLog& log, const RotorModel& rotors) {
   return out;
 }
 
+Params rough_nominal(const FlightLog& log, const RotorModel& rotors, double g) {
+  const Eigen::VectorXd Fz = log.column("Fz");
+  const double m = Fz.mean() / g;
+  if (!(m > 0.0)) throw InputError(fmt::format("the log's mean thrust {:.4g} N is not positive: no reference mass", Fz.mean()));
+  double r2 = 0.0;
+  for (const Vec3& p : rotors.positions) r2 += p.head<2>().squaredNorm();
+  r2 /= static_cast<double>(rotors.positions.size());
+  Params P;
+  P.m = m;
+  P.I = Mat3::Zero();
+  P.I(0, 0) = P.I(1, 1) = 0.25 * m * r2;
+  P.I(2, 2) = 0.5 * m * r2;
+  return P;
+}
+
 }  // namespace quadid

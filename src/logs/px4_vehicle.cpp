@@ -1,5 +1,5 @@
 // PX4's rotor model from the control-allocation parameters of a ULog
-// (include/quadid/vehicle.hpp, docs/import.md).
+// (include/quadid/logs.hpp, docs/import.md).
 #include "quadid/logs.hpp"
 #include "quadid/vehicle.hpp"
 
@@ -82,21 +82,6 @@ Vehicle px4_vehicle(const logs::ULog& log, const std::string& source) {
   v.nominal.m = 1.0;  // placeholder until rough_nominal
   v.nominal.I = Mat3::Identity() * 0.01;
   return v;
-}
-
-Params rough_nominal(const FlightLog& log, const RotorModel& rotors, double g) {
-  const Eigen::VectorXd Fz = log.column("Fz");
-  const double m = Fz.mean() / g;
-  if (!(m > 0.0)) throw InputError(fmt::format("the log's mean thrust {:.4g} N is not positive: no reference mass", Fz.mean()));
-  double r2 = 0.0;
-  for (const Vec3& p : rotors.positions) r2 += p.head<2>().squaredNorm();
-  r2 /= static_cast<double>(rotors.positions.size());
-  Params P;
-  P.m = m;
-  P.I = Mat3::Zero();
-  P.I(0, 0) = P.I(1, 1) = 0.25 * m * r2;
-  P.I(2, 2) = 0.5 * m * r2;
-  return P;
 }
 
 }  // namespace quadid

@@ -22,7 +22,7 @@
 //                   phase's curvature), then Nelder-Mead in (u, tau).
 #pragma once
 
-#include "quadid/extended.hpp"
+#include "quadid/identification/extended.hpp"
 #include "quadid/vehicle.hpp"
 
 #include <nlohmann/json.hpp>

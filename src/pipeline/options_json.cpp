@@ -1,7 +1,7 @@
 // Commands' options from JSON objects keyed by the CLI's long option names
-// (include/quadid/options_json.hpp). The defaults below are those of the
+// (include/quadid/pipeline.hpp). The defaults below are those of the
 // command line (apps/quadid/cmd_*.cpp); tests/test_options_json.cpp checks them.
-#include "quadid/options_json.hpp"
+#include "quadid/pipeline.hpp"
 
 #include "quadid/logs.hpp"
 
@@ -863,7 +863,7 @@ SimulateRequest simulate_options_from_json(const nlohmann::json& j) {
   } else {
     if (radius || altitude)
       throw std::invalid_argument("simulate: options radius and altitude only apply to trajectory circle");
-    req.trajectory = trajectory_from_spec(*spec);
+    req.trajectory = load_trajectory(*spec);
   }
   // In the command line's order: rates, models, noise profile, then the
   // vehicle (which overrides those it defines unless given here), then noise levels.

@@ -4,9 +4,9 @@
 // Memory: everything is computed inside the 15-column RegressionSignals, with
 // one reusable work buffer (signal::ZeroPhaseFilter): for 1.2 million samples
 // that is 144 MB + 10 MB beside the log.
-#include "quadid/identification.hpp"
+#include "quadid/regression.hpp"
 
-#include "../common/parallel.hpp"
+#include "quadid/core/parallel.hpp"
 
 #include <fmt/format.h>
 

@@ -1,4 +1,4 @@
-// Private to the library: independent pieces of work at once, for the 2-core
+// Part of core (include/quadid/core.hpp): independent pieces of work at once, for the 2-core
 // machines quadid targets (identification, reproduce, design starts, Monte
 // Carlo runs, simulated flights). The results do not depend on it: each piece
 // computes exactly what it computes alone.

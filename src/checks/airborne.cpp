@@ -1,7 +1,7 @@
-// The part of a flight log in the air (include/quadid/identification.hpp,
+// The part of a flight log in the air (include/quadid/checks.hpp,
 // docs/real-flights.md "On the ground"): a log from the autopilot starts at
 // arming and ends at disarming, with the vehicle on the ground at both ends.
-#include "quadid/identification.hpp"
+#include "quadid/checks.hpp"
 
 #include <fmt/format.h>
 

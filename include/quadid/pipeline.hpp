@@ -19,7 +19,7 @@
 #include "quadid/logs.hpp"
 #include "quadid/vehicle.hpp"
 #include "quadid/simulation.hpp"
-#include "quadid/timing.hpp"
+#include "quadid/identification/timing.hpp"
 #include "quadid/validation.hpp"
 
 #include <nlohmann/json.hpp>

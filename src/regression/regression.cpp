@@ -1,5 +1,5 @@
 // Regressions over a window (eqs. 34, 38) and the output prediction error (eq. 43).
-#include "quadid/identification.hpp"
+#include "quadid/regression.hpp"
 
 #include <fmt/format.h>
 
@@ -9,53 +9,7 @@
 #include <stdexcept>
 
 namespace quadid {
-namespace {
-
-bool parse_double(std::string_view s, double& v) {
-  while (!s.empty() && s.front() == ' ') s.remove_prefix(1);
-  while (!s.empty() && s.back() == ' ') s.remove_suffix(1);
-  if (!s.empty() && s.front() == '+') s.remove_prefix(1);
-  const auto [p, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
-  return ec == std::errc() && p == s.data() + s.size() && std::isfinite(v);
-}
-
-}  // namespace
-
-TimeWindow TimeWindow::parse(std::string_view spec) {
-  const auto colon = spec.find(':');
-  auto bad = [&](std::string_view why) {
-    return std::invalid_argument(fmt::format("window '{}': {} (expected T0:T1 in seconds from the log's start, "
-                                             "e.g. 10:50, or 10: for the rest of the log)",
-                                             spec, why));
-  };
-  if (colon == std::string_view::npos) throw bad("no ':'");
-  TimeWindow w;
-  const std::string_view a = spec.substr(0, colon), b = spec.substr(colon + 1);
-  if (a.find_first_not_of(' ') != std::string_view::npos && !parse_double(a, w.t0)) throw bad("T0 is not a number");
-  if (b.find_first_not_of(' ') != std::string_view::npos && !parse_double(b, w.t1)) throw bad("T1 is not a number");
-  if (w.t0 < 0.0) throw bad("T0 is negative");
-  if (!(w.t1 > w.t0)) throw bad("T1 must be greater than T0");
-  return w;
-}
-
-std::string TimeWindow::to_string() const {
-  return std::isfinite(t1) ? fmt::format("{:g}-{:g} s", t0, t1) : fmt::format("{:g} s-end", t0);
-}
-
 const char* to_string(RegressionModel m) { return m == RegressionModel::Standard ? "standard" : "filtered"; }
-
-Regressor4x7 assemble_regressor(const Vec4& a, const Eigen::Matrix<double, 7, 1>& b) {
-  // Phi_a(a) + Phi_b(b), rows from eqs. (7)-(10) (see regressor.hpp);
-  // a = [w p q r] (or their derivatives / g_D images), b = [c pq pr qr p2 q2 r2].
-  const double w = a(0), p = a(1), q = a(2), r = a(3);
-  const double c = b(0), pq = b(1), pr = b(2), qr = b(3), pp = b(4), qq = b(5), rr = b(6);
-  Regressor4x7 G;
-  G << w + c, 0.0, 0.0,     0.0,      0.0, 0.0,     0.0,
-       0.0,   p,   q - pr,  r + pq,   -qr, qq - rr, qr,
-       0.0,   pr,  p + qr,  rr - pp,  q,   r - pq,  -pr,
-       0.0,   -pq, pp - qq, p - qr,   pq,  q + pr,  r;
-  return G;
-}
 
 Regression::Regression(std::shared_ptr<const RegressionSignals> signals, RegressionModel model, TimeWindow window,
                        double lambda, signal::GdVariant gd_variant)

@@ -1,7 +1,7 @@
 // What a vehicle can fly, for `design --vehicle` (issue 14): its [limits]
 // table, the per-rotor thrust limits of its rotor model, and the frequency of
 // the excitation's highest harmonic from its closed-loop bandwidth.
-#include "quadid/vehicle.hpp"
+#include "quadid/design.hpp"
 
 #include <fmt/format.h>
 

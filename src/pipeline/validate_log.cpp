@@ -1,9 +1,9 @@
-// `quadid validate` as a library call (include/quadid/options_json.hpp): the
+// `quadid validate` as a library call (include/quadid/pipeline.hpp): the
 // parameter sets, Table 4 by re-flying the log, Tables 5-12.
-#include "quadid/options_json.hpp"
+#include "quadid/pipeline.hpp"
 
-#include "quadid/extended.hpp"
-#include "quadid/timing.hpp"
+#include "quadid/identification/extended.hpp"
+#include "quadid/identification/timing.hpp"
 #include "quadid/vehicle.hpp"
 
 #include <fmt/format.h>

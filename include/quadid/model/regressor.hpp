@@ -16,6 +16,11 @@ template <class S>
 using Regressor = Eigen::Matrix<S, 4, 7>;
 using Regressor4x7 = Regressor<double>;
 
+/// Gamma = Phi_a(a) + Phi_b(b): the 4x7 regressor from the 4 "a" signals
+/// a = [w p q r] (or their derivatives / g_D images) and the 7 "b" signals
+/// b = [c pq pr qr p^2 q^2 r^2], c = p v - q u + g_bz (eq. 13's split).
+Regressor4x7 assemble_regressor(const Vec4& a, const Eigen::Matrix<double, 7, 1>& b);
+
 /// Standard regressor Phi, eq. (12), rows from eqs. (7)-(10).
 template <class S>
 Regressor<S> regressor(const Eigen::Matrix<S, 3, 1>& v, const Eigen::Matrix<S, 3, 1>& w,

@@ -6,9 +6,9 @@
 // of the rates' regressor serves them all: each arrangement costs a quadratic
 // form. Noise in the rotor speeds leaves every arrangement equally
 // unexplained, so only a far better fit elsewhere is a finding.
-#include "quadid/identification.hpp"
+#include "quadid/checks.hpp"
+#include "quadid/model/regressor.hpp"
 #include "quadid/signal.hpp"
-#include "quadid/vehicle.hpp"
 
 #include <fmt/format.h>
 

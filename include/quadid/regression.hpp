@@ -1,0 +1,293 @@
+// quadid regression: a flight log -> processed signals (section II-C: zero-phase
+// filtering, central differences eq. 33, v = R^T p_dot) -> the standard (eq. 34)
+// and filtered (eqs. 35-39) regressions Gamma(k) Theta = Upsilon(k), sample by
+// sample, and the output prediction error of any parameter set (eq. 43,
+// Tables 5-6). The terms of the real-flight regression (ModelTerms) are listed
+// here; identification.hpp estimates from these rows. See docs/identify.md.
+#pragma once
+
+#include "quadid/core.hpp"
+#include "quadid/io.hpp"
+#include "quadid/model.hpp"
+#include "quadid/model/regressor.hpp"
+#include "quadid/signal.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <memory>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+namespace quadid {
+
+// --- Processing (section II-C) -----------------------------------------------
+
+struct ProcessingOptions {
+  /// Zero-phase pre-filter of p, eta, omega and F (step 1). Default Butterworth,
+  /// order 4, 4 Hz: passes the excitation (<= 0.5 Hz for Table 2) untouched and
+  /// attenuates the motion-capture hold steps (10, 20, 30 Hz in a 500 Hz log)
+  /// by 64-141 dB zero-phase before p is differentiated twice. Being in Hz it
+  /// keeps its meaning at any sample rate.
+  signal::LowpassOptions lowpass{};
+  double g = kDefaultGravity;  // m/s^2
+  /// Unwrap psi (remove 2 pi jumps) before filtering; harmless on an unwrapped log.
+  bool unwrap_yaw = true;
+  /// Relative tolerance of each time step against the median step
+  /// (signal::check_sample_period, the same check as the CSV reader's).
+  double period_tolerance = signal::kDefaultPeriodTolerance;
+  /// Leave out of every regression window the samples whose filtered values
+  /// still depend on how the filters started: the pre-filter's settling time at
+  /// both ends of the log (0.57 s for the default) and, for the filtered model,
+  /// 5/lambda after the start (f_D's unknown initial state). Without this, a
+  /// flight that starts abruptly (the circle paths: at rest on a reference
+  /// already moving at 0.63 m/s) has edge residuals that dominate the 0-50 s
+  /// prediction-error tables. false: the paper's windows taken literally.
+  bool exclude_edges = true;
+  /// Also keep the body-frame horizontal velocity [u v] (RegressionSignals::uv)
+  /// and the body x, y components of the world's X and Y axes
+  /// (RegressionSignals::world_axes), for the blade-flapping and wind terms of
+  /// the real-flight regression.
+  bool keep_body_velocity = false;
+  /// Put the pose (x y z psi) back on its sample instants when the log repeats
+  /// each of its samples until the next (motion capture held at 30-120 Hz in a
+  /// faster log): signal::interpolate_held_samples, before the pre-filter. The
+  /// hold delays the pose by half its period against the wrench and the IMU
+  /// (16.7 ms at 30 Hz), an error that is the same in every flight.
+  /// false (--keep-held-samples): the log's values as they are.
+  bool interpolate_held = true;
+  /// Threads for the independent parts of the processing and of identify()
+  /// (the pre-filter's columns, the two regressions, the input checks):
+  /// 0 = two when the machine has two cores or more, 1 = one (e.g. inside a
+  /// pool that already keeps every core busy, as montecarlo does), 2 = two.
+  /// The results are the same bits whatever the value.
+  int threads = 0;
+  void validate() const;
+};
+
+/// What processing found and used, for the report.
+struct ProcessingSummary {
+  Eigen::Index samples = 0;
+  double T = 0.0, fs = 0.0, duration = 0.0;  // s, Hz, s
+  std::string filter;                       // e.g. "Butterworth order 4, 4 Hz"
+  int padlen = 0;                           // filtfilt's padding (samples)
+  double filter_f3db = 0.0;                 // Hz, -3 dB of the zero-phase pre-filter
+  double filter_settling = 0.0;             // s, the pre-filter's impulse response above 1% of its peak
+  /// Pose columns found held and put back on their sample instants
+  /// (ProcessingOptions::interpolate_held), and their rate: distinct samples
+  /// per second of log (the lowest over those columns).
+  std::vector<std::string> held_columns;
+  double held_rate_hz = 0.0;
+};
+
+/// The processed signals both regressions are built from, one row per log
+/// sample, 15 columns:
+///   0-3   [w p q r]          body z velocity and body rates (the Phi_a signals)
+///   4-10  [c pq pr qr p^2 q^2 r^2], c = p v - q u + g_bz  (the Phi_b signals)
+///   11-14 [Fz tau_phi tau_theta tau_psi]                    (the outputs)
+/// Every row of Phi_a(v, w) and Phi_b(v, w, eta) is linear in these, so
+/// Phi = Phi_a(d/dt a) + Phi_b(b) and Phi_dF = Phi_a(g_D a) + Phi_b(f_D b).
+/// Storing 15 numbers per sample instead of two 4x7 matrices keeps a
+/// 1.2-million-sample log in ~150 MB.
+struct RegressionSignals {
+  static constexpr int kCols = 15;
+  double t_start = 0.0;  // the log's t at the first sample
+  double T = 0.0;        // sample period, s
+  /// Seconds at each end of the log that regressions leave out (the pre-filter's
+  /// settling time; 0 when ProcessingOptions::exclude_edges is false).
+  double edge = 0.0;
+  Eigen::Matrix<double, Eigen::Dynamic, kCols> x;
+  /// Body velocity [u v] (m/s), only with ProcessingOptions::keep_body_velocity.
+  Eigen::Matrix<double, Eigen::Dynamic, 2> uv;
+  /// [R00 R10 R01 R11] of R(eta) (eq. 1): the body x components of the world X
+  /// and Y axes, then their body y components. Only with keep_body_velocity.
+  Eigen::Matrix<double, Eigen::Dynamic, 4> world_axes;
+  Eigen::Index size() const { return x.rows(); }
+};
+
+/// Section II-C: filter, differentiate (eq. 33), rotate (v = R^T p_dot).
+/// Throws InputError on a missing column, a non-uniform or too short log.
+std::shared_ptr<const RegressionSignals> process_log(const FlightLog& log, const ProcessingOptions& opt = {},
+                                                     ProcessingSummary* summary = nullptr);
+
+// --- Regressions (eqs. 34 and 38) ---------------------------------------------
+
+enum class RegressionModel { Standard, Filtered };
+const char* to_string(RegressionModel m);
+
+
+/// One regression over a window: Gamma(k) Theta = Upsilon(k) for the samples
+/// with t in [t0, t1]. Standard: Gamma = Phi(v_f, w_f, eta_f, v_f', w_f')
+/// (eq. 34, derivatives by eq. 33), Upsilon = F_f. Filtered: Gamma = Phi_dF,
+/// Upsilon = f_D F_f (eqs. 38-39); f_D and g_D start at the log's first sample
+/// (steady-state initial condition). The window is clipped to the samples
+/// clear of the log's edges (RegressionSignals::edge, and 5/lambda after the
+/// start for the filtered model); window() tells what was used.
+class Regression {
+ public:
+  /// Throws InputError when the window is outside the log or holds fewer than
+  /// 8 samples clear of the edges, std::invalid_argument on a malformed window.
+  Regression(std::shared_ptr<const RegressionSignals> signals, RegressionModel model, TimeWindow window,
+             double lambda = 30.0, signal::GdVariant gd_variant = signal::GdVariant::Consistent);
+
+  RegressionModel model() const { return model_; }
+  double lambda() const { return lambda_; }
+  signal::GdVariant gd_variant() const { return variant_; }
+  Eigen::Index begin() const { return begin_; }  // first sample index (inclusive)
+  Eigen::Index end() const { return end_; }      // last sample index + 1
+  Eigen::Index size() const { return end_ - begin_; }
+  double T() const { return sig_->T; }
+  /// The log's t of sample k.
+  double time(Eigen::Index k) const { return sig_->t_start + static_cast<double>(k) * sig_->T; }
+  /// Window actually used (after edge clipping), in seconds from the log's start.
+  TimeWindow window() const;
+  const RegressionSignals& signals() const { return *sig_; }
+  /// The same regression over another window.
+  Regression with_window(TimeWindow w) const { return Regression(sig_, model_, w, lambda_, variant_); }
+
+  /// Calls f(k, G, Y) for every sample k of the window, in time order.
+  template <class F>
+  void for_each(F&& f) const;
+
+ private:
+  std::shared_ptr<const RegressionSignals> sig_;
+  RegressionModel model_;
+  double lambda_;
+  signal::GdVariant variant_;
+  Eigen::Index begin_ = 0, end_ = 0;
+};
+
+// --- Output prediction error (eq. 43, Tables 5-6) -------------------------------
+
+struct PredictionErrorRow {
+  std::string name;
+  Vec4 rms = Vec4::Zero();              // RMS of each component of eq. (43): N, N m, N m, N m
+  Vec4 improvement_pct = Vec4::Zero();  // P_imp% against the reference row (0 for the reference)
+};
+
+struct PredictionErrorTable {
+  RegressionModel model = RegressionModel::Standard;
+  TimeWindow window;          // seconds from the log's start
+  Eigen::Index samples = 0;
+  PredictionErrorRow reference;
+  std::vector<PredictionErrorRow> rows;
+};
+
+/// P_imp% of section IV-B: (RMS_ref - RMS_set) / RMS_ref * 100. NaN when it is
+/// undefined (a non-finite RMS, or a zero reference RMS); improvement_undefined()
+/// then says why in words.
+double improvement_pct(double rms_ref, double rms_set);
+/// Empty when improvement_pct(rms_ref, rms_set) is defined, else the reason.
+std::string improvement_undefined(double rms_ref, double rms_set);
+
+/// RMS of e = Gamma Theta_i - Upsilon per component over the regression's
+/// window, for every set and for the reference, with
+/// P_imp% = (RMS_ref - RMS_i) / RMS_ref * 100. Works on any log and any sets.
+PredictionErrorTable prediction_error(const Regression& reg, const std::vector<NamedParams>& sets,
+                                      const NamedParams& reference);
+
+/// The table of the sums of squared errors `sse` over `samples` samples:
+/// names[0] and sse[0] are the reference's, then one row per set (RMS and
+/// P_imp% against the reference). The one place PredictionErrorSums and
+/// real_flight_prediction_error turn sums into a table.
+PredictionErrorTable prediction_error_table(const std::vector<std::string>& names, const std::vector<Vec4>& sse,
+                                            RegressionModel model, const TimeWindow& window, Eigen::Index samples);
+
+/// prediction_error's sums one sample at a time, for a pass over the
+/// regression that does other work too (identify() adds them during the
+/// pass for the LS intervals). The same arithmetic, in the same order.
+class PredictionErrorSums {
+ public:
+  PredictionErrorSums(const std::vector<NamedParams>& sets, const NamedParams& reference);
+  void add(const Regressor4x7& G, const Vec4& Y) {
+    for (size_t s = 0; s < theta_.size(); ++s) sse_[s] += (G * theta_[s] - Y).cwiseAbs2();  // eq. (43), squared
+  }
+  /// The table, for the samples of `reg`'s window: the ones added.
+  PredictionErrorTable table(const Regression& reg) const;
+
+ private:
+  std::vector<std::string> names_;  // reference first
+  std::vector<Theta> theta_;
+  std::vector<Vec4> sse_;  // fixed size per set: no allocation per sample
+};
+
+/// The terms of the real-flight regression. Each is linear in its parameters.
+struct ModelTerms {
+  /// kg, weighed: estimate the thrust scale s instead of the mass.
+  std::optional<double> known_mass{};
+  bool torque_offsets = false;  // o: centre of mass off the rotors' centre, rotor mismatch (N m)
+  bool flapping = false;        // K_x, K_y: blade-flapping moment, -K (e_z x v_body) (N s)
+  bool rate_damping = false;    // D_x, D_y, D_z: -D w (N m s)
+  bool rotor_inertia = false;   // J_r: yaw reaction and gyroscopic torque (kg m^2); needs Omega_r
+  /// With rotor_inertia: J_r of one rotor, kg m^2, known (the vehicle file's
+  /// rotor_inertia, or --rotor-inertia VALUE): the term is applied with it
+  /// instead of being estimated. J_r shares the yaw row with Izz (the yaw
+  /// torque drives both r_dot and Omega_r_dot), so an estimated J_r, attenuated
+  /// by the noise of the differentiated rotor speeds, pulls Izz with it.
+  std::optional<double> known_rotor_inertia{};
+  bool force_drag = false;      // k_w: -k_w w in the force row (N s/m)
+  /// Horizontal moments fixed in the world frame (N m), seen in the body frame:
+  /// a steady wind on flapping blades (-K (e_z x R^T w_wind)). 4 parameters.
+  bool wind = false;
+  /// Weigh the four rows by the inverse of their own residual RMS (two passes).
+  bool weight_rows = false;
+  /// True when any term beyond the paper's model is on.
+  bool any() const {
+    return known_mass || torque_offsets || flapping || rate_damping || rotor_inertia || force_drag || wind ||
+           weight_rows;
+  }
+  /// All real-flight terms on (the defaults with a rotor model).
+  static ModelTerms real_flight(bool have_rotor_speeds);
+  /// Throws std::invalid_argument naming the option (command-line spelling).
+  void validate() const;
+};
+
+/// --terms: "paper" (none of the terms), "real" (real_flight()), or a comma
+/// list of offsets, flapping, damping, rotor-inertia, drag, wind, weighting. Throws
+/// std::invalid_argument naming --terms and the choices.
+ModelTerms parse_model_terms(std::string_view spec, bool have_rotor_speeds);
+
+
+// --- Implementation of the template ----------------------------------------------
+
+template <class F>
+void Regression::for_each(F&& f) const {
+  const auto& X = sig_->x;
+  const double T = sig_->T;
+  const Eigen::Index n = X.rows();
+  Vec4 a;
+  Eigen::Matrix<double, 7, 1> b;
+  Vec4 y;
+  if (model_ == RegressionModel::Standard) {
+    // eq. (33) on [w p q r]; second-order one-sided at the log's two ends.
+    const auto awpqr = [&X](Eigen::Index i) -> Vec4 { return X.row(i).template head<4>().transpose(); };
+    for (Eigen::Index k = begin_; k < end_; ++k) {
+      a = signal::central_difference_at(awpqr, k, n, T);
+      b = X.row(k).segment<7>(4).transpose();
+      y = X.row(k).tail<4>().transpose();
+      f(k, assemble_regressor(a, b), y);
+    }
+    return;
+  }
+  // Filtered: s = f_D x by y[k+1] = alpha y[k] + (1 - alpha) x[k] (eq. 35), with
+  // the steady-state start y[0] = x[0]; g_D x = c (x - f_D x) because
+  // g_D = c (z - 1)/(z - alpha) = c (1 - f_D) (eq. 36), c = lambda (printed) or
+  // (1 - alpha)/T (consistent: the difference quotient of f_D's output).
+  const double alpha = std::exp(-lambda_ * T);
+  const double one_minus = -std::expm1(-lambda_ * T);
+  const double c = (variant_ == signal::GdVariant::Printed) ? lambda_ : one_minus / T;
+  Eigen::Matrix<double, 1, RegressionSignals::kCols> s = X.row(0);
+  for (Eigen::Index k = 0; k < end_; ++k) {
+    if (k >= begin_) {
+      a = c * (X.row(k).head<4>() - s.head<4>()).transpose();
+      b = s.segment<7>(4).transpose();
+      y = s.tail<4>().transpose();
+      f(k, assemble_regressor(a, b), y);
+    }
+    s = alpha * s + one_minus * X.row(k);
+  }
+}
+
+}  // namespace quadid
