@@ -10,6 +10,8 @@
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
+
+#include "shared_data.hpp"
 #include <nlohmann/json.hpp>
 
 #include <cmath>
@@ -152,7 +154,7 @@ TEST_F(CliVehicle, RealCrazyflieFlightsRecommendASetPhysicalInBodyAndTerms) {
 #else
   const std::filesystem::path dir = "/nonexistent";
 #endif
-  if (!std::filesystem::exists(dir / "jana00")) GTEST_SKIP() << dir << " absent";
+  QUADID_REQUIRE_SHARED_FILE(dir / "jana00");
   for (const char* flight : {"jana00", "jana01", "jana04", "jana06"}) {
     SCOPED_TRACE(flight);
     const CliRun id = run("identify " + (dir / flight).string() +

@@ -11,6 +11,8 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
+#include "shared_data.hpp"
+
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -239,7 +241,7 @@ std::string slurp(const fs::path& p) {
 
 TEST(ULogSamples, ReproducePyulogListings) {
   const fs::path dir = kShared / "px4-ulog";
-  if (!fs::exists(dir / "sample.ulg")) GTEST_SKIP() << dir << " absent";
+  QUADID_REQUIRE_SHARED_FILE(dir / "sample.ulg");
   const std::vector<Sample> samples = {
       {"sample", true, false, {}},
       {"sample_log_small", true, false, {}},
@@ -285,7 +287,7 @@ TEST(ULogSamples, ReproducePyulogListings) {
 
 TEST(ULogSamples, TaggedLogHasDefaultParametersAndRotorGeometry) {
   const fs::path f = kShared / "px4-ulog" / "sample_logging_tagged_and_default_params.ulg";
-  if (!fs::exists(f)) GTEST_SKIP() << f << " absent";
+  QUADID_REQUIRE_SHARED_FILE(f);
   const ULog log = read_ulog(f);
   EXPECT_FALSE(log.default_parameters_system.empty());
   std::size_t tagged = 0;
@@ -298,7 +300,7 @@ TEST(ULogSamples, ImportOfTheSitlFlightClimbsUp) {
   // 2.50 m" in its messages) and landing, jMAVSim. With NED -> z up, z starts
   // near 0 on the ground and rises by more than 2 m; motors from actuator_motors.
   const fs::path f = kShared / "px4-ulog" / "sample_px4_events.ulg";
-  if (!fs::exists(f)) GTEST_SKIP() << f << " absent";
+  QUADID_REQUIRE_SHARED_FILE(f);
   ImportReport rep;
   const FlightLog log = import_ulog(read_ulog(f), {}, &rep);
   const auto z = log.column("z");
@@ -323,7 +325,7 @@ TEST(ULogSamples, SitlFlightAtDefaultLogRatesIsRefusedForIdentification) {
   // 10 Hz topic; the moment rows use 8 Hz, the force row 4 Hz: both topics
   // are named, the gyro (50 Hz >= 4 x 8 Hz) is not.
   const fs::path f = kShared / "px4-ulog" / "sample_px4_events.ulg";
-  if (!fs::exists(f)) GTEST_SKIP() << f << " absent";
+  QUADID_REQUIRE_SHARED_FILE(f);
   ImportReport rep;
   (void)import_ulog(read_ulog(f), {}, &rep);
   EXPECT_NEAR(rep.column_sources.at("actuator_motors.control[0]").rate_hz, 313.0 / 31.0, 0.5);
@@ -470,7 +472,7 @@ TEST(Usd, CorruptOrTruncatedFileIsAnInputErrorWithItsOffset) {
 // tests/data/logs/usd_reference.txt, from usd_reference.py (Python struct + zlib).
 TEST(UsdReal, CountsRatesGapAndCrcAgreeWithThePythonReference) {
   const fs::path dir = kShared / "crazyflie-usd";
-  if (!fs::exists(dir / "jana00")) GTEST_SKIP() << dir << " absent";
+  QUADID_REQUIRE_SHARED_FILE(dir / "jana00");
   std::ifstream ref(fs::path(QUADID_TEST_DATA) / "logs" / "usd_reference.txt");
   int checked = 0;
   for (std::string line; std::getline(ref, line);) {
@@ -511,7 +513,7 @@ TEST(UsdReal, CountsRatesGapAndCrcAgreeWithThePythonReference) {
 
 TEST(UsdReal, ImportGivesSensibleRangesInSiUnits) {
   const fs::path dir = kShared / "crazyflie-usd";
-  if (!fs::exists(dir / "jana01")) GTEST_SKIP() << dir << " absent";
+  QUADID_REQUIRE_SHARED_FILE(dir / "jana01");
   ImportReport rep;
   const FlightLog log = load_any_log(dir / "jana01", no_required_check(), &rep);
   EXPECT_EQ(rep.kind, "usd");
@@ -841,7 +843,7 @@ TEST_F(LogsCli, ImportWarnsOfTopicsTooSlowForIdentify) {
   // The same finding as identify's (ULogSamples.SitlFlightAtDefaultLogRates...),
   // said at import time: the CSV no longer knows the topics' own rates.
   const fs::path f = kShared / "px4-ulog" / "sample_px4_events.ulg";
-  if (!fs::exists(f)) GTEST_SKIP() << f << " absent";
+  QUADID_REQUIRE_SHARED_FILE(f);
   const auto r = run("import " + f.string() + " -o " + path("s.csv") + " --json");
   ASSERT_EQ(r.rc, 0) << r.err;
   const auto j = nlohmann::json::parse(r.out);
