@@ -19,6 +19,9 @@ class InputError : public std::runtime_error {
 
 inline constexpr double kDeg = std::numbers::pi / 180.0;  // rad per degree
 inline constexpr double kInf = std::numeric_limits<double>::infinity();
+// Two-sided 95 % quantile of the standard normal, Phi^-1(0.975) (scipy.stats.norm.ppf):
+// the default interval half width in standard errors, written once.
+inline constexpr double kZ95 = 1.959963984540054;
 
 /// A time interval in seconds from the log's first sample (not its t value).
 struct TimeWindow {

@@ -3,6 +3,7 @@
 // Knows nothing of logs or files: identification.hpp feeds it. See docs/identify.md.
 #pragma once
 
+#include "quadid/core.hpp"
 #include "quadid/model.hpp"
 #include "quadid/model/regressor.hpp"
 
@@ -83,7 +84,7 @@ struct LeastSquaresUncertainty {
   /// Degrees of freedom of the variance estimate, 2 K, and the Student-t
   /// quantile used for the intervals.
   double dof = std::numeric_limits<double>::infinity();
-  double quantile = 1.959963984540054;
+  double quantile = kZ95;
   /// Real-flight regression only (ExtendedEstimate): the delete-a-block
   /// jackknife's standard errors, its blocks and Student-t quantile (0 blocks:
   /// not computed). std_error is then the larger of the two estimates and the
@@ -189,7 +190,7 @@ struct LongRunCovariance {
   /// the K lowest frequencies alone.
   bool end_values_separated = false;
   double dof = std::numeric_limits<double>::infinity();
-  double quantile = 1.959963984540054;  // Student t at opt.confidence, dof
+  double quantile = kZ95;  // Student t at opt.confidence, dof
 };
 /// psi: n x P influences, row-major (sample k's P numbers contiguous). The
 /// series is centred first. Needs n >= 8.

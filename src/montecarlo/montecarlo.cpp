@@ -1,5 +1,6 @@
 // Monte Carlo identification flights on a thread pool (docs/montecarlo.md).
 #include "quadid/montecarlo.hpp"
+#include "quadid/core.hpp"
 #include "quadid/vehicle.hpp"
 #include "quadid/core/parallel.hpp"
 
@@ -238,7 +239,7 @@ std::string format_montecarlo(const MonteCarloResult& r) {
     return s.has_intervals ? 100.0 * s.coverage(j) : kNaN;
   });
   table("Mean 95% half width / (1.96 x std over runs)", [&](const MonteCarloSetStats& s, int j) {
-    return s.has_intervals && s.std(j) > 0 ? s.mean_half_width(j) / (1.959963984540054 * s.std(j)) : kNaN;
+    return s.has_intervals && s.std(j) > 0 ? s.mean_half_width(j) / (kZ95 * s.std(j)) : kNaN;
   });
   fmt::format_to(it, "\nPhysically consistent:");
   for (const auto& s : r.sets) fmt::format_to(it, " {} {:.0f}%", s.name, 100.0 * s.physical_fraction);

@@ -56,7 +56,7 @@ struct ExtendedEstimate {
   bool end_values_separated = false;  // LongRunCovariance::end_values_separated
   bool correlation_time_capped = false;
   double dof = std::numeric_limits<double>::infinity();
-  double quantile = 1.959963984540054;  // Student t of the 95 % intervals
+  double quantile = kZ95;  // Student t of the 95 % intervals
   /// The rigid-body parameters (m = the known mass when it was given).
   Theta theta = Theta::Zero();
   /// The extra parameters (thrust_scale, offset_x, ... rotor_inertia), name -> value.
