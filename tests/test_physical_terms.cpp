@@ -170,5 +170,37 @@ TEST(PhysicalTerms, MismatchedSizesAreNamed) {
   }
 }
 
+
+// With the mass weighed, the rigid body's Estimate carries the known mass as a
+// point (no variance, no correlation) in place of the thrust scale, and keeps
+// every other entry of the real-flight estimate as it is.
+TEST(RigidBodyEstimate, KnownMassIsAPointAndTheRestIsCopied) {
+  const Eigen::VectorXd v = (Eigen::VectorXd(11) << 0.97, 0.012, 1e-4, -2e-4, 0.015, 3e-5, 0.02, 0.01, 0.05, 0.04, 3e-5)
+                                .finished();
+  const Eigen::VectorXd sd = Eigen::VectorXd::Constant(11, 1e-4);
+  ExtendedEstimate x = make_estimate(v, sd, true, 5);
+  x.theta(0) = 0.8;  // the weighed mass
+  x.white_std_error = sd / 2.0;
+  x.hac_std_error = sd;
+  x.jackknife_std_error = sd;
+  x.ci_low = v.array() - 2e-4;
+  x.ci_high = v.array() + 2e-4;
+  x.poorly_determined = {"thrust_scale", "Ixy"};
+  const Estimate u = rigid_body_estimate(x, true);
+  ASSERT_EQ(u.size(), 7);
+  EXPECT_EQ(u.names[0], "m");
+  EXPECT_EQ(u.rigid_body(), x.theta);
+  EXPECT_EQ(u.std_error(0), 0.0);
+  EXPECT_EQ(u.ci_low(0), 0.8);
+  EXPECT_EQ(u.ci_high(0), 0.8);
+  EXPECT_TRUE(u.covariance.row(0).isZero() && u.covariance.col(0).isZero());
+  EXPECT_EQ(Eigen::MatrixXd(u.covariance.bottomRightCorner(6, 6)), Eigen::MatrixXd(x.covariance.block(1, 1, 6, 6)));
+  EXPECT_EQ(u.std_error.tail<6>(), sd.segment<6>(1));
+  EXPECT_EQ(u.poorly_determined, (std::vector<std::string>{"Ixy"}));  // the thrust scale is not a body parameter
+  const Estimate free_mass = rigid_body_estimate(x, false);
+  EXPECT_EQ(free_mass.std_error(0), sd(0));
+  EXPECT_EQ(free_mass.covariance(0, 0), x.covariance(0, 0));
+}
+
 }  // namespace
 }  // namespace quadid

@@ -136,7 +136,7 @@ CoverageCount coverage(int reps, int n, double rho, unsigned seed, const Uncerta
     LeastSquaresSolution sol = solve_least_squares(acc, th);
     InfluenceAccumulator infl(sol);
     for (int k = 0; k < n; ++k) infl.add(G[static_cast<size_t>(k)], Y[static_cast<size_t>(k)]);
-    const LeastSquaresUncertainty u = infl.finish(uo);
+    const Estimate u = infl.finish(uo);
     EXPECT_TRUE(u.computed);
 
     for (int j = 0; j < 7; ++j) {
@@ -236,7 +236,7 @@ TEST(Uncertainty, DerivativeOfNoiseIsNotCountedAsPowerAtZero) {
     const LeastSquaresSolution sol = solve_least_squares(acc, th);
     InfluenceAccumulator infl(sol);
     for (size_t k = 0; k < Gn.size(); ++k) infl.add(Gn[k], Y[k]);
-    const LeastSquaresUncertainty u = infl.finish();
+    const Estimate u = infl.finish();
     ASSERT_TRUE(u.computed);
     err.col(r) = sol.theta - th;
     se.col(r) = u.std_error;
@@ -500,4 +500,26 @@ TEST(Uncertainty, JackknifeOfTheMeanIsTheVarianceOfBlockMeansOverK) {
   UncertaintyOptions bad;
   bad.jackknife_blocks = 2;
   EXPECT_THROW(bad.validate(), std::invalid_argument);
+}
+
+// The one Estimate type: Theta order, the 3x3 tensor and the names agree with
+// Params (the model's own conversion), so a caller can use any of them.
+TEST(Estimate, TheRigidBodyInThetaOrderAndAsATensor) {
+  Params p;
+  p.m = 1.2;
+  p.I << 0.011, -0.001, 0.0005, -0.001, 0.012, 0.0002, 0.0005, 0.0002, 0.021;
+  Estimate e = Estimate::unfilled({"m", "Ixx", "Ixy", "Ixz", "Iyy", "Iyz", "Izz", "thrust_scale"});
+  EXPECT_EQ(e.size(), 8);
+  EXPECT_TRUE(e.value.hasNaN());  // unfilled: nothing looks like a number before it is one
+  e.value.head<7>() = p.theta();
+  e.value(7) = 0.98;
+  EXPECT_EQ(e.rigid_body(), p.theta());
+  EXPECT_EQ(e.inertia_tensor(), p.I);
+  EXPECT_EQ(e.index_of("Iyz"), 5);
+  EXPECT_EQ(e.index_of("thrust_scale"), 7);
+  EXPECT_EQ(e.index_of("rotor_inertia"), -1);
+  e.covariance = Eigen::MatrixXd::Identity(8, 8) * 4.0;
+  EXPECT_EQ(e.rigid_body_covariance(), Mat7::Identity() * 4.0);
+  const Estimate small = Estimate::unfilled({"m"});
+  EXPECT_THROW((void)small.rigid_body(), std::logic_error);
 }

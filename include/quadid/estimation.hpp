@@ -11,6 +11,7 @@
 #include <array>
 #include <limits>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace quadid {
@@ -60,19 +61,29 @@ struct LeastSquaresOptions {
   void validate() const;
 };
 
-/// The HAC covariance of a least-squares solution and its intervals.
-struct LeastSquaresUncertainty {
-  bool computed = false;
+/// One estimate of a linear regression's parameters with its uncertainty: the
+/// one result type of the estimators (least squares of the paper's model and
+/// the real-flight regression of identification/extended.hpp). Every vector
+/// has one entry per parameter, in `names`' order: Theta order (m Ixx Ixy Ixz
+/// Iyy Iyz Izz, kThetaNames) for the paper's model, then the extra terms for
+/// the real-flight one (whose entry 0 is the thrust scale when the mass is
+/// known). SI units (kg, kg m^2; docs/file-formats.md for the terms').
+struct Estimate {
+  bool computed = false;  // false: no uncertainty (too few samples, or not yet attached)
   long samples = 0;
-  /// Cov(theta) = Var(sum_k psi_k), the influence psi_k = (A^T A)^+ Gamma_k^T e_k:
-  /// long_run_covariance of psi (docs/uncertainty.md).
-  Mat7 covariance = Mat7::Constant(std::numeric_limits<double>::quiet_NaN());
-  Theta std_error = Theta::Constant(std::numeric_limits<double>::quiet_NaN());
+  std::vector<std::string> names;
+  Eigen::VectorXd value;
+  /// Cov(value). Least squares: Var(sum_k psi_k) with the influence psi_k =
+  /// (A^T A)^+ Gamma_k^T e_k (long_run_covariance, docs/uncertainty.md). The
+  /// real-flight regression: standard deviations std_error, correlations of
+  /// the lag-0 (white) sandwich, full rank however few frequencies the HAC has.
+  Eigen::MatrixXd covariance;
+  Eigen::VectorXd std_error;
   /// The same with lag 0 only (heteroscedasticity-consistent, white residuals):
   /// std_error / white_std_error is the inflation by the residual correlation.
-  Theta white_std_error = Theta::Constant(std::numeric_limits<double>::quiet_NaN());
-  Theta ci_low = Theta::Constant(std::numeric_limits<double>::quiet_NaN());
-  Theta ci_high = Theta::Constant(std::numeric_limits<double>::quiet_NaN());
+  Eigen::VectorXd white_std_error;
+  /// The 95 % (UncertaintyOptions::confidence) intervals.
+  Eigen::VectorXd ci_low, ci_high;
   /// Lag (samples) after which the autocorrelation of every parameter's
   /// influence series stays within +-2 sqrt(log10(n)/n) for 5 consecutive lags
   /// (Politis & White 2004).
@@ -85,14 +96,31 @@ struct LeastSquaresUncertainty {
   /// quantile used for the intervals.
   double dof = std::numeric_limits<double>::infinity();
   double quantile = kZ95;
-  /// Real-flight regression only (ExtendedEstimate): the delete-a-block
-  /// jackknife's standard errors, its blocks and Student-t quantile (0 blocks:
-  /// not computed). std_error is then the larger of the two estimates and the
-  /// interval the wider of the two, per parameter.
-  Theta jackknife_std_error = Theta::Constant(std::numeric_limits<double>::quiet_NaN());
-  Theta hac_std_error = Theta::Constant(std::numeric_limits<double>::quiet_NaN());  // before the jackknife's floor
+  /// Real-flight regression only: the delete-a-block jackknife's standard
+  /// errors, its blocks and Student-t quantile (0 blocks: not computed).
+  /// std_error is then the larger of the two estimates and the interval the
+  /// wider of the two, per parameter; hac_std_error is the HAC one alone.
+  Eigen::VectorXd jackknife_std_error, hac_std_error;
   int jackknife_blocks = 0;
   double jackknife_quantile = std::numeric_limits<double>::quiet_NaN();
+  /// Determinedness: parameters in directions the data do not determine
+  /// (rank deficiency; they keep the prior), with a standard error large
+  /// against their scale, or in a near-null direction of the regressor.
+  std::vector<std::string> unidentifiable, poorly_determined, near_null;
+
+  /// An estimate of `n` parameters named `names` (n = names.size()), every
+  /// number NaN (quantile kZ95, dof infinite) until filled.
+  static Estimate unfilled(std::vector<std::string> names);
+  Eigen::Index size() const { return value.size(); }
+  /// Position of a parameter in `names`, -1 when absent.
+  Eigen::Index index_of(std::string_view name) const;
+  /// The rigid body's entries 0..6 in Theta order (the paper's Theta, eq. 40;
+  /// with a real-flight estimate of known mass, entry 0 is the thrust scale).
+  Theta rigid_body() const;
+  /// Their covariance (7x7 top-left block).
+  Mat7 rigid_body_covariance() const;
+  /// The inertia tensor I (body FLU, kg m^2) of entries 1..6, symmetric 3x3.
+  Mat3 inertia_tensor() const;
 };
 
 /// The batch solution of eq. (40) with its diagnostics.
@@ -131,8 +159,9 @@ struct LeastSquaresSolution {
   /// How std_error was computed: "white" (residual variance x sqrt(correlation
   /// length), from the accumulated sums alone) or "HAC" (attach_uncertainty).
   std::string std_error_method = "white";
-  /// The HAC covariance and intervals (computed = false until attach_uncertainty).
-  LeastSquaresUncertainty uncertainty;
+  /// The HAC covariance and intervals, in Theta order (computed = false until
+  /// attach_uncertainty).
+  Estimate uncertainty = Estimate::unfilled({kThetaNames.begin(), kThetaNames.end()});
   bool full_rank() const { return unidentifiable.empty(); }
 };
 
@@ -211,7 +240,7 @@ class InfluenceAccumulator {
   /// Room for `samples` add() calls (optional: saves the copies of growing).
   void reserve(long samples) { psi_.reserve(7 * static_cast<size_t>(std::max(0L, samples))); }
   long count() const { return static_cast<long>(psi_.size() / 7); }
-  LeastSquaresUncertainty finish(const UncertaintyOptions& opt = {}) const;
+  Estimate finish(const UncertaintyOptions& opt = {}) const;
 
  private:
   Theta theta_;
@@ -226,7 +255,7 @@ void judge_poorly_determined(LeastSquaresSolution& sol, const Theta& prior, cons
 
 /// Replaces sol.std_error by the HAC one, keeps `u` in sol.uncertainty and
 /// re-judges which parameters are poorly determined.
-void attach_uncertainty(LeastSquaresSolution& sol, const LeastSquaresUncertainty& u, const Theta& prior,
+void attach_uncertainty(LeastSquaresSolution& sol, const Estimate& u, const Theta& prior,
                         const LeastSquaresOptions& opt = {});
 
 /// Student-t quantile, 0 < p < 1, nu >= 1: exact for integer nu up to 1000

@@ -67,6 +67,11 @@ struct NamedParams {
 /// zero. The one definition montecarlo, the predicted precision, the recommendation
 /// and the design's precision criterion share.
 Theta relative_error_scale(const Theta& theta);
+/// The scale a standard error is judged against ("poorly determined", the
+/// recommendation's precision, the report's rel %): |m| for the mass and the
+/// mean principal moment (|Ixx| + |Iyy| + |Izz|) / 3 for every inertia entry,
+/// so that a product of inertia near 0 is judged against the body's size.
+Theta determinedness_scale(const Theta& theta);
 
 /// Euler angles eta = [phi, theta, psi] (roll, pitch, yaw), ZYX.
 template <class S>

@@ -173,16 +173,13 @@ LeastSquaresSolution solve_least_squares(const LeastSquaresAccumulator& acc, con
 }
 
 void judge_poorly_determined(LeastSquaresSolution& sol, const Theta& prior, const LeastSquaresOptions& opt) {
-  const Theta& th = sol.theta;
-  const double mscale = std::abs(th(0));
-  double iscale = (std::abs(th(1)) + std::abs(th(4)) + std::abs(th(6))) / 3.0;
-  if (!(iscale > 0.0)) iscale = (std::abs(prior(1)) + std::abs(prior(4)) + std::abs(prior(6))) / 3.0;
+  Theta scale = determinedness_scale(sol.theta);
+  if (!(scale(1) > 0.0)) scale.tail<6>() = determinedness_scale(prior).tail<6>();
   sol.poorly_determined.clear();
   for (int j = 0; j < 7; ++j) {
-    const double scale = (j == 0) ? mscale : iscale;
     const std::string name = kThetaNames[static_cast<size_t>(j)];
     const bool near = std::find(sol.near_null.begin(), sol.near_null.end(), name) != sol.near_null.end();
-    if (!(sol.std_error(j) <= opt.poor_fraction * scale) || near) sol.poorly_determined.push_back(name);
+    if (!(sol.std_error(j) <= opt.poor_fraction * scale(j)) || near) sol.poorly_determined.push_back(name);
   }
 }
 

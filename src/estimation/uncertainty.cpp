@@ -398,9 +398,40 @@ LongRunCovariance long_run_covariance(const std::vector<double>& psi, int P, con
   return r;
 }
 
-LeastSquaresUncertainty InfluenceAccumulator::finish(const UncertaintyOptions& opt) const {
+Estimate Estimate::unfilled(std::vector<std::string> names) {
+  Estimate e;
+  const auto n = static_cast<Eigen::Index>(names.size());
+  e.names = std::move(names);
+  for (Eigen::VectorXd* v : {&e.value, &e.std_error, &e.white_std_error, &e.ci_low, &e.ci_high,
+                             &e.jackknife_std_error, &e.hac_std_error})
+    v->setConstant(n, kNaN);
+  e.covariance.setConstant(n, n, kNaN);
+  return e;
+}
+
+Eigen::Index Estimate::index_of(std::string_view name) const {
+  for (size_t j = 0; j < names.size(); ++j)
+    if (names[j] == name) return static_cast<Eigen::Index>(j);
+  return -1;
+}
+
+Theta Estimate::rigid_body() const {
+  if (value.size() < 7) throw std::logic_error("Estimate::rigid_body: fewer than 7 parameters");
+  return value.head<7>();
+}
+
+Mat7 Estimate::rigid_body_covariance() const {
+  if (covariance.rows() < 7 || covariance.cols() < 7)
+    throw std::logic_error("Estimate::rigid_body_covariance: fewer than 7 parameters");
+  return covariance.topLeftCorner<7, 7>();
+}
+
+Mat3 Estimate::inertia_tensor() const { return Params::from_theta(rigid_body()).I; }
+
+Estimate InfluenceAccumulator::finish(const UncertaintyOptions& opt) const {
   opt.validate();
-  LeastSquaresUncertainty u;
+  Estimate u = Estimate::unfilled({kThetaNames.begin(), kThetaNames.end()});
+  u.value = theta_;
   const long n = count();
   u.samples = n;
   if (n < 8 || !theta_.allFinite()) return u;
@@ -420,7 +451,7 @@ LeastSquaresUncertainty InfluenceAccumulator::finish(const UncertaintyOptions& o
   return u;
 }
 
-void attach_uncertainty(LeastSquaresSolution& sol, const LeastSquaresUncertainty& u, const Theta& prior,
+void attach_uncertainty(LeastSquaresSolution& sol, const Estimate& u, const Theta& prior,
                         const LeastSquaresOptions& opt) {
   sol.uncertainty = u;
   if (!u.computed) return;
@@ -437,6 +468,9 @@ void attach_uncertainty(LeastSquaresSolution& sol, const LeastSquaresUncertainty
   }
   sol.std_error_method = "HAC";
   judge_poorly_determined(sol, prior, opt);
+  sol.uncertainty.unidentifiable = sol.unidentifiable;
+  sol.uncertainty.poorly_determined = sol.poorly_determined;
+  sol.uncertainty.near_null = sol.near_null;
 }
 
 }  // namespace quadid

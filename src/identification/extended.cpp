@@ -730,6 +730,8 @@ ExtendedResult identify_extended(const FlightLog& log, const ExtendedOptions& op
       }
     }
     ExtendedEstimate e;
+    e.computed = true;
+    e.samples = k1 - k0;
     Eigen::MatrixXd white;  // lag-0 sandwich: its correlations shape the reported covariance
     e.name = mi == 0 ? "LS" : "FMLS";
     e.model = model;
@@ -879,14 +881,50 @@ ExtendedResult identify_extended(const FlightLog& log, const ExtendedOptions& op
     for (auto j : f.sol.unidentifiable) e.unidentifiable.push_back(names[static_cast<size_t>(j)]);
     // Poorly determined: the rigid-body parameters against their scale (the
     // mass, or the mean principal moment), the thrust scale against 1.
-    const double iscale = (std::abs(e.theta(1)) + std::abs(e.theta(4)) + std::abs(e.theta(6))) / 3.0;
+    Theta scale = determinedness_scale(e.theta);
+    scale(0) = std::abs(e.value(0));
     for (Eigen::Index j = 0; j < 7; ++j) {
-      const double scale = j == 0 ? std::abs(e.value(0)) : iscale;
-      if (!(e.std_error(j) <= opt.ls.poor_fraction * scale)) e.poorly_determined.push_back(names[static_cast<size_t>(j)]);
+      if (!(e.std_error(j) <= opt.ls.poor_fraction * scale(j))) e.poorly_determined.push_back(names[static_cast<size_t>(j)]);
     }
     res.estimates[static_cast<size_t>(mi)] = std::move(e);
   }
   return res;
+}
+
+Estimate rigid_body_estimate(const ExtendedEstimate& x, bool known_mass) {
+  Estimate u = Estimate::unfilled({kThetaNames.begin(), kThetaNames.end()});
+  u.computed = true;
+  u.samples = x.samples;
+  u.value = x.theta;
+  u.std_error = x.std_error.head<7>();
+  if (known_mass) u.std_error(0) = 0.0;
+  u.covariance = x.covariance.topLeftCorner<7, 7>();
+  if (known_mass) {  // m is given: no variance, no correlation
+    u.covariance.row(0).setZero();
+    u.covariance.col(0).setZero();
+  }
+  u.white_std_error = x.white_std_error.head<7>();
+  if (known_mass) u.white_std_error(0) = 0.0;
+  u.correlation_time = x.correlation_time;
+  u.correlation_time_capped = x.correlation_time_capped;
+  u.frequencies = x.frequencies;
+  u.end_values_separated = x.end_values_separated;
+  u.dof = x.dof;
+  u.quantile = x.quantile;
+  u.ci_low = x.ci_low.head<7>();
+  u.ci_high = x.ci_high.head<7>();
+  u.jackknife_std_error = x.jackknife_std_error.head<7>();
+  u.hac_std_error = x.hac_std_error.head<7>();
+  u.jackknife_blocks = x.jackknife_blocks;
+  u.jackknife_quantile = x.jackknife_quantile;
+  if (known_mass) {  // m is given: its interval is the point
+    u.ci_low(0) = u.ci_high(0) = x.theta(0);
+    u.jackknife_std_error(0) = u.hac_std_error(0) = 0.0;
+  }
+  u.unidentifiable = x.unidentifiable;
+  for (const auto& n : x.poorly_determined)
+    if (n != "thrust_scale") u.poorly_determined.push_back(n);
+  return u;
 }
 
 CutoffSelection select_cutoffs(const FlightLog& log, const ExtendedOptions& opt) {

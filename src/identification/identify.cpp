@@ -361,41 +361,11 @@ IdentificationResult identify(const FlightLog& log, const IdentificationOptions&
       e.extra = x.extra;
       sol.theta = x.theta;
       sol.condition = x.condition;
-      for (int j = 0; j < 7; ++j) sol.std_error(j) = (j == 0 && opt.terms.known_mass) ? 0.0 : x.std_error(j);
-      sol.poorly_determined.clear();
-      for (const auto& n : x.poorly_determined)
-        if (n != "thrust_scale") sol.poorly_determined.push_back(n);
       // Intervals of the real-flight regression: its HAC standard errors,
-      // Student t quantile.
-      Mat7 cov = x.covariance.topLeftCorner<7, 7>();
-      if (opt.terms.known_mass) {  // m is given: no variance, no correlation
-        cov.row(0).setZero();
-        cov.col(0).setZero();
-      }
-      auto& u = sol.uncertainty;
-      u = LeastSquaresUncertainty{};
-      u.computed = true;
-      u.samples = xr->window_samples;
-      u.covariance = cov;
-      u.std_error = sol.std_error;
-      u.white_std_error = x.white_std_error.head<7>();
-      if (opt.terms.known_mass) u.white_std_error(0) = 0.0;
-      u.correlation_time = x.correlation_time;
-      u.correlation_time_capped = x.correlation_time_capped;
-      u.frequencies = x.frequencies;
-      u.end_values_separated = x.end_values_separated;
-      u.dof = x.dof;
-      u.quantile = x.quantile;
-      u.ci_low = x.ci_low.head<7>();
-      u.ci_high = x.ci_high.head<7>();
-      u.jackknife_std_error = x.jackknife_std_error.head<7>();
-      u.hac_std_error = x.hac_std_error.head<7>();
-      u.jackknife_blocks = x.jackknife_blocks;
-      u.jackknife_quantile = x.jackknife_quantile;
-      if (opt.terms.known_mass) {  // m is given: its interval is the point
-        u.ci_low(0) = u.ci_high(0) = x.theta(0);
-        u.jackknife_std_error(0) = u.hac_std_error(0) = 0.0;
-      }
+      // Student t quantile, in Theta order.
+      sol.uncertainty = rigid_body_estimate(x, opt.terms.known_mass.has_value());
+      sol.std_error = sol.uncertainty.std_error;
+      sol.poorly_determined = sol.uncertainty.poorly_determined;
       sol.std_error_method =
           x.jackknife_blocks > 0
               ? fmt::format("real-flight regression: the larger of the HAC (low-frequency periodogram) covariance of "

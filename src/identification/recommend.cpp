@@ -15,12 +15,12 @@ namespace {
 // (|m| for m, the mean principal moment for the inertia entries); the mass
 // is left out when it was given (its standard error is 0 by construction).
 double relative_precision(const LeastSquaresSolution& sol, const Theta& theta, bool mass_known) {
-  const Theta& se = sol.uncertainty.computed ? sol.uncertainty.std_error : sol.std_error;
-  const double iscale = (std::abs(theta(1)) + std::abs(theta(4)) + std::abs(theta(6))) / 3.0;
+  const Theta se = sol.uncertainty.computed ? Theta(sol.uncertainty.std_error) : sol.std_error;
+  const Theta scales = determinedness_scale(theta);
   double ss = 0.0;
   int n = 0;
   for (int j = mass_known ? 1 : 0; j < 7; ++j) {
-    const double scale = j == 0 ? std::abs(theta(0)) : iscale;
+    const double scale = scales(j);
     if (!(scale > 0.0)) return std::numeric_limits<double>::infinity();
     const double rel = se(j) / scale;
     if (!std::isfinite(rel)) return std::numeric_limits<double>::infinity();
@@ -96,8 +96,8 @@ Recommendation recommend_set(const IdentificationResult& r) {
   // uncertainty means the processing or the model does not suit the data.
   if (other) {
     std::vector<std::string> differ;
-    const Theta& sa = best->sol->uncertainty.computed ? best->sol->uncertainty.std_error : best->sol->std_error;
-    const Theta& sb = other->sol->uncertainty.computed ? other->sol->uncertainty.std_error : other->sol->std_error;
+    const Theta sa = best->sol->uncertainty.computed ? Theta(best->sol->uncertainty.std_error) : best->sol->std_error;
+    const Theta sb = other->sol->uncertainty.computed ? Theta(other->sol->uncertainty.std_error) : other->sol->std_error;
     for (int j : {0, 1, 4, 6}) {
       if (j == 0 && mass_known) continue;
       const double d = std::abs(best->set->theta(j) - other->set->theta(j));

@@ -161,10 +161,10 @@ std::string format_uncertainty_table(const IdentificationResult& r) {
                      u.jackknife_blocks, u.jackknife_blocks - 1, u.jackknife_quantile);
     fmt::format_to(it, "{:<10}{:>14}{:>11}{:>9}{:>29}{:>10}{}\n", "Parameter", "estimate", "std err", "rel %",
                    "95% interval", "x white", jk ? "  jackknife/HAC" : "");
-    const double iscale = (std::abs(s.theta(1)) + std::abs(s.theta(4)) + std::abs(s.theta(6))) / 3.0;
+    const Theta scales = determinedness_scale(s.theta);
     for (int j = 0; j < 7; ++j) {
       const std::string n = kThetaNames[static_cast<size_t>(j)];
-      const double scale = j == 0 ? std::abs(s.theta(0)) : iscale;
+      const double scale = scales(j);
       const bool poor = std::find(s.poorly_determined.begin(), s.poorly_determined.end(), n) != s.poorly_determined.end();
       const double hac = u.hac_std_error(j), jse = u.jackknife_std_error(j);
       const std::string ratio = !jk                                      ? ""

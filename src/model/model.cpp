@@ -35,6 +35,13 @@ Theta relative_error_scale(const Theta& th) {
   return s;
 }
 
+Theta determinedness_scale(const Theta& th) {
+  const double mean_moment = (std::abs(th(1)) + std::abs(th(4)) + std::abs(th(6))) / 3.0;
+  Theta s = Theta::Constant(mean_moment);
+  s(0) = std::abs(th(0));
+  return s;
+}
+
 Theta Params::theta() const {
   Theta th;
   th << m, I(0, 0), I(0, 1), I(0, 2), I(1, 1), I(1, 2), I(2, 2);

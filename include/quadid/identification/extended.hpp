@@ -29,34 +29,21 @@
 namespace quadid {
 
 
-/// One estimated set of the real-flight regression.
-struct ExtendedEstimate {
+/// One estimated set of the real-flight regression: an Estimate (value,
+/// covariance, intervals, determinedness) over every estimated parameter in
+/// regression order, m (or s), Ixx Ixy Ixz Iyy Iyz Izz, then the extra terms,
+/// and what the set adds.
+///
+/// std_error is the larger of two estimates, per parameter: the HAC sandwich
+/// of each sample's influence on the weighted fit (long_run_covariance;
+/// coloured noise), and the delete-a-block jackknife
+/// (UncertaintyOptions::jackknife_blocks; model error that changes along the
+/// flight). The 95 % interval is the wider of their two Student-t intervals.
+/// `covariance`: standard deviations std_error, correlations of the lag-0
+/// (white) sandwich, which is full rank however few frequencies the HAC one has.
+struct ExtendedEstimate : Estimate {
   std::string name;  // LS or FMLS
   RegressionModel model = RegressionModel::Standard;
-  /// Names and values of every estimated parameter, in regression order:
-  /// m (or s), Ixx Ixy Ixz Iyy Iyz Izz, then the extra terms.
-  std::vector<std::string> names;
-  Eigen::VectorXd value, std_error;
-  /// std_error is the larger of two estimates, per parameter: the HAC
-  /// sandwich of each sample's influence on the weighted fit
-  /// (long_run_covariance; coloured noise), and the delete-a-block jackknife
-  /// (UncertaintyOptions::jackknife_blocks; model error that changes along
-  /// the flight). The 95 % interval is the wider of their two Student-t
-  /// intervals.
-  Eigen::VectorXd hac_std_error, jackknife_std_error;  // jackknife: NaN when not computed
-  int jackknife_blocks = 0;                           // 0: not computed
-  double jackknife_quantile = std::numeric_limits<double>::quiet_NaN();  // Student t, blocks - 1 dof
-  Eigen::VectorXd ci_low, ci_high;
-  /// Of `value`: standard deviations std_error, correlations of the lag-0
-  /// (white) sandwich, which is full rank however few frequencies the HAC one has.
-  Eigen::MatrixXd covariance;
-  Eigen::VectorXd white_std_error;  // the same ignoring the residuals' correlation
-  long correlation_time = 0;  // samples
-  long frequencies = 0;       // of the long-run covariance (UncertaintyOptions)
-  bool end_values_separated = false;  // LongRunCovariance::end_values_separated
-  bool correlation_time_capped = false;
-  double dof = std::numeric_limits<double>::infinity();
-  double quantile = kZ95;  // Student t of the 95 % intervals
   /// The rigid-body parameters (m = the known mass when it was given).
   Theta theta = Theta::Zero();
   /// The extra parameters (thrust_scale, offset_x, ... rotor_inertia), name -> value.
@@ -67,9 +54,12 @@ struct ExtendedEstimate {
   Vec4 row_weight = Vec4::Ones();  // 1/N, 1/(N m): weights of the last pass
   Vec4 residual_rms = Vec4::Zero();  // N, N m: per row, unweighted
   double condition = 0.0;  // of the column-scaled weighted regressor
-  std::vector<std::string> unidentifiable;
-  std::vector<std::string> poorly_determined;
 };
+
+/// The rigid body of a real-flight estimate as an Estimate in Theta order
+/// (kThetaNames): with the mass known, m is the known mass with no variance
+/// and a point interval, in place of the thrust scale.
+Estimate rigid_body_estimate(const ExtendedEstimate& x, bool known_mass);
 
 /// Identifies with the real-flight regression. The force row is built from
 /// signals filtered at `force_cutoff_hz` (positions differentiated twice),
