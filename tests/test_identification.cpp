@@ -737,3 +737,39 @@ TEST(Airborne, AFlightWithoutGroundIsLeftWholeAndALandingInsideIsNamed) {
   bad.thrust_fraction = 1.5;
   EXPECT_THROW(quadid::airborne_part(thrust_log(10.0, [](double) { return 1.0; }), bad), std::invalid_argument);
 }
+
+namespace quadid {
+namespace {
+// Issue 36: the result for code. least_squares.<SET> carries theta in
+// theta_order, the inertia as a 3x3 tensor and the 7x7 covariance whose
+// diagonal is the square of the intervals' standard errors; the same numbers as
+// the per-parameter objects (exact: one value written twice).
+TEST(Identification, JsonCarriesThetaOrderTensorAndCovariance) {
+  SimulationOptions so;
+  so.record_truth = false;
+  const IdentificationResult r = identify(simulate(FourierTrajectory::table2(), so).log);
+  const nlohmann::json j = to_json(r);
+  for (const char* set : {"LS", "FMLS"}) {
+    const auto& ls = j.at("least_squares").at(set);
+    ASSERT_EQ(ls.at("theta_order").size(), 7u);
+    const auto& cov = ls.at("covariance");
+    ASSERT_EQ(cov.size(), 7u);
+    for (size_t a = 0; a < 7; ++a) {
+      const std::string name = ls.at("theta_order")[a].get<std::string>();
+      EXPECT_EQ(name, kThetaNames[a]);
+      EXPECT_EQ(ls.at("theta")[a].get<double>(), j.at("estimates").at(set).at(name).get<double>()) << set << name;
+      ASSERT_EQ(cov[a].size(), 7u);
+      const double se = j.at("uncertainty").at(set).at(name).at("std_error").get<double>();
+      EXPECT_NEAR(std::sqrt(cov[a][a].get<double>()), se, 1e-15 * se) << set << name;
+      for (size_t b = 0; b < 7; ++b) EXPECT_EQ(cov[a][b].get<double>(), cov[b][a].get<double>());
+    }
+    const auto& I = ls.at("inertia_tensor");
+    EXPECT_EQ(I[0][0].get<double>(), ls.at("theta")[1].get<double>());  // Ixx
+    EXPECT_EQ(I[0][1].get<double>(), ls.at("theta")[2].get<double>());  // Ixy
+    EXPECT_EQ(I[1][0].get<double>(), ls.at("theta")[2].get<double>());  // symmetric
+    EXPECT_EQ(I[1][2].get<double>(), ls.at("theta")[5].get<double>());  // Iyz
+    EXPECT_EQ(I[2][2].get<double>(), ls.at("theta")[6].get<double>());  // Izz
+  }
+}
+}  // namespace
+}  // namespace quadid

@@ -39,6 +39,12 @@ json theta_json(const Theta& th) {
   return j;
 }
 
+json matrix_json(const Eigen::MatrixXd& m) {
+  json rows = json::array();
+  for (Eigen::Index i = 0; i < m.rows(); ++i) rows.push_back(vec_json(m.row(i).transpose()));
+  return rows;
+}
+
 json window_json(const TimeWindow& w) {
   return {{"t0", w.t0}, {"t1", finite_or_null(w.t1)}};
 }
@@ -51,7 +57,12 @@ json ls_json(const LeastSquaresSolution& s) {
             {"residual_rms", s.residual_rms},
             {"unidentifiable", s.unidentifiable},
             {"near_null", s.near_null},
-            {"poorly_determined", s.poorly_determined}};
+            {"poorly_determined", s.poorly_determined},
+            // For code: the estimate as an array in Theta order (eq. 40; JSON
+            // objects do not keep key order), and the inertia as a 3x3 tensor.
+            {"theta_order", kThetaNames},
+            {"theta", vec_json(s.theta)},
+            {"inertia_tensor", matrix_json(Params::from_theta(s.theta).I)}};
   if (!s.unidentifiable.empty())
     j["std_error_note"] = fmt::format(
         "null for {}: the data do not determine them (kept at the reference values); the other standard errors "
@@ -66,6 +77,11 @@ json ls_json(const LeastSquaresSolution& s) {
                 {"dof", finite_or_null(u.dof)},
                 {"t_quantile", u.quantile},
                 {"white_std_error", theta_json(u.white_std_error)}};
+  // Cov(theta), 7x7 in theta_order (kg^2, kg^3 m^2, kg^2 m^4): the one the
+  // intervals come from (docs/uncertainty.md).
+  // Written symmetric: the sandwich's products leave the two triangles
+  // ~1e-16 relative apart, which a consumer's Cholesky may refuse.
+  if (u.computed) j["covariance"] = matrix_json(0.5 * (u.covariance + u.covariance.transpose()));
   if (u.computed && u.jackknife_blocks > 0)
     j["jackknife"] = {{"blocks", u.jackknife_blocks},
                       {"t_quantile", u.jackknife_quantile},
