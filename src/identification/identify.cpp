@@ -58,8 +58,8 @@ struct alignas(64) RunOutput {  // own cache lines: the two regressions run at o
 // Accumulates LS and runs GD over the regression, recording both in columns
 // ls_col.. and gd_col.. of the evolution (and the time in column 0 when asked:
 // the two regressions run at once and share the rows).
-RunOutput run(const Regression& reg, const Theta& init, const GradientDescentOptions& gdo, const Recorder& rec,
-              Eigen::MatrixXd& evo, Eigen::Index ls_col, Eigen::Index gd_col, bool write_time) {
+RunOutput run_regression(const Regression& reg, const Theta& init, const GradientDescentOptions& gdo, const Recorder& rec,
+                         Eigen::MatrixXd& evo, Eigen::Index ls_col, Eigen::Index gd_col, bool write_time) {
   RunOutput out;
   out.gd = std::make_unique<GradientDescent>(init, reg.T(), gdo);
   reg.for_each([&](Eigen::Index k, const Regressor4x7& G, const Vec4& Y) {
@@ -213,157 +213,185 @@ const SetEstimate& IdentificationResult::estimate(std::string_view name) const {
   throw std::invalid_argument(fmt::format("no estimate named '{}' (LS, GD, FMLS, FMGD, PC, FMPC)", name));
 }
 
-IdentificationResult identify(const FlightLog& log, const IdentificationOptions& opt) {
-  opt.validate();
-  IdentificationResult res;
-  std::vector<std::string> input_warnings;  // listed after the estimation's own warnings
+namespace {
+
+// One identify() call: its state and its steps, in the order identify() takes
+// them (the warnings keep that order).
+class IdentifyRun {
+ public:
+  IdentifyRun(const FlightLog& log, const IdentificationOptions& opt)
+      : log_(log),
+        opt_(opt),
+        two_(detail::use_second_thread(opt.processing.threads)),
+        prior_(opt.reference.params.theta()),
+        error_window_(opt.error_window.value_or(TimeWindow{})) {}
+
+  IdentificationResult run() {
+    start_input_checks();
+    try {
+      estimate_paper_model();
+    } catch (...) {
+      estimation_error_ = std::current_exception();
+    }
+    finish_input_checks();
+    if (estimation_error_) std::rethrow_exception(estimation_error_);
+    collect_sets();
+    if (opt_.extended()) use_real_flight_regression();
+    check_model_fit();
+    const std::vector<std::string> deficient = judge_rank();
+    warn_poorly_determined(deficient);
+    warn_disagreement();
+    warn_unphysical();
+    prediction_tables();
+    res_.warnings.insert(res_.warnings.end(), input_warnings_.begin(), input_warnings_.end());
+    res_.recommended = recommend_set(res_);
+    return std::move(res_);
+  }
+
+ private:
   // The input checks read the log independently of the estimation: on a
   // thread of their own, from the start, when two threads are allowed (they
   // cost a fifth of the work and would otherwise hold up the processing or the
   // two regressions). A failed check is still reported first, as if the
   // estimation had not started; what it computed meanwhile is dropped.
-  const bool two = detail::use_second_thread(opt.processing.threads);
-  auto run_checks = [&] {
-    InputCheckOptions ic;
-    ic.g = opt.processing.g;
-    ic.reference_mass = opt.reference.params.m;
-    // A log with the vehicle on the ground at an end (airborne_part) is
-    // checked in the air: on the ground the thrust sits at idle or 0 and the
-    // vertical acceleration has nothing to do with it, which the saturation
-    // and z-direction checks would report as faults of the log.
-    if (const auto air = airborne_part(log); air && air->trimmed()) return check_input(rows_in(log, air->in_air), ic);
-    return check_input(log, ic);
-  };
-  std::future<std::vector<InputFinding>> checks;
-  if (opt.input_checks) {
-    if (two) checks = std::async(std::launch::async, run_checks);
-    else res.input_findings = run_checks();
-  }
-  std::shared_ptr<const RegressionSignals> sig;
-  std::optional<Regression> std_reg_opt, filt_reg_opt;
-  Recorder rec{0, 1, 1, false};
-  RunOutput s, f;
-  PhysicalProjection pc_std, pc_filt;
-  const Theta prior = opt.reference.params.theta();
-  std::exception_ptr estimation_error;
-  // Tables 5-6 over the error window (the regression's by default).
-  const TimeWindow error_window = opt.error_window.value_or(TimeWindow{});
-  std::optional<PredictionErrorTable> errors_standard, errors_filtered;  // when computed in the second pass
-  try {
-    sig = process_log(log, opt.processing, &res.processing);
-    std_reg_opt.emplace(sig, RegressionModel::Standard, opt.window);
-    filt_reg_opt.emplace(sig, RegressionModel::Filtered, opt.window, opt.lambda, opt.gd_variant);
-    const Regression& std_reg = *std_reg_opt;
-    const Regression& filt_reg = *filt_reg_opt;
-    res.window = std_reg.window();
-    res.window_samples = std_reg.size();
-    res.reference = opt.reference;
-    res.options = opt;
-    res.gd_initial = opt.gd_initial ? opt.gd_initial->theta() : prior;
-
-    // Evolution: t, then LS, GD, FMLS, FMGD (7 each).
-    const double T = sig->T;
-    const Eigen::Index stride =
-        opt.evolution_interval <= 0.0 ? 1 : std::max<Eigen::Index>(1, std::llround(opt.evolution_interval / T));
-    rec = Recorder{std_reg.begin(), std_reg.end(), stride, opt.record_evolution};
-    if (opt.record_evolution) {
-      res.evolution.columns.push_back("t");
-      for (const char* set : {"LS", "GD", "FMLS", "FMGD"})
-        for (const char* p : kThetaNames) res.evolution.columns.push_back(fmt::format("{}_{}", set, p));
-      res.evolution.data.setConstant(rec.rows(), 29, kNaN);
-    }
-
-    // The two regressions are independent until the tables: each runs LS and GD,
-    // solves, computes its HAC intervals and its physically consistent set, on
-    // its own thread when two are allowed.
-    const double fs = res.processing.fs, f3 = res.processing.filter_f3db;
-    auto chain = [&](const Regression& reg, RunOutput& out, LeastSquaresSolution& sol, PhysicalProjection& pc,
-                     Eigen::Index ls_col, Eigen::Index gd_col, bool filtered) {
-      out = run(reg, res.gd_initial, opt.gd, rec, res.evolution.data, ls_col, gd_col, !filtered);
-      sol = solve_least_squares(out.acc, prior, opt.ls, correlation_length(fs, f3, opt.lambda, filtered));
-      // Second pass: the influence of each sample on the estimate, for the HAC
-      // covariance (docs/uncertainty.md), and, when one window holds the other
-      // (by default Tables 5-6 cover the whole log) and the sets are final
-      // (not replaced by the real-flight regression), the tables' sums in the
-      // same pass: each sum still sees its own samples in their order.
-      InfluenceAccumulator infl(sol);
-      infl.reserve(static_cast<long>(reg.size()));
-      const Regression err_reg = reg.with_window(error_window);
-      const bool err_outer = err_reg.begin() <= reg.begin() && err_reg.end() >= reg.end();
-      const bool reg_outer = reg.begin() <= err_reg.begin() && reg.end() >= err_reg.end();
-      if (!opt.extended() && (err_outer || reg_outer)) {
-        std::vector<NamedParams> sets{{filtered ? "FMLS" : "LS", Params::from_theta(sol.theta)}};
-        if (!out.gd->diverged()) sets.push_back({filtered ? "FMGD" : "GD", Params::from_theta(out.gd->theta())});
-        PredictionErrorSums errors(sets, opt.reference);
-        (err_outer ? err_reg : reg).for_each([&](Eigen::Index k, const Regressor4x7& G, const Vec4& Y) {
-          if (k >= reg.begin() && k < reg.end()) infl.add(G, Y);
-          if (k >= err_reg.begin() && k < err_reg.end()) errors.add(G, Y);
-        });
-        (filtered ? errors_filtered : errors_standard) = errors.table(err_reg);
-      } else {
-        reg.for_each([&](Eigen::Index, const Regressor4x7& G, const Vec4& Y) { infl.add(G, Y); });
-      }
-      attach_uncertainty(sol, infl.finish(opt.uncertainty), prior, opt.ls);
-      // The physically consistent set: the closest consistent Theta in the LS metric.
-      pc = closest_physical(sol, prior, opt.physical);
+  void start_input_checks() {
+    if (!opt_.input_checks) return;
+    auto run_checks = [this] {
+      InputCheckOptions ic;
+      ic.g = opt_.processing.g;
+      ic.reference_mass = opt_.reference.params.m;
+      // A log with the vehicle on the ground at an end (airborne_part) is
+      // checked in the air: on the ground the thrust sits at idle or 0 and the
+      // vertical acceleration has nothing to do with it, which the saturation
+      // and z-direction checks would report as faults of the log.
+      if (const auto air = airborne_part(log_); air && air->trimmed())
+        return check_input(rows_in(log_, air->in_air), ic);
+      return check_input(log_, ic);
     };
-    detail::run_both(
-        two, [&] { chain(std_reg, s, res.ls_standard, pc_std, 1, 8, false); },
-        [&] { chain(filt_reg, f, res.ls_filtered, pc_filt, 15, 22, true); });
-  } catch (...) {
-    estimation_error = std::current_exception();
+    if (two_) checks_ = std::async(std::launch::async, run_checks);
+    else res_.input_findings = run_checks();
   }
-  if (checks.valid()) res.input_findings = checks.get();
-  if (opt.input_checks) {
+
+  void finish_input_checks() {
+    if (checks_.valid()) res_.input_findings = checks_.get();
+    if (!opt_.input_checks) return;
     std::vector<std::string> errors;
-    for (const auto& fd : res.input_findings) {
+    for (const auto& fd : res_.input_findings) {
       if (fd.severity == Severity::Error) errors.push_back(fmt::format("{}: {} ({})", fd.check, fd.saw, fd.action));
       else if (fd.severity == Severity::Warning)
-        input_warnings.push_back(fmt::format("input check {}: {} ({})", fd.check, fd.saw, fd.action));
+        input_warnings_.push_back(fmt::format("input check {}: {} ({})", fd.check, fd.saw, fd.action));
     }
-    input_check_errors(errors, opt, "the log is right", input_warnings);
+    input_check_errors(errors, opt_, "the log is right", input_warnings_);
   }
-  if (estimation_error) std::rethrow_exception(estimation_error);
-  const Regression& std_reg = *std_reg_opt;
-  const Regression& filt_reg = *filt_reg_opt;
-  res.gd_step_gain_standard = s.gd->max_step_gain();
-  res.gd_step_gain_filtered = f.gd->max_step_gain();
 
-  auto gd_estimate = [&](const char* name, RegressionModel m, const GradientDescent& gd) {
+  // Section II-C processing, the standard (eq. 34) and filtered (eqs. 35-39)
+  // regressions, and on each LS (eq. 40), GD (eqs. 41-42), the HAC intervals
+  // and the physically consistent set.
+  void estimate_paper_model() {
+    sig_ = process_log(log_, opt_.processing, &res_.processing);
+    std_reg_.emplace(sig_, RegressionModel::Standard, opt_.window);
+    filt_reg_.emplace(sig_, RegressionModel::Filtered, opt_.window, opt_.lambda, opt_.gd_variant);
+    res_.window = std_reg_->window();
+    res_.window_samples = std_reg_->size();
+    res_.reference = opt_.reference;
+    res_.options = opt_;
+    res_.gd_initial = opt_.gd_initial ? opt_.gd_initial->theta() : prior_;
+    start_evolution();
+    // The two regressions are independent until the tables: each on its own
+    // thread when two are allowed.
+    detail::run_both(
+        two_, [&] { chain(*std_reg_, s_, res_.ls_standard, pc_std_, 1, 8, false); },
+        [&] { chain(*filt_reg_, f_, res_.ls_filtered, pc_filt_, 15, 22, true); });
+  }
+
+  // Evolution: t, then LS, GD, FMLS, FMGD (7 each).
+  void start_evolution() {
+    const double T = sig_->T;
+    const Eigen::Index stride =
+        opt_.evolution_interval <= 0.0 ? 1 : std::max<Eigen::Index>(1, std::llround(opt_.evolution_interval / T));
+    rec_ = Recorder{std_reg_->begin(), std_reg_->end(), stride, opt_.record_evolution};
+    if (!opt_.record_evolution) return;
+    res_.evolution.columns.push_back("t");
+    for (const char* set : {"LS", "GD", "FMLS", "FMGD"})
+      for (const char* p : kThetaNames) res_.evolution.columns.push_back(fmt::format("{}_{}", set, p));
+    res_.evolution.data.setConstant(rec_.rows(), 29, kNaN);
+  }
+
+  // One regression: LS and GD, the solve, the HAC intervals, the physically
+  // consistent set.
+  void chain(const Regression& reg, RunOutput& out, LeastSquaresSolution& sol, PhysicalProjection& pc,
+             Eigen::Index ls_col, Eigen::Index gd_col, bool filtered) {
+    const double fs = res_.processing.fs, f3 = res_.processing.filter_f3db;
+    out = run_regression(reg, res_.gd_initial, opt_.gd, rec_, res_.evolution.data, ls_col, gd_col, !filtered);
+    sol = solve_least_squares(out.acc, prior_, opt_.ls, correlation_length(fs, f3, opt_.lambda, filtered));
+    // Second pass: the influence of each sample on the estimate, for the HAC
+    // covariance (docs/uncertainty.md), and, when one window holds the other
+    // (by default Tables 5-6 cover the whole log) and the sets are final
+    // (not replaced by the real-flight regression), the tables' sums in the
+    // same pass: each sum still sees its own samples in their order.
+    InfluenceAccumulator infl(sol);
+    infl.reserve(static_cast<long>(reg.size()));
+    const Regression err_reg = reg.with_window(error_window_);
+    const bool err_outer = err_reg.begin() <= reg.begin() && err_reg.end() >= reg.end();
+    const bool reg_outer = reg.begin() <= err_reg.begin() && reg.end() >= err_reg.end();
+    if (!opt_.extended() && (err_outer || reg_outer)) {
+      std::vector<NamedParams> sets{{filtered ? "FMLS" : "LS", Params::from_theta(sol.theta)}};
+      if (!out.gd->diverged()) sets.push_back({filtered ? "FMGD" : "GD", Params::from_theta(out.gd->theta())});
+      PredictionErrorSums errors(sets, opt_.reference);
+      (err_outer ? err_reg : reg).for_each([&](Eigen::Index k, const Regressor4x7& G, const Vec4& Y) {
+        if (k >= reg.begin() && k < reg.end()) infl.add(G, Y);
+        if (k >= err_reg.begin() && k < err_reg.end()) errors.add(G, Y);
+      });
+      (filtered ? errors_filtered_ : errors_standard_) = errors.table(err_reg);
+    } else {
+      reg.for_each([&](Eigen::Index, const Regressor4x7& G, const Vec4& Y) { infl.add(G, Y); });
+    }
+    attach_uncertainty(sol, infl.finish(opt_.uncertainty), prior_, opt_.ls);
+    // The physically consistent set: the closest consistent Theta in the LS metric.
+    pc = closest_physical(sol, prior_, opt_.physical);
+  }
+
+  SetEstimate gd_estimate(const char* name, RegressionModel m, const GradientDescent& gd) {
     SetEstimate e{name, m, false, gd.theta(), !gd.diverged(), "", {}};
     if (gd.diverged()) {
       e.note = fmt::format("{} diverged: {}", name, gd.divergence_reason());
-      res.warnings.push_back(e.note);
+      res_.warnings.push_back(e.note);
     }
     return e;
-  };
-  res.estimates[0] = SetEstimate{"LS", RegressionModel::Standard, true, res.ls_standard.theta, true, "", {}};
-  res.estimates[1] = gd_estimate("GD", RegressionModel::Standard, *s.gd);
-  res.estimates[2] = SetEstimate{"FMLS", RegressionModel::Filtered, true, res.ls_filtered.theta, true, "", {}};
-  res.estimates[3] = gd_estimate("FMGD", RegressionModel::Filtered, *f.gd);
-  for (auto [name, model, pr] : {std::tuple{"PC", RegressionModel::Standard, &pc_std},
-                                  std::tuple{"FMPC", RegressionModel::Filtered, &pc_filt}}) {
-    SetEstimate e{name, model, true, pr->theta, pr->theta.allFinite(), "", {}};
-    if (!e.valid) e.note = fmt::format("{}: no consistent set ({})", name, pr->status);
-    res.physical_sets.push_back(e);
-    res.projections.push_back(std::move(*pr));
   }
 
-  if (opt.extended()) {
-    // LS and FMLS from the real-flight regression (extended.hpp); the paper's
-    // model above still gives GD, FMGD and the identifiability diagnostics.
-    auto xr = std::make_shared<ExtendedResult>(identify_extended(log, extended_options(opt)));
+  // The four sets of the paper and the two physically consistent ones.
+  void collect_sets() {
+    res_.gd_step_gain_standard = s_.gd->max_step_gain();
+    res_.gd_step_gain_filtered = f_.gd->max_step_gain();
+    res_.estimates[0] = SetEstimate{"LS", RegressionModel::Standard, true, res_.ls_standard.theta, true, "", {}};
+    res_.estimates[1] = gd_estimate("GD", RegressionModel::Standard, *s_.gd);
+    res_.estimates[2] = SetEstimate{"FMLS", RegressionModel::Filtered, true, res_.ls_filtered.theta, true, "", {}};
+    res_.estimates[3] = gd_estimate("FMGD", RegressionModel::Filtered, *f_.gd);
+    for (auto [name, model, pr] : {std::tuple{"PC", RegressionModel::Standard, &pc_std_},
+                                    std::tuple{"FMPC", RegressionModel::Filtered, &pc_filt_}}) {
+      SetEstimate e{name, model, true, pr->theta, pr->theta.allFinite(), "", {}};
+      if (!e.valid) e.note = fmt::format("{}: no consistent set ({})", name, pr->status);
+      res_.physical_sets.push_back(e);
+      res_.projections.push_back(std::move(*pr));
+    }
+  }
+
+  // LS and FMLS from the real-flight regression (extended.hpp); the paper's
+  // model above still gives GD, FMGD and the identifiability diagnostics.
+  void use_real_flight_regression() {
+    auto xr = std::make_shared<ExtendedResult>(identify_extended(log_, extended_options(opt_)));
     for (int i : {0, 1}) {
       const ExtendedEstimate& x = xr->estimates[static_cast<size_t>(i)];
-      SetEstimate& e = res.estimates[static_cast<size_t>(2 * i)];
-      LeastSquaresSolution& sol = i == 0 ? res.ls_standard : res.ls_filtered;
+      SetEstimate& e = res_.estimates[static_cast<size_t>(2 * i)];
+      LeastSquaresSolution& sol = i == 0 ? res_.ls_standard : res_.ls_filtered;
       e.theta = x.theta;
       e.extra = x.extra;
       sol.theta = x.theta;
       sol.condition = x.condition;
       // Intervals of the real-flight regression: its HAC standard errors,
       // Student t quantile, in Theta order.
-      sol.uncertainty = rigid_body_estimate(x, opt.terms.known_mass.has_value());
+      sol.uncertainty = rigid_body_estimate(x, opt_.terms.known_mass.has_value());
       sol.std_error = sol.uncertainty.std_error;
       sol.poorly_determined = sol.uncertainty.poorly_determined;
       sol.std_error_method =
@@ -373,137 +401,177 @@ IdentificationResult identify(const FlightLog& log, const IdentificationOptions&
                             x.jackknife_blocks)
               : "real-flight regression: HAC (low-frequency periodogram) covariance of each sample's influence on the "
                 "weighted fit";
-      // The physically consistent set closest to it, in the metric of its
-      // covariance (m held at the known mass when given), with its terms.
-      TermsProjection tp = closest_physical_with_terms(x, opt.terms.known_mass, prior, opt.physical);
-      PhysicalProjection pr = std::move(tp.body);
-      SetEstimate& pc = res.physical_sets[static_cast<size_t>(i)];
-      pc.theta = pr.theta;
-      pc.valid = pr.theta.allFinite();
-      pc.note = pc.valid ? "" : fmt::format("{}: no consistent set ({})", pc.name, pr.status);
-      if (pc.valid) pc.extra = std::move(tp.extra);
-      if (pc.valid && !tp.pinned.empty()) {
-        pr.changed = true;
-        pr.status += fmt::format("; {} held at 0 (sign)", fmt::join(tp.pinned, ", "));
-      }
-      res.projections[static_cast<size_t>(i)] = std::move(pr);
+      project_with_terms(x, static_cast<size_t>(i));
     }
-    for (const auto& w : xr->warnings) res.warnings.push_back(w);
-    res.extended = std::move(xr);
+    for (const auto& w : xr->warnings) res_.warnings.push_back(w);
+    res_.extended = std::move(xr);
+  }
+
+  // The physically consistent set closest to a real-flight estimate, in the
+  // metric of its covariance (m held at the known mass when given), with its terms.
+  void project_with_terms(const ExtendedEstimate& x, size_t i) {
+    TermsProjection tp = closest_physical_with_terms(x, opt_.terms.known_mass, prior_, opt_.physical);
+    PhysicalProjection pr = std::move(tp.body);
+    SetEstimate& pc = res_.physical_sets[i];
+    pc.theta = pr.theta;
+    pc.valid = pr.theta.allFinite();
+    pc.note = pc.valid ? "" : fmt::format("{}: no consistent set ({})", pc.name, pr.status);
+    if (pc.valid) pc.extra = std::move(tp.extra);
+    if (pc.valid && !tp.pinned.empty()) {
+      pr.changed = true;
+      pr.status += fmt::format("; {} held at 0 (sign)", fmt::join(tp.pinned, ", "));
+    }
+    res_.projections[i] = std::move(pr);
   }
 
   // The torques must fit the rotations: otherwise the error is the log's or
   // the vehicle file's, and the estimates are not a body's.
-  if (opt.input_checks) {
-    input_check_errors(model_fit_findings(res), opt, "the log and the vehicle file are right", input_warnings);
-    if (const auto w = unexplained_warning(res)) input_warnings.push_back("input check " + *w);
+  void check_model_fit() {
+    if (!opt_.input_checks) return;
+    input_check_errors(model_fit_findings(res_), opt_, "the log and the vehicle file are right", input_warnings_);
+    if (const auto w = unexplained_warning(res_)) input_warnings_.push_back("input check " + *w);
   }
 
-  // Identifiability: rank deficiency is an error unless allowed; a large
-  // standard error is a warning.
-  std::vector<std::string> deficient;
-  for (const auto* sol : {&res.ls_standard, &res.ls_filtered})
-    for (const auto& n : sol->unidentifiable)
-      if (std::find(deficient.begin(), deficient.end(), n) == deficient.end()) deficient.push_back(n);
-  if (!deficient.empty()) {
+  // Rank deficiency is an error unless allowed (then a warning); returns the
+  // parameters the data do not determine.
+  std::vector<std::string> judge_rank() {
+    std::vector<std::string> deficient;
+    for (const auto* sol : {&res_.ls_standard, &res_.ls_filtered})
+      for (const auto& n : sol->unidentifiable)
+        if (std::find(deficient.begin(), deficient.end(), n) == deficient.end()) deficient.push_back(n);
+    if (deficient.empty()) return deficient;
     const std::string msg = fmt::format(
         "the data do not determine {} (column-scaled condition number: standard {:.3g}, filtered {:.3g}): the "
         "flight does not excite these parameters (hover, or too little rotation)",
-        fmt::join(deficient, ", "), res.ls_standard.condition, res.ls_filtered.condition);
-    if (!opt.allow_rank_deficient)
+        fmt::join(deficient, ", "), res_.ls_standard.condition, res_.ls_filtered.condition);
+    if (!opt_.allow_rank_deficient)
       throw InputError(msg + "; fly an exciting trajectory (quadid design), or allow rank-deficient data to keep "
                              "them at the reference values");
-    res.warnings.push_back(msg + fmt::format("; LS keeps them at the reference set '{}' and GD at its initial guess",
-                                             opt.reference.name));
+    res_.warnings.push_back(msg + fmt::format("; LS keeps them at the reference set '{}' and GD at its initial guess",
+                                              opt_.reference.name));
+    return deficient;
   }
-  for (const auto& [name, sol] : {std::pair{"LS", &res.ls_standard}, std::pair{"FMLS", &res.ls_filtered}}) {
-    std::vector<std::string> poor;
-    for (const auto& n : sol->poorly_determined)
-      if (std::find(deficient.begin(), deficient.end(), n) == deficient.end()) poor.push_back(n);
-    if (!poor.empty()) {
+
+  // A large standard error against the parameter's scale is a warning.
+  void warn_poorly_determined(const std::vector<std::string>& deficient) {
+    for (const auto& [name, sol] : {std::pair{"LS", &res_.ls_standard}, std::pair{"FMLS", &res_.ls_filtered}}) {
       std::vector<std::string> detail;
-      for (const auto& n : poor) {
+      for (const auto& n : sol->poorly_determined) {
+        if (std::find(deficient.begin(), deficient.end(), n) != deficient.end()) continue;
         int j = 0;
         while (kThetaNames[static_cast<size_t>(j)] != n) ++j;
         detail.push_back(fmt::format("{} = {:.4g} +- {:.2g}", n, sol->theta(j), sol->std_error(j)));
       }
-      res.warnings.push_back(fmt::format("{}: poorly determined by these data (standard error above {:g}% of the "
-                                         "parameter's scale{}): {}",
-                                         name, 100.0 * opt.ls.poor_fraction,
-                                         sol->near_null.empty()
-                                             ? std::string()
-                                             : fmt::format(", or in a near-null direction: {}",
-                                                           fmt::join(sol->near_null, ", ")),
-                                         fmt::join(detail, ", ")));
+      if (detail.empty()) continue;
+      res_.warnings.push_back(fmt::format("{}: poorly determined by these data (standard error above {:g}% of the "
+                                          "parameter's scale{}): {}",
+                                          name, 100.0 * opt_.ls.poor_fraction,
+                                          sol->near_null.empty()
+                                              ? std::string()
+                                              : fmt::format(", or in a near-null direction: {}",
+                                                            fmt::join(sol->near_null, ", ")),
+                                          fmt::join(detail, ", ")));
     }
   }
+
   // The two regressions see the same flight through different filters; when
   // they disagree the processing is wrong for these data (e.g. motion-capture
   // steps left in the position, which the standard model differentiates twice).
-  {
+  void warn_disagreement() {
     std::vector<std::string> differ;
     for (int j : {0, 1, 4, 6}) {
-      const double a = res.ls_standard.theta(j), b = res.ls_filtered.theta(j);
+      const double a = res_.ls_standard.theta(j), b = res_.ls_filtered.theta(j);
       if (std::abs(a - b) > 0.03 * std::max(std::abs(a), std::abs(b)))
         differ.push_back(fmt::format("{} {:.4g} vs {:.4g}", kThetaNames[static_cast<size_t>(j)], a, b));
     }
-    if (!differ.empty())
-      res.warnings.push_back(fmt::format(
-          "LS and FMLS disagree by more than 3% ({}): the processing does not suit these data; with 30 Hz "
-          "motion capture use the Butterworth pre-filter with a cutoff of a few Hz",
-          fmt::join(differ, ", ")));
-  }
-  for (const auto& e : res.estimates) {
-    if (!e.valid) continue;
-    // Positivity only: the triangle inequalities are reported in consistency.<SET>
-    // (the paper's own "true" plant, Table 3, violates them).
-    const PhysicalConsistency c = check_physical_consistency(e.theta);
-    if (!c.physical && c.why.find("triangle") == std::string::npos)
-      res.warnings.push_back(fmt::format("{}: not a physical body: {}{}", e.name, c.why,
-                                         e.least_squares ? fmt::format(" (the closest physical set is {})",
-                                                                       e.model == RegressionModel::Standard ? "PC"
-                                                                                                            : "FMPC")
-                                                         : std::string()));
+    if (differ.empty()) return;
+    res_.warnings.push_back(fmt::format(
+        "LS and FMLS disagree by more than 3% ({}): the processing does not suit these data; with 30 Hz "
+        "motion capture use the Butterworth pre-filter with a cutoff of a few Hz",
+        fmt::join(differ, ", ")));
   }
 
-  // Tables 5-6: each model with its own sets and the reference.
-  // With their real-flight terms (LS and FMLS of the real-flight regression;
-  // the paper's prediction_error does not read them).
-  auto sets_of = [&](int a, int b) {
+  // Positivity only: the triangle inequalities are reported in consistency.<SET>
+  // (the paper's own "true" plant, Table 3, violates them).
+  void warn_unphysical() {
+    for (const auto& e : res_.estimates) {
+      if (!e.valid) continue;
+      const PhysicalConsistency c = check_physical_consistency(e.theta);
+      if (c.physical || c.why.find("triangle") != std::string::npos) continue;
+      res_.warnings.push_back(fmt::format(
+          "{}: not a physical body: {}{}", e.name, c.why,
+          e.least_squares
+              ? fmt::format(" (the closest physical set is {})", e.model == RegressionModel::Standard ? "PC" : "FMPC")
+              : std::string()));
+    }
+  }
+
+  // The valid sets among estimates a and b, with their real-flight terms
+  // (the paper's prediction_error does not read them).
+  std::vector<NamedParams> sets_of(int a, int b) const {
     std::vector<NamedParams> v;
     for (int i : {a, b}) {
-      const SetEstimate& e = res.estimates[static_cast<size_t>(i)];
+      const SetEstimate& e = res_.estimates[static_cast<size_t>(i)];
       if (e.valid) v.push_back({e.name, e.params(), e.extra});
     }
     return v;
-  };
-  if (errors_standard && errors_filtered) {
-    res.errors_standard = std::move(*errors_standard);
-    res.errors_filtered = std::move(*errors_filtered);
-  } else if (opt.extended()) {
-    ExtendedOptions eo = extended_options(opt);
-    eo.window = error_window;
-    const std::vector<NamedParams> std_sets = sets_of(0, 1), filt_sets = sets_of(2, 3);
-    detail::run_both(
-        two,
-        [&] {
-          res.errors_standard =
-              real_flight_prediction_error(log, std_sets, opt.reference, RegressionModel::Standard, eo, true);
-        },
-        [&] {
-          res.errors_filtered =
-              real_flight_prediction_error(log, filt_sets, opt.reference, RegressionModel::Filtered, eo, true);
-        });
-    res.errors_real_flight = true;
-  } else {
-    const std::vector<NamedParams> std_sets = sets_of(0, 1), filt_sets = sets_of(2, 3);
-    detail::run_both(
-        two, [&] { res.errors_standard = prediction_error(std_reg.with_window(error_window), std_sets, opt.reference); },
-        [&] { res.errors_filtered = prediction_error(filt_reg.with_window(error_window), filt_sets, opt.reference); });
   }
-  res.warnings.insert(res.warnings.end(), input_warnings.begin(), input_warnings.end());
-  res.recommended = recommend_set(res);
-  return res;
+
+  // Tables 5-6: each model with its own sets and the reference.
+  void prediction_tables() {
+    if (errors_standard_ && errors_filtered_) {
+      res_.errors_standard = std::move(*errors_standard_);
+      res_.errors_filtered = std::move(*errors_filtered_);
+      return;
+    }
+    const std::vector<NamedParams> std_sets = sets_of(0, 1), filt_sets = sets_of(2, 3);
+    if (opt_.extended()) {
+      ExtendedOptions eo = extended_options(opt_);
+      eo.window = error_window_;
+      detail::run_both(
+          two_,
+          [&] {
+            res_.errors_standard =
+                real_flight_prediction_error(log_, std_sets, opt_.reference, RegressionModel::Standard, eo, true);
+          },
+          [&] {
+            res_.errors_filtered =
+                real_flight_prediction_error(log_, filt_sets, opt_.reference, RegressionModel::Filtered, eo, true);
+          });
+      res_.errors_real_flight = true;
+      return;
+    }
+    detail::run_both(
+        two_,
+        [&] { res_.errors_standard = prediction_error(std_reg_->with_window(error_window_), std_sets, opt_.reference); },
+        [&] {
+          res_.errors_filtered = prediction_error(filt_reg_->with_window(error_window_), filt_sets, opt_.reference);
+        });
+  }
+
+  const FlightLog& log_;
+  const IdentificationOptions& opt_;
+  const bool two_;
+  const Theta prior_;
+  // Tables 5-6 over the error window (the regression's by default).
+  const TimeWindow error_window_;
+  IdentificationResult res_;
+  std::vector<std::string> input_warnings_;  // listed after the estimation's own warnings
+  std::future<std::vector<InputFinding>> checks_;
+  std::shared_ptr<const RegressionSignals> sig_;
+  std::optional<Regression> std_reg_, filt_reg_;
+  Recorder rec_{0, 1, 1, false};
+  RunOutput s_, f_;
+  PhysicalProjection pc_std_, pc_filt_;
+  std::exception_ptr estimation_error_;
+  std::optional<PredictionErrorTable> errors_standard_, errors_filtered_;  // when computed in the second pass
+};
+
+}  // namespace
+
+IdentificationResult identify(const FlightLog& log, const IdentificationOptions& opt) {
+  opt.validate();
+  return IdentifyRun(log, opt).run();
 }
 
 }  // namespace quadid
