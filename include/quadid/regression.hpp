@@ -271,22 +271,18 @@ void Regression::for_each(F&& f) const {
     }
     return;
   }
-  // Filtered: s = f_D x by y[k+1] = alpha y[k] + (1 - alpha) x[k] (eq. 35), with
-  // the steady-state start y[0] = x[0]; g_D x = c (x - f_D x) because
-  // g_D = c (z - 1)/(z - alpha) = c (1 - f_D) (eq. 36), c = lambda (printed) or
-  // (1 - alpha)/T (consistent: the difference quotient of f_D's output).
-  const double alpha = std::exp(-lambda_ * T);
-  const double one_minus = -std::expm1(-lambda_ * T);
-  const double c = (variant_ == signal::GdVariant::Printed) ? lambda_ : one_minus / T;
+  // Filtered: f_D and g_D (eqs. 35-36) as signal::FdGd codes them, run along
+  // all columns of the signals at once.
+  const signal::FdGd fd(lambda_, T, variant_, "Regression");
   Eigen::Matrix<double, 1, RegressionSignals::kCols> s = X.row(0);
   for (Eigen::Index k = 0; k < end_; ++k) {
     if (k >= begin_) {
-      a = c * (X.row(k).head<4>() - s.head<4>()).transpose();
+      a = fd.c * (X.row(k).head<4>() - s.head<4>()).transpose();
       b = s.segment<7>(4).transpose();
       y = s.tail<4>().transpose();
       f(k, assemble_regressor(a, b), y);
     }
-    s = alpha * s + one_minus * X.row(k);
+    fd.step(s, X.row(k));
   }
 }
 

@@ -230,6 +230,22 @@ auto central_difference(const Eigen::MatrixBase<Derived>& x, double T) {
 // Printed g_D = lambda T/(1 - a) (1.030 for lambda = 30, T = 0.002) times the
 // derivative of f_D's output at low frequency (docs/method.md, "Corrections to the printed paper"); Consistent is the default.
 enum class GdVariant { Consistent, Printed };
+/// The one coding of f_D and g_D: every user (the filtered regression's
+/// streaming loop, filter_fD/filter_gD, the transfer functions, the adjoint of
+/// the precision prediction) takes its constants and its step from here.
+/// With the state s_k = f_D x at sample k (s_0 = x_0, the steady-state start):
+///   s_{k+1} = alpha s_k + one_minus x_k        eq. (35)
+///   g_D x at k = c (x_k - s_k)                 eq. (36): g_D = c (1 - f_D)
+/// c = lambda (printed) or one_minus / T (consistent).
+struct FdGd {
+  double alpha;      // exp(-lambda T)
+  double one_minus;  // 1 - alpha, by expm1 (alpha is close to 1)
+  double c;          // g_D's gain
+  /// Throws std::invalid_argument naming `where` unless lambda > 0 and T > 0.
+  FdGd(double lambda, double T, GdVariant variant = GdVariant::Consistent, const char* where = "FdGd");
+  template <class S, class X>
+  void step(S& s, const X& x) const { s = alpha * s + one_minus * x; }
+};
 TransferFunction fD_tf(double lambda, double T);
 TransferFunction gD_tf(double lambda, double T, GdVariant variant = GdVariant::Consistent);
 // Column-wise, steady-state initialization (state lfilter_zi * x[0]): constant in,

@@ -313,41 +313,48 @@ std::string LowpassOptions::name() const {
   return fmt::format("FIR {} taps Blackman-Harris, {} Hz", taps, cutoff_hz);
 }
 
+FdGd::FdGd(double lambda, double T, GdVariant variant, const char* where)
+    : alpha(0.0), one_minus(0.0), c(0.0) {
+  check_lambda_T(lambda, T, where);
+  alpha = std::exp(-lambda * T);
+  one_minus = -std::expm1(-lambda * T);
+  c = (variant == GdVariant::Printed) ? lambda : one_minus / T;
+}
+
 TransferFunction fD_tf(double lambda, double T) {
-  check_lambda_T(lambda, T, "fD_tf");
-  const double a = std::exp(-lambda * T);
-  const double one_minus_a = -std::expm1(-lambda * T);
+  const FdGd f(lambda, T, GdVariant::Consistent, "fD_tf");
   // (1 - a) / (z - a) = (1 - a) z^-1 / (1 - a z^-1)
-  return {{0.0, one_minus_a}, {1.0, -a}};
+  return {{0.0, f.one_minus}, {1.0, -f.alpha}};
 }
 
 TransferFunction gD_tf(double lambda, double T, GdVariant variant) {
-  check_lambda_T(lambda, T, "gD_tf");
-  const double a = std::exp(-lambda * T);
+  const FdGd f(lambda, T, variant, "gD_tf");
   // c (z - 1) / (z - a) = c (1 - z^-1) / (1 - a z^-1)
-  const double c = (variant == GdVariant::Printed) ? lambda : -std::expm1(-lambda * T) / T;
-  return {{c, -c}, {1.0, -a}};
+  return {{f.c, -f.c}, {1.0, -f.alpha}};
 }
 
 namespace {
-Eigen::MatrixXd filter_steady(const TransferFunction& tf, const Eigen::MatrixXd& x) {
-  const Eigen::VectorXd zi = lfilter_zi(tf);
+// Runs FdGd along each column: out(k) = f_D x (gd = false) or g_D x (gd = true).
+Eigen::MatrixXd run_fdgd(const FdGd& f, const Eigen::MatrixXd& x, bool gd) {
   Eigen::MatrixXd y(x.rows(), x.cols());
-  if (x.rows() == 0) return y;
   for (Eigen::Index j = 0; j < x.cols(); ++j) {
-    const Eigen::VectorXd z0 = zi * x(0, j);
-    y.col(j) = lfilter(tf, x.col(j), &z0);
+    if (x.rows() == 0) break;
+    double s = x(0, j);
+    for (Eigen::Index k = 0; k < x.rows(); ++k) {
+      y(k, j) = gd ? f.c * (x(k, j) - s) : s;
+      f.step(s, x(k, j));
+    }
   }
   return y;
 }
 }  // namespace
 
 Eigen::MatrixXd filter_fD(const Eigen::MatrixXd& x, double lambda, double T) {
-  return filter_steady(fD_tf(lambda, T), x);
+  return run_fdgd(FdGd(lambda, T, GdVariant::Consistent, "filter_fD"), x, false);
 }
 
 Eigen::MatrixXd filter_gD(const Eigen::MatrixXd& x, double lambda, double T, GdVariant variant) {
-  return filter_steady(gD_tf(lambda, T, variant), x);
+  return run_fdgd(FdGd(lambda, T, variant, "filter_gD"), x, true);
 }
 
 }  // namespace quadid::signal
