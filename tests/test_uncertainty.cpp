@@ -172,16 +172,25 @@ TEST(Uncertainty, HacIntervalsCoverWithColouredNoise) {
   }
 }
 
-// The study behind UncertaintyOptions::band_factor = 10 (docs/uncertainty.md):
-// run with --gtest_also_run_disabled_tests.
-TEST(Uncertainty, DISABLED_BandFactorStudy) {
+// The study behind UncertaintyOptions::band_factor = 10 (docs/uncertainty.md),
+// kept as a test: the coverage of the 95 % intervals must hold over a decade of
+// factors on each side of the default, so the default is not a knife edge, and at
+// the default the standard error must match the estimates' spread. Measured
+// (200 flights of 6000 samples, AR(1) 0.9): factor 3: coverage 0.943, se/spread
+// 0.962; 10: 0.946, 0.953; 30: 0.931, 0.883. Bounds: coverage 0.90-0.99 (a
+// binomial over 200 x 7 intervals has a standard deviation of ~0.6 %, so 0.90
+// is 8 of them below nominal); se/spread within 10 % at the default, 20 % at
+// the extremes (fewer frequencies give a noisier variance, more a biased one).
+TEST(Uncertainty, BandFactorDecadeAroundTheDefaultKeepsCoverage) {
   for (double f : {3.0, 10.0, 30.0}) {
     UncertaintyOptions uo;
     uo.band_factor = f;
     const CoverageCount c = coverage(200, 6000, 0.9, 11, uo);
     double ratio = 0;
     for (int j = 0; j < 7; ++j) ratio += c.se.row(j).mean() / std::sqrt(c.errors.row(j).squaredNorm() / c.errors.cols()) / 7;
-    std::printf("factor %g coverage %.3f se/spread %.3f\n", f, c.hac.mean(), ratio);
+    EXPECT_GE(c.hac.mean(), 0.90) << "band_factor " << f;
+    EXPECT_LE(c.hac.mean(), 0.99) << "band_factor " << f;
+    EXPECT_NEAR(ratio, 1.0, f == 10.0 ? 0.10 : 0.20) << "band_factor " << f;
   }
 }
 
