@@ -773,3 +773,40 @@ TEST(Identification, JsonCarriesThetaOrderTensorAndCovariance) {
 }
 }  // namespace
 }  // namespace quadid
+
+// A known mass the flight contradicts (issue 37): in grams, or 10x off, every
+// inertia would come out scaled by the same factor with intervals that do not
+// show it. identify refuses, names the mass the flight's thrust measures, and
+// the value it advises, applied, identifies the vehicle (principal moments to
+// 1 % on this noise-free log, as KnownMassRecoversThrustScale).
+TEST(Identification, KnownMassTheFlightContradictsIsRefusedAndTheAdviceWorks) {
+  const FlightLog& log = perfect_table2();
+  const Params truth = Params::qball2_virtual();
+  for (const double factor : {1000.0, 10.0, 0.1}) {
+    SCOPED_TRACE(factor);
+    IdentificationOptions o;
+    o.terms.known_mass = truth.m * factor;
+    std::string msg;
+    try {
+      (void)identify(log, o);
+    } catch (const std::invalid_argument& e) {
+      msg = e.what();
+    }
+    ASSERT_NE(msg.find("--known-mass"), std::string::npos) << "not refused";
+    EXPECT_EQ(msg.find("Grams?") != std::string::npos, factor == 1000.0) << msg;
+    const auto at = msg.find("Give --known-mass ");
+    ASSERT_NE(at, std::string::npos) << msg;
+    const double advised = std::stod(msg.substr(at + 18));
+    EXPECT_NEAR(advised, truth.m, 0.005 * truth.m) << msg;
+    o.terms.known_mass = advised;
+    const IdentificationResult r = identify(log, o);
+    for (int j : {1, 4, 6})
+      EXPECT_NEAR(r.estimate("LS").theta(j), truth.theta()(j), 0.01 * truth.theta()(j)) << j;
+  }
+  // The right mass, and one 30 % off (a thrust model can be that far), pass.
+  for (const double factor : {1.0, 1.3}) {
+    IdentificationOptions o;
+    o.terms.known_mass = truth.m * factor;
+    EXPECT_NO_THROW((void)identify(log, o)) << factor;
+  }
+}

@@ -404,7 +404,36 @@ class IdentifyRun {
       project_with_terms(x, static_cast<size_t>(i));
     }
     for (const auto& w : xr->warnings) res_.warnings.push_back(w);
+    check_known_mass(xr->estimates[0]);
     res_.extended = std::move(xr);
+  }
+
+  // A known mass the flight contradicts (issue 37): with the mass given, the
+  // regression estimates the thrust scale s (true wrench = s x the logged or
+  // modelled one), so the flight itself measures the mass as known_mass / s.
+  // A thrust model is rarely more than a factor 2 off; beyond that, and beyond
+  // five standard errors of s, the number given is wrong (or the rotor model
+  // is), and every inertia would be scaled by the same wrong factor.
+  void check_known_mass(const ExtendedEstimate& ls) const {
+    if (!opt_.terms.known_mass) return;
+    const Eigen::Index j = ls.index_of("thrust_scale");
+    if (j < 0) return;
+    const double s = ls.value(j), se = ls.std_error(j), m = *opt_.terms.known_mass;
+    if (!std::isfinite(s) || !(s > 0.0)) {
+      throw std::invalid_argument(fmt::format(
+          "--known-mass {:g} kg: the flight's thrust scale came out {:g}, not a positive number: the wrench columns "
+          "(Fz, or the rotor model) do not lift the vehicle; leave --known-mass out to see what the flight measures",
+          m, s));
+    }
+    const double measured = m / s;
+    if (s >= 0.5 && s <= 2.0) return;
+    if (std::isfinite(se) && std::abs(s - 1.0) <= 5.0 * se) return;
+    const bool grams = s > 300.0 && s < 3000.0;
+    throw std::invalid_argument(fmt::format(
+        "--known-mass {:g} kg contradicts the flight: its thrust measures {:.4g} kg (thrust scale {:.4g} +- {:.2g}, "
+        "expected near 1).{} Give --known-mass {:.4g} if that is the vehicle's mass, or leave --known-mass out to "
+        "estimate it; if {:g} kg is right, the thrust is off by that factor (the vehicle file's kf, or Fz's unit)",
+        m, measured, s, se, grams ? " Grams? The mass is in kg." : "", measured, m));
   }
 
   // The physically consistent set closest to a real-flight estimate, in the
