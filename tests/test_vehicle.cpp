@@ -417,3 +417,69 @@ TEST(RotorActuators, RotorNoiseIsForMeasuredSpeedsOnly) {
   EXPECT_EQ(back.rotor_noise, 3.0);
   EXPECT_TRUE(r.log.has("w4"));
 }
+
+// Units by plausibility (issue 37): a vehicle file whose numbers are in the wrong
+// unit parses, validates and scales every later estimate. Each slip below is
+// refused at its line, naming the unit that would make it plausible and the value
+// to write; written as advised, the file loads. The x500 text is the base: a
+// 2 kg quad with 0.25 m arms, tilt 45 deg, rate 220 deg/s.
+TEST(VehicleFile, UnitSlipsAreNamedAndTheAdvisedValueLoads) {
+  const std::string base(builtin_vehicle_text("x500"));
+  struct Slip {
+    const char* what;
+    std::string from, to, word, fixed;
+  };
+  const std::vector<Slip> slips = {
+      {"mass in grams", "\nm = 2.064", "\nm = 2064", "grams?", "m = 2.064"},
+      {"positions in mm", "[[0.174, -0.174, 0.0], [-0.174, 0.174, 0.0], [0.174, 0.174, 0.0], [-0.174, -0.174, 0.0]]",
+       "[[174, -174, 0.0], [-174, 174, 0.0], [174, 174, 0.0], [-174, -174, 0.0]]", "millimetres?",
+       "[[0.174, -0.174, 0.0], [-0.174, 0.174, 0.0], [0.174, 0.174, 0.0], [-0.174, -0.174, 0.0]]"},
+      {"inertia in g m^2", "Izz = 0.04388", "Izz = 43.88\n", "times what such a body has", "Izz = 0.04388"},
+      {"tilt_max in radians", "tilt_max = 45.0", "tilt_max = 0.785", "radians?", "tilt_max = 45"},
+      {"rate_max in rad/s", "rate_max = 220.0", "rate_max = 3.84", "rad/s?", "rate_max = 220"},
+  };
+  for (const Slip& s : slips) {
+    SCOPED_TRACE(s.what);
+    std::string text = base;
+    const auto at = text.find(s.from);
+    ASSERT_NE(at, std::string::npos);
+    text.replace(at, s.from.size(), s.to);
+    if (std::string(s.what) == "inertia in g m^2") {  // every moment in g m^2
+      for (const auto& [a, b] : {std::pair{"Ixx = 0.02361", "Ixx = 23.61"}, std::pair{"Iyy = 0.02361", "Iyy = 23.61"}})
+        text.replace(text.find(a), std::string(a).size(), b);
+    }
+    try {
+      (void)parse_vehicle(text, "slip.toml");
+      ADD_FAILURE() << "accepted";
+    } catch (const InputError& e) {
+      const std::string msg = e.what();
+      EXPECT_NE(msg.find("slip.toml:"), std::string::npos) << msg;  // file:line:column
+      EXPECT_NE(msg.find(s.word), std::string::npos) << msg;
+      // Where the message names a value to write, it is the right one.
+      if (s.fixed.starts_with("m =") || s.fixed.starts_with("tilt") || s.fixed.starts_with("rate"))
+        EXPECT_NE(msg.find(s.fixed.substr(s.fixed.find('=') + 2)), std::string::npos) << msg;
+    }
+  }
+  // The advice applied: the values the messages name load (they are x500's own).
+  EXPECT_NO_THROW((void)parse_vehicle(base, "x500.toml"));
+  // Noise in degrees in [sensors] (SI): named, and the advised radians load.
+  for (const auto& [line, fixed] : {std::pair{"attitude_noise = 0.5", "attitude_noise = 0.00873"},
+                                    std::pair{"gyro_noise = 2.0", "gyro_noise = 0.0349"},
+                                    std::pair{"position_noise = 0.3", "position_noise = 0.0003"}}) {
+    SCOPED_TRACE(line);
+    const std::string bad = base + "[sensors]\n" + line + "\n";
+    std::string msg;
+    try {
+      (void)parse_vehicle(bad, "noise.toml");
+    } catch (const InputError& e) {
+      msg = e.what();
+    }
+    ASSERT_NE(msg.find("write "), std::string::npos) << "not refused: " << msg;
+    const std::string advised = msg.substr(msg.find("write ") + 6);
+    EXPECT_NEAR(std::stod(advised), std::stod(std::string(fixed).substr(std::string(fixed).find('=') + 1)), 1e-3 * std::stod(advised) + 1e-9) << msg;
+    const std::string key(line, std::string(line).find(' '));
+    EXPECT_NO_THROW((void)parse_vehicle(base + "[sensors]\n" + key + " = " + advised.substr(0, advised.find(')')) + "\n", "noise.toml"));
+  }
+  // Every built-in vehicle is plausible.
+  for (const std::string& name : builtin_vehicle_names()) EXPECT_NO_THROW((void)load_vehicle(name)) << name;
+}

@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 #include <toml++/toml.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <filesystem>
@@ -263,6 +264,90 @@ VehicleFlightLimits read_limits(const Reader& r, const toml::table& t) {
   return l;
 }
 
+// --- Units by plausibility (issue 37) ---------------------------------------------
+// A number in the wrong unit parses and validates: 600 for a 0.6 kg mass,
+// positions in mm, tilt_max in radians. Each identification built on it is then
+// off by the same factor with nothing to show it. These checks compare the
+// numbers with what flies and name the unit that would make them plausible.
+// Typical multirotors (the built-in vehicles): arm L ~ 0.15 m (m / 0.5 kg)^(1/3)
+// (Crazyflie 0.046 m at 35 g; x500 0.25 m at 2 kg: within 1.4x of it), and the
+// radius of gyration about z, sqrt(Izz / m), is 0.6-0.75 of the arm.
+constexpr double kArmSpread = 4.0;               // accepted factor around the typical arm
+constexpr double kGyrationMin = 0.2, kGyrationMax = 2.0;  // sqrt(Izz/m) / arm
+
+double typical_arm(double m) { return 0.15 * std::cbrt(m / 0.5); }
+bool plausible_body(double m, double Izz, double arm) {
+  if (!(m > 0.0) || !(arm > 0.0) || !(Izz > 0.0)) return true;  // nothing to compare
+  const double a0 = typical_arm(m), g = std::sqrt(Izz / m) / arm;
+  return arm >= a0 / kArmSpread && arm <= a0 * kArmSpread && g >= kGyrationMin && g <= kGyrationMax;
+}
+
+const toml::node* node_at(const toml::table& root, const char* table, const char* key) {
+  const toml::node* t = root.get(table);
+  return t && t->is_table() ? t->as_table()->get(key) : nullptr;
+}
+
+void check_body_units(const Reader& r, const toml::table& root, const Vehicle& v) {
+  double arm = 0.0;
+  for (const Vec3& p : v.rotors.positions) arm = std::max(arm, std::hypot(p(0), p(1)));
+  const double m = v.nominal.m, Izz = v.nominal.I(2, 2);
+  if (plausible_body(m, Izz, arm)) return;
+  const std::string facts = fmt::format("a {:g} kg vehicle with rotors {:.3g} m from its centre and sqrt(Izz/m) = "
+                                        "{:.3g} m (multirotors: arms ~{:.2g} m at this mass, sqrt(Izz/m) 0.6-0.75 of the arm)",
+                                        m, arm, std::sqrt(Izz / m), typical_arm(m));
+  const toml::node* pos = node_at(root, "rotors", "positions");
+  const toml::node* mass = node_at(root, "nominal", "m");
+  if (plausible_body(m, Izz, arm / 1000.0))
+    r.fail(pos->source(), "rotors.positions", fmt::format("{}: millimetres? positions are in metres (the farthest "
+                                                           "rotor would be {:.3g} m)", facts, arm / 1000.0));
+  if (plausible_body(m, Izz, arm / 100.0))
+    r.fail(pos->source(), "rotors.positions", fmt::format("{}: centimetres? positions are in metres (the farthest "
+                                                           "rotor would be {:.3g} m)", facts, arm / 100.0));
+  if (plausible_body(m / 1000.0, Izz, arm))
+    r.fail(mass->source(), "nominal.m", fmt::format("{}: grams? the mass is in kg ({:g} kg)", facts, m / 1000.0));
+  const toml::node* izz = node_at(root, "nominal", "Izz");
+  for (const double f : {1e-3, 1e-4, 1e-6, 1e3, 1e4, 1e6})
+    if (plausible_body(m, Izz * f, arm))
+      r.fail(izz->source(), "nominal",
+             fmt::format("{}: the inertia is {:g} times what such a body has: its unit is kg m^2 (g cm^2 = 1e-7 kg "
+                         "m^2, g mm^2 = 1e-9 kg m^2)", facts, 1.0 / f));
+  r.fail(root.source(), "nominal", fmt::format("{}: no rigid multirotor is built so; check the units (kg, kg m^2, "
+                                               "positions in m)", facts));
+}
+
+// A limit or a noise level given in the other angular unit: [limits] is in
+// degrees, [sensors] in SI (rad, rad/s, m).
+void check_angle_units(const Reader& r, const toml::table& root) {
+  auto value = [&](const char* table, const char* key) -> std::optional<std::pair<double, const toml::node*>> {
+    const toml::node* n = node_at(root, table, key);
+    if (!n) return std::nullopt;
+    if (const auto* i = n->as_integer()) return std::pair{static_cast<double>(i->get()), n};
+    if (const auto* f = n->as_floating_point()) return std::pair{f->get(), n};
+    return std::nullopt;
+  };
+  if (const auto t = value("limits", "tilt_max"); t && t->first < 1.6)
+    r.fail(t->second->source(), "limits.tilt_max",
+           fmt::format("{:g} degrees is less than any flight tilts: radians? [limits] is in degrees (write {:.3g})",
+                       t->first, t->first / kDeg));
+  if (const auto t = value("limits", "rate_max"); t && t->first < 10.0)
+    r.fail(t->second->source(), "limits.rate_max",
+           fmt::format("{:g} deg/s is slower than any manoeuvre that excites the inertia: rad/s? [limits] is in deg/s "
+                       "(write {:.3g})", t->first, t->first / kDeg));
+  for (const char* key : {"attitude_noise", "yaw_noise"})
+    if (const auto t = value("sensors", key); t && t->first > 0.1)
+      r.fail(t->second->source(), fmt::format("sensors.{}", key),
+             fmt::format("{:g} rad ({:.3g} degrees) of white noise: degrees? [sensors] is in SI units (write {:.3g})",
+                         t->first, t->first / kDeg, t->first * kDeg));
+  if (const auto t = value("sensors", "gyro_noise"); t && t->first > 0.5)
+    r.fail(t->second->source(), "sensors.gyro_noise",
+           fmt::format("{:g} rad/s ({:.3g} deg/s) of white noise: deg/s? [sensors] is in SI units (write {:.3g})",
+                       t->first, t->first / kDeg, t->first * kDeg));
+  if (const auto t = value("sensors", "position_noise"); t && t->first > 0.05)
+    r.fail(t->second->source(), "sensors.position_noise",
+           fmt::format("{:g} m of white noise: millimetres? [sensors] is in SI units (write {:.3g})", t->first,
+                       t->first / 1000.0));
+}
+
 }  // namespace
 
 void Vehicle::validate() const {
@@ -311,6 +396,8 @@ Vehicle parse_vehicle(std::string_view text, const std::string& source) {
   if (const auto* c = r.table(root, "controller", false)) v.controller = read_controller(r, *c);
   if (const auto* s = r.table(root, "sensors", false)) v.sensors = read_sensors(r, *s);
   if (const auto* l = r.table(root, "limits", false)) v.limits = read_limits(r, *l);
+  check_body_units(r, root, v);
+  check_angle_units(r, root);
   return v;
 }
 
