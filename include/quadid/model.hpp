@@ -73,6 +73,15 @@ Theta relative_error_scale(const Theta& theta);
 /// so that a product of inertia near 0 is judged against the body's size.
 Theta determinedness_scale(const Theta& theta);
 
+/// The size of a flying multirotor, for checks of units by plausibility
+/// (issue 37): arm (centre to the farthest rotor) ~ 0.15 m (m / 0.5 kg)^(1/3)
+/// (the built-in vehicles, 35 g to 2 kg, lie within 1.4x of it), and the radius
+/// of gyration about z, sqrt(Izz / m), 0.6-0.75 of the arm.
+double typical_multirotor_arm(double m_kg);
+/// sqrt(Izz / m) / arm outside [kGyrationPerArmMin, kGyrationPerArmMax]: no
+/// rigid multirotor; wide enough for long-armed or compact frames.
+inline constexpr double kGyrationPerArmMin = 0.2, kGyrationPerArmMax = 2.0;
+
 /// Euler angles eta = [phi, theta, psi] (roll, pitch, yaw), ZYX.
 template <class S>
 Eigen::Matrix<S, 3, 3> rotation(const Eigen::Matrix<S, 3, 1>& eta) {

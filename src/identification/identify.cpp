@@ -242,6 +242,7 @@ class IdentifyRun {
     warn_poorly_determined(deficient);
     warn_disagreement();
     warn_unphysical();
+    warn_implausible_size();
     prediction_tables();
     res_.warnings.insert(res_.warnings.end(), input_warnings_.begin(), input_warnings_.end());
     res_.recommended = recommend_set(res_);
@@ -532,6 +533,42 @@ class IdentifyRun {
           e.least_squares
               ? fmt::format(" (the closest physical set is {})", e.model == RegressionModel::Standard ? "PC" : "FMPC")
               : std::string()));
+    }
+  }
+
+  // Units by plausibility (issue 37): a torque column in N mm or N cm scales
+  // every moment of inertia by 1000 or 100 and nothing else in the fit shows it
+  // (the torque rows fit as well). The mass comes from the force row, so the
+  // radius of gyration sqrt(I_max / m) can be held against the size of a
+  // multirotor of that mass (typical_multirotor_arm: built-ins at 0.47-0.65 of
+  // it; accepted 0.15-3, which leaves a 10x-off torque unit outside).
+  void warn_implausible_size() {
+    const SetEstimate& e = res_.estimates[0];
+    if (!e.valid || !(e.theta(0) > 0.0)) return;
+    const Params P = e.params();
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(P.I, Eigen::EigenvaluesOnly);
+    const double Imax = es.eigenvalues().maxCoeff();
+    if (!(Imax > 0.0)) return;
+    const double m = P.m, rg = std::sqrt(Imax / m), arm = typical_multirotor_arm(m), ratio = rg / arm;
+    constexpr double kLow = 0.15, kHigh = 3.0;
+    if (ratio >= kLow && ratio <= kHigh) return;
+    const std::string facts = fmt::format(
+        "{}: the largest moment of inertia {:.4g} kg m^2 for a mass of {:.4g} kg gives sqrt(I/m) = {:.3g} m, where a "
+        "multirotor of that mass has arms of ~{:.2g} m and sqrt(I/m) of ~{:.2g} m",
+        e.name, Imax, m, rg, arm, 0.6 * arm);
+    if (ratio > kHigh) {
+      // The unit whose factor brings sqrt(I/m) closest to the typical 0.6 arm.
+      const auto distance = [&](double f) { return std::abs(std::log(ratio / std::sqrt(f) / 0.6)); };
+      const char* unit = distance(1000.0) < distance(100.0) ? "N mm (1000x)" : "N cm (100x)";
+      res_.warnings.push_back(fmt::format("{}: the torque columns look like {}: convert tau_phi, tau_theta, tau_psi "
+                                          "to N m (or the mass is too small: positions in mm make the vertical acceleration, which the mass "
+                                          "multiplies, 1000x too large)",
+                                          facts, unit));
+    } else {
+      res_.warnings.push_back(fmt::format("{}: the mass looks too large for the inertia: Fz in mN or the positions "
+                                          "in mm (the mass comes from Fz over the vertical acceleration), or the "
+                                          "torques in a unit larger than N m; convert to N, m and N m",
+                                          facts));
     }
   }
 

@@ -35,6 +35,8 @@ Theta relative_error_scale(const Theta& th) {
   return s;
 }
 
+double typical_multirotor_arm(double m_kg) { return 0.15 * std::cbrt(m_kg / 0.5); }
+
 Theta determinedness_scale(const Theta& th) {
   const double mean_moment = (std::abs(th(1)) + std::abs(th(4)) + std::abs(th(6))) / 3.0;
   Theta s = Theta::Constant(mean_moment);

@@ -269,17 +269,14 @@ VehicleFlightLimits read_limits(const Reader& r, const toml::table& t) {
 // positions in mm, tilt_max in radians. Each identification built on it is then
 // off by the same factor with nothing to show it. These checks compare the
 // numbers with what flies and name the unit that would make them plausible.
-// Typical multirotors (the built-in vehicles): arm L ~ 0.15 m (m / 0.5 kg)^(1/3)
-// (Crazyflie 0.046 m at 35 g; x500 0.25 m at 2 kg: within 1.4x of it), and the
-// radius of gyration about z, sqrt(Izz / m), is 0.6-0.75 of the arm.
-constexpr double kArmSpread = 4.0;               // accepted factor around the typical arm
-constexpr double kGyrationMin = 0.2, kGyrationMax = 2.0;  // sqrt(Izz/m) / arm
+// Typical sizes: typical_multirotor_arm (model.hpp).
+constexpr double kArmSpread = 4.0;  // accepted factor around the typical arm
 
-double typical_arm(double m) { return 0.15 * std::cbrt(m / 0.5); }
+double typical_arm(double m) { return typical_multirotor_arm(m); }
 bool plausible_body(double m, double Izz, double arm) {
   if (!(m > 0.0) || !(arm > 0.0) || !(Izz > 0.0)) return true;  // nothing to compare
   const double a0 = typical_arm(m), g = std::sqrt(Izz / m) / arm;
-  return arm >= a0 / kArmSpread && arm <= a0 * kArmSpread && g >= kGyrationMin && g <= kGyrationMax;
+  return arm >= a0 / kArmSpread && arm <= a0 * kArmSpread && g >= kGyrationPerArmMin && g <= kGyrationPerArmMax;
 }
 
 const toml::node* node_at(const toml::table& root, const char* table, const char* key) {
