@@ -84,6 +84,9 @@ struct SetEstimate {
   std::string note;    // why not valid
   /// Extra estimated quantities (thrust_scale, offsets, ...) of the real-flight regression.
   std::vector<std::pair<std::string, double>> extra;
+  /// Their standard errors where estimated (name -> value; empty for the
+  /// paper's sets and the projections, whose terms are exact).
+  std::vector<std::pair<std::string, double>> extra_std_error{};
   Params params() const { return Params::from_theta(theta); }
 };
 

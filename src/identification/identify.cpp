@@ -365,9 +365,9 @@ class IdentifyRun {
   void collect_sets() {
     res_.gd_step_gain_standard = s_.gd->max_step_gain();
     res_.gd_step_gain_filtered = f_.gd->max_step_gain();
-    res_.estimates[0] = SetEstimate{"LS", RegressionModel::Standard, true, res_.ls_standard.theta, true, "", {}};
+    res_.estimates[0] = SetEstimate{"LS", RegressionModel::Standard, true, res_.ls_standard.theta, true, "", {}, {}};
     res_.estimates[1] = gd_estimate("GD", RegressionModel::Standard, *s_.gd);
-    res_.estimates[2] = SetEstimate{"FMLS", RegressionModel::Filtered, true, res_.ls_filtered.theta, true, "", {}};
+    res_.estimates[2] = SetEstimate{"FMLS", RegressionModel::Filtered, true, res_.ls_filtered.theta, true, "", {}, {}};
     res_.estimates[3] = gd_estimate("FMGD", RegressionModel::Filtered, *f_.gd);
     for (auto [name, model, pr] : {std::tuple{"PC", RegressionModel::Standard, &pc_std_},
                                     std::tuple{"FMPC", RegressionModel::Filtered, &pc_filt_}}) {
@@ -388,6 +388,12 @@ class IdentifyRun {
       LeastSquaresSolution& sol = i == 0 ? res_.ls_standard : res_.ls_filtered;
       e.theta = x.theta;
       e.extra = x.extra;
+      e.extra_std_error.clear();
+      for (const auto& [name, value] : x.extra) {
+        (void)value;
+        const Eigen::Index j = x.index_of(name);
+        if (j >= 0) e.extra_std_error.emplace_back(name, x.std_error(j));
+      }
       sol.theta = x.theta;
       sol.condition = x.condition;
       // Intervals of the real-flight regression: its HAC standard errors,

@@ -73,20 +73,28 @@ bool term_is_nonnegative(std::string_view name) {
   return std::find(kNonnegative.begin(), kNonnegative.end(), name) != kNonnegative.end();
 }
 
-PhysicalConsistency check_term_signs(const std::vector<std::pair<std::string, double>>& extra) {
-  for (const auto& [name, value] : extra)
-    if (term_is_nonnegative(name) && !(value >= 0.0))
-      return {false, fmt::format("{} = {:.4g} < 0 ({})", name, value,
+PhysicalConsistency check_term_signs(const std::vector<std::pair<std::string, double>>& extra,
+                                     const std::vector<std::pair<std::string, double>>& std_errors) {
+  for (const auto& [name, value] : extra) {
+    if (!term_is_nonnegative(name)) continue;
+    double se = 0.0;
+    for (const auto& [n, s] : std_errors)
+      if (n == name && std::isfinite(s) && s > 0.0) se = s;
+    if (value >= -kZ95 * se) continue;
+    const std::string interval =
+        se > 0.0 ? fmt::format(" +- {:.2g}: its 95 % interval lies below 0", se) : std::string();
+    return {false, fmt::format("{} = {:.4g}{} ({})", name, value, interval,
                                  name.starts_with("flapping")  ? "a flapping moment toward the velocity"
                                  : name == "rotor_inertia"     ? "a negative inertia"
                                                                : "a drag that adds energy")};
+  }
   return {true, "the terms' signs hold"};
 }
 
 PhysicalConsistency check_set_consistency(const SetEstimate& e, bool term_signs) {
   PhysicalConsistency c = check_physical_consistency(e.theta);
   if (c.physical && term_signs && !e.extra.empty()) {
-    const PhysicalConsistency t = check_term_signs(e.extra);
+    const PhysicalConsistency t = check_term_signs(e.extra, e.extra_std_error);
     if (!t.physical) return t;
     c.why += "; " + t.why;
   }

@@ -190,8 +190,12 @@ ExtendedOptions extended_options(const IdentificationOptions& opt);
 bool term_is_nonnegative(std::string_view name);
 
 /// The extra terms' signs: physical = false, and why, at the first term of
-/// `extra` that term_is_nonnegative and is below 0.
-PhysicalConsistency check_term_signs(const std::vector<std::pair<std::string, double>>& extra);
+/// `extra` that term_is_nonnegative and is below 0 -- with a standard error in
+/// `std_errors` (name -> value), only when its 95 % interval lies below 0: a
+/// term whose truth is 0 comes out negative half the time, and that is no
+/// evidence against the body.
+PhysicalConsistency check_term_signs(const std::vector<std::pair<std::string, double>>& extra,
+                                     const std::vector<std::pair<std::string, double>>& std_errors = {});
 
 /// The physically consistent set of a real-flight estimate: the rigid body
 /// and the extra terms together.
