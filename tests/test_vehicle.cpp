@@ -6,6 +6,8 @@
 
 #include <gtest/gtest.h>
 
+#include <random>
+
 #include <cmath>
 #include <string>
 
@@ -456,8 +458,9 @@ TEST(VehicleFile, UnitSlipsAreNamedAndTheAdvisedValueLoads) {
       EXPECT_NE(msg.find("slip.toml:"), std::string::npos) << msg;  // file:line:column
       EXPECT_NE(msg.find(s.word), std::string::npos) << msg;
       // Where the message names a value to write, it is the right one.
-      if (s.fixed.starts_with("m =") || s.fixed.starts_with("tilt") || s.fixed.starts_with("rate"))
+      if (s.fixed.starts_with("m =") || s.fixed.starts_with("tilt") || s.fixed.starts_with("rate")) {
         EXPECT_NE(msg.find(s.fixed.substr(s.fixed.find('=') + 2)), std::string::npos) << msg;
+      }
     }
   }
   // The advice applied: the values the messages name load (they are x500's own).
@@ -482,4 +485,31 @@ TEST(VehicleFile, UnitSlipsAreNamedAndTheAdvisedValueLoads) {
   }
   // Every built-in vehicle is plausible.
   for (const std::string& name : builtin_vehicle_names()) EXPECT_NO_THROW((void)load_vehicle(name)) << name;
+}
+
+// Measured rotor speeds are signed (issue 37: one sample at -0.58 rad/s refused a
+// whole flight). Noise around 0 near idle gives a thrust of the same small
+// size and sign (T = kf w|w|, an odd function: the thrust of -w is minus that
+// of w) and no finding; a column that goes negative by far more than its
+// noise is named.
+TEST(Vehicle, SignedRotorSpeedsNoiseAroundZeroIsNoFinding) {
+  const RotorModel r = parse_vehicle(kGood, "good.toml").rotors;
+  EXPECT_DOUBLE_EQ(r.thrust(-300.0), -r.thrust(300.0));
+  EXPECT_DOUBLE_EQ(r.thrust(300.0), r.kf * 300.0 * 300.0);
+  const Eigen::Index n = 2000;
+  std::mt19937 rng(5);
+  std::normal_distribution<double> noise(0.0, 2.0);  // rad/s
+  Eigen::MatrixXd in(n, r.count());
+  for (Eigen::Index k = 0; k < n; ++k)
+    for (int i = 0; i < r.count(); ++i) in(k, i) = (k < 200 ? 0.0 : 800.0) + noise(rng);  // idle, then flight
+  ASSERT_LT(in.minCoeff(), 0.0);  // noise reaches below 0 at idle
+  EXPECT_NO_THROW((void)r.speeds(in, 0.002));
+  EXPECT_TRUE(r.speed_findings(in).empty());
+  const Eigen::MatrixXd T = r.thrusts(in);
+  for (Eigen::Index k = 0; k < n; ++k) EXPECT_DOUBLE_EQ(T(k, 0), r.thrust(in(k, 0)));
+  in.col(2) = -in.col(2);  // a column of the wrong sign
+  const auto f = r.speed_findings(in);
+  ASSERT_EQ(f.size(), 1u);
+  EXPECT_NE(f[0].find("'" + r.columns[2] + "'"), std::string::npos) << f[0];
+  EXPECT_NE(f[0].find("wrong sign"), std::string::npos) << f[0];
 }

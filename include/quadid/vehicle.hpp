@@ -28,6 +28,7 @@
 
 #include <array>
 #include <optional>
+#include <cmath>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -74,8 +75,12 @@ struct RotorModel {
 
   /// k of T = k w^2: kf (speed, rpm) or thrust_max (command).
   double thrust_coefficient() const { return input == RotorInput::kCommand ? thrust_max : kf; }
-  /// T = k w^2 for one rotor speed w (the rotor state, see the file comment).
-  double thrust(double w) const { return thrust_coefficient() * w * w; }
+  /// T = k w |w| for one rotor speed w (the rotor state, see the file comment):
+  /// signed, so that measured speeds whose noise reaches below 0 near idle
+  /// give a small negative thrust there instead of a refused log.
+  double thrust(double w) const { return thrust_coefficient() * w * std::abs(w); }
+  /// thrust() of every sample (samples x N): the one coding of the thrust law.
+  Eigen::MatrixXd thrusts(const Eigen::MatrixXd& speeds) const;
   /// Steady-state rotor speed for thrust T >= 0 (inverse of thrust()).
   double speed_for_thrust(double T) const;
   /// The logged value that holds thrust T in steady state: the speed (speed, rpm) or the command
@@ -102,8 +107,14 @@ struct RotorModel {
   /// speed, rpm: the inputs themselves; command (c = command_of_logged(input)): w_0 = sqrt(c_0) (steady state at the first
   /// sample), then the exact discretization of tau w' = sqrt(c) - w with c held between samples,
   ///   w_{k+1} = sqrt(c_k) + (w_k - sqrt(c_k)) exp(-T / tau)   (w_k = sqrt(c_k) when tau = 0).
-  /// Throws InputError on a negative input, or a command above 1 (above command_range's high end).
+  /// Throws InputError on a negative command, or a command above 1 (above command_range's
+  /// high end). Measured speeds may be negative (noise around 0; see speed_findings).
   Eigen::MatrixXd speeds(const Eigen::MatrixXd& inputs, double T) const;
+  /// Measured speeds (speed, rpm) that go below 0 by more than their own noise
+  /// (5 x the robust sample-to-sample noise, MAD of the differences): a column
+  /// of the wrong sign, or a rotor that reverses. One sentence per rotor; none
+  /// for noise around 0 near idle, which thrust()'s sign handles.
+  std::vector<std::string> speed_findings(const Eigen::MatrixXd& inputs) const;
   /// Per-sample wrench from rotor speeds (samples x N).
   WrenchSeries wrench_from_speeds(const Eigen::MatrixXd& speeds) const;
 };

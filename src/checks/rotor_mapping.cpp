@@ -39,7 +39,7 @@ RotorMappingCheck check_rotor_mapping(const FlightLog& log, const RotorModel& ro
   // Per-rotor thrusts (N) and the body rates, low-passed alike (zero phase).
   const Eigen::MatrixXd w = rotors.speeds(rotor_inputs(log, rotors), T);
   Eigen::MatrixXd cols(n, N + 3);
-  for (int i = 0; i < N; ++i) cols.col(i) = rotors.thrust_coefficient() * w.col(i).array().square();
+  cols.leftCols(N) = rotors.thrusts(w);
   cols.col(N) = log.column("p");
   cols.col(N + 1) = log.column("q");
   cols.col(N + 2) = log.column("r");

@@ -134,11 +134,11 @@ Eigen::MatrixXd RotorModel::speeds(const Eigen::MatrixXd& in, double T) const {
     for (Eigen::Index k = 0; k < in.rows(); ++k) {
       const double v = in(k, i);
       if (command) c(k, i) = command_of_logged(v);
-      if (!(v >= 0.0) || (command && c(k, i) > 1.0 + 1e-9))
+      if (!std::isfinite(v) || (command && (v < 0.0 || c(k, i) > 1.0 + 1e-9)))
         throw InputError(fmt::format(
             "rotor column '{}', sample {}: {} is not a {} ({})", columns[static_cast<size_t>(i)], k, v,
             to_string(input),
-            !command ? std::string("expected >= 0")
+            !command ? std::string("expected a finite number")
             : !has_command_range()
                 ? std::string("expected 0..1; a command logged in other units, e.g. PWM in microseconds, needs "
                               "rotors.command_range in the vehicle file")
@@ -163,8 +163,39 @@ Eigen::MatrixXd RotorModel::speeds(const Eigen::MatrixXd& in, double T) const {
 WrenchSeries RotorModel::wrench_from_speeds(const Eigen::MatrixXd& w) const {
   if (w.cols() != count())
     throw std::invalid_argument(fmt::format("rotor speeds: {} columns for {} rotors", w.cols(), count()));
-  const Eigen::MatrixXd thrusts = thrust_coefficient() * w.cwiseAbs2();  // T_i = k w_i^2
-  return thrusts * allocation().transpose();
+  return thrusts(w) * allocation().transpose();
+}
+
+Eigen::MatrixXd RotorModel::thrusts(const Eigen::MatrixXd& w) const {
+  return thrust_coefficient() * w.cwiseProduct(w.cwiseAbs());  // T_i = k w_i |w_i|
+}
+
+std::vector<std::string> RotorModel::speed_findings(const Eigen::MatrixXd& in) const {
+  std::vector<std::string> out;
+  if (input == RotorInput::kCommand || in.rows() < 3) return out;
+  const auto median = [](std::vector<double> v) {
+    std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
+    return v[v.size() / 2];
+  };
+  for (Eigen::Index i = 0; i < in.cols() && i < count(); ++i) {
+    const Eigen::VectorXd v = in.col(i);
+    if (!(v.minCoeff() < 0.0)) continue;
+    std::vector<double> d(static_cast<size_t>(v.size() - 1));
+    for (Eigen::Index k = 1; k < v.size(); ++k) d[static_cast<size_t>(k - 1)] = v(k) - v(k - 1);
+    const double md = median(d);
+    for (double& x : d) x = std::abs(x - md);
+    const double noise = 1.4826 * median(d) / std::sqrt(2.0);  // of one sample, from the differences
+    const double floor = 5.0 * noise;  // a normal sample reaches 5 sigma once in 3.5 million
+    Eigen::Index below = 0;
+    for (Eigen::Index k = 0; k < v.size(); ++k) below += v(k) < -floor ? 1 : 0;
+    if (below == 0) continue;
+    const char* unit = input == RotorInput::kRpm ? "rpm" : "rad/s";
+    out.push_back(fmt::format(
+        "rotor column '{}': {} of {} samples below 0 by more than 5x its noise ({:.3g} {}), down to {:.4g} {}: a "
+        "column of the wrong sign or a rotor that reverses; its thrust is taken as kf w|w|",
+        columns[static_cast<size_t>(i)], below, v.size(), noise, unit, v.minCoeff(), unit));
+  }
+  return out;
 }
 
 namespace {
