@@ -144,6 +144,39 @@ std::vector<std::string> model_fit_findings(const IdentificationResult& res) {
   return out;
 }
 
+// A pre-filter below the motion removes what the fit needs, and the fit then
+// looks like a wrong torque sign or a wrong layout. The root cause is named
+// first (issue 37): the share of the body rates' variance (mean removed) that
+// the pre-filter keeps, against a Butterworth order 4 at 20 Hz (or 0.4 of the
+// sample rate) that keeps all motion a multirotor makes and little noise.
+// Below half, the filter is the finding.
+std::optional<std::string> prefilter_removes_motion(const FlightLog& log, const ProcessingOptions& po) {
+  if (log.rows() < 64 || !log.has("p") || !log.has("q") || !log.has("t")) return std::nullopt;
+  const Eigen::VectorXd t = log.column("t");
+  const double fs = static_cast<double>(t.size() - 1) / (t(t.size() - 1) - t(0));
+  if (!(fs > 0.0) || !std::isfinite(fs)) return std::nullopt;
+  signal::LowpassOptions wide;
+  wide.cutoff_hz = std::min(20.0, 0.4 * fs);
+  if (!(po.lowpass.cutoff_hz < wide.cutoff_hz)) return std::nullopt;
+  Eigen::MatrixXd rates(log.rows(), 2);
+  rates << log.column("p"), log.column("q");
+  rates.rowwise() -= rates.colwise().mean();
+  double kept = 0.0;
+  try {
+    const Eigen::MatrixXd a = signal::zero_phase_lowpass(rates, fs, po.lowpass);
+    const Eigen::MatrixXd b = signal::zero_phase_lowpass(rates, fs, wide);
+    if (!(b.squaredNorm() > 0.0)) return std::nullopt;
+    kept = a.squaredNorm() / b.squaredNorm();
+  } catch (const std::exception&) {
+    return std::nullopt;  // a filter the log cannot take is reported by the processing
+  }
+  if (kept >= 0.5) return std::nullopt;
+  return fmt::format("the pre-filter ({}) keeps {:.0f} % of the roll and pitch rates' motion (against a "
+                     "{:g} Hz filter): it removes the motion the fit needs, and the estimates that follow are the "
+                     "filter's, not the vehicle's; raise the cutoff (--cutoff, default 4 Hz)",
+                     po.lowpass.name(), 100.0 * kept, wide.cutoff_hz);
+}
+
 }  // namespace
 
 void IdentificationOptions::validate() const {
@@ -464,7 +497,10 @@ class IdentifyRun {
   // the vehicle file's, and the estimates are not a body's.
   void check_model_fit() {
     if (!opt_.input_checks) return;
-    input_check_errors(model_fit_findings(res_), opt_, "the log and the vehicle file are right", input_warnings_);
+    const std::vector<std::string> findings = model_fit_findings(res_);
+    if (!findings.empty())  // the root cause first: a filter that removed the motion
+      if (const auto f = prefilter_removes_motion(log_, opt_.processing)) throw InputError(*f);
+    input_check_errors(findings, opt_, "the log and the vehicle file are right", input_warnings_);
     if (const auto w = unexplained_warning(res_)) input_warnings_.push_back("input check " + *w);
   }
 
