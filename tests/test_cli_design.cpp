@@ -143,3 +143,17 @@ TEST_F(CliDesign, Seed1BeatsTheScipyReferenceAndHoldsEveryLimitOnA1msGrid) {
   for (const auto& e : j["endpoints"]) EXPECT_TRUE(e["holds"].get<bool>()) << e.dump();
   EXPECT_TRUE(j["all_hold"].get<bool>());
 }
+
+// A design no start can make feasible names the limit that fails and its flag
+// (issue 37: it said "try more --starts"). Here a 0.01 deg tilt limit leaves the
+// best start just under --z-min (the height it starts from); relaxed as the
+// message says, the same design succeeds.
+TEST_F(CliDesign, InfeasibleDesignNamesTheLimitAndRelaxingItWorks) {
+  const auto bad = run("design -q --tilt-max 0.01 --starts 2 --seed 1 -o " + path("t.json"));
+  ASSERT_NE(bad.rc, 0);
+  EXPECT_NE(bad.err.find("(--z-min)"), std::string::npos) << bad.err;
+  EXPECT_NE(bad.err.find("relax that limit"), std::string::npos) << bad.err;
+  EXPECT_FALSE(std::filesystem::exists(path("t.json")));
+  const auto good = run("design -q --tilt-max 0.01 --starts 2 --seed 1 --z-min 0.5 -o " + path("t.json"));
+  EXPECT_EQ(good.rc, 0) << good.err;
+}

@@ -163,6 +163,9 @@ struct CheckReport {
   bool constraints_hold = true;
   bool endpoints_hold = true;
   bool all_hold() const { return constraints_hold && endpoints_hold; }
+  /// The limits that do not hold, each with what the trajectory reaches, where,
+  /// and the option (or vehicle-file key) that sets it; "" when all hold.
+  std::string violations() const;
 };
 
 /// Evaluates every limit on a fine grid, the start/end conditions and cond(W)

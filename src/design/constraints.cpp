@@ -167,6 +167,37 @@ std::vector<double> closed_grid(double duration, double dt) {
 
 }  // namespace design_detail
 
+namespace {
+// The option that sets each limit (design and check-trajectory's flags; the
+// vehicle's rate and thrust limits come from its file's [limits]).
+std::string limit_option(const std::string& name) {
+  static const std::array<std::pair<std::string_view, std::string_view>, 14> kFlags{{
+      {"x", "--x-max"}, {"y", "--y-max"}, {"z_min", "--z-min"}, {"z_max", "--z-max"}, {"psi", "--psi-max"},
+      {"phi", "--tilt-max"}, {"theta", "--tilt-max"}, {"xdot", "--xdot-max"}, {"ydot", "--ydot-max"},
+      {"zdot", "--zdot-max"}, {"psidot", "--psidot-max"}, {"zddot_min", "--zddot-min"}, {"p", "--rate-max"},
+      {"q", "--rate-max"}}};
+  for (const auto& [n, flag] : kFlags)
+    if (n == name) return std::string(flag);
+  if (name.starts_with("rotor")) return "the vehicle file's [limits] thrust_min / thrust_margin";
+  return "its limit";
+}
+}  // namespace
+
+std::string CheckReport::violations() const {
+  std::vector<std::string> out;
+  for (const auto& c : constraints) {
+    if (c.holds) continue;
+    const bool angle = c.unit.starts_with("rad");
+    const double f = angle ? 1.0 / kDeg : 1.0;
+    const std::string unit = angle ? "deg" + c.unit.substr(3) : c.unit;
+    out.push_back(fmt::format("{} reaches {:.4g} {} at t = {:.3g} s against the limit {:.4g} {} ({})", c.name,
+                              c.worst * f, unit, c.time, c.limit * f, unit, limit_option(c.name)));
+  }
+  for (const auto& e : endpoints)
+    if (!e.holds) out.push_back(fmt::format("{} at t = {:.3g} s is {:.3g} from hover at its target", e.axis, e.time, e.error));
+  return fmt::format("{}", fmt::join(out, "; "));
+}
+
 CheckReport check_trajectory(const Trajectory& traj, const CheckOptions& opt) {
   opt.validate();
   using namespace design_detail;
