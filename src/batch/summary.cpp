@@ -7,6 +7,7 @@
 // on it falsely flags some flight in nearly every fleet of 3 to 5
 // (bench/fleet_outliers.py).
 #include "quadid/batch.hpp"
+#include "quadid/core/json.hpp"
 
 #include "quadid/estimation.hpp"
 #include "quadid/model.hpp"
@@ -233,11 +234,10 @@ std::string FleetSummary::table() const {
 }
 
 nlohmann::json to_json(const FleetSummary& s) {
-  const auto num = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); };
   nlohmann::json params = nlohmann::json::object();
   for (const auto& p : s.parameters)
-    params[p.name] = {{"flights", p.flights}, {"mean", num(p.mean)}, {"std_dev", num(p.std_dev)},
-                      {"min", num(p.min)},    {"max", num(p.max)},       {"median_std_error", num(p.median_std_error)},
+    params[p.name] = {{"flights", p.flights}, {"mean", finite_or_null(p.mean)}, {"std_dev", finite_or_null(p.std_dev)},
+                      {"min", finite_or_null(p.min)},    {"max", finite_or_null(p.max)},       {"median_std_error", finite_or_null(p.median_std_error)},
                       {"fixed", p.fixed}};
   nlohmann::json outliers = nlohmann::json::array();
   for (const auto& x : s.outliers)
@@ -245,9 +245,9 @@ nlohmann::json to_json(const FleetSummary& s) {
                         {"parameter", x.parameter},
                         {"value", x.value},
                         {"others_mean", x.others_mean},
-                        {"t", num(x.t)}});  // null: the others agree exactly
+                        {"t", finite_or_null(x.t)}});  // null: the others agree exactly
   return {{"set", s.set},           {"flights", s.flights},   {"level", s.level},
-          {"critical_t", num(s.critical_t)}, {"parameters", params},
+          {"critical_t", finite_or_null(s.critical_t)}, {"parameters", params},
           {"outliers", outliers},   {"skipped", s.skipped},   {"notes", s.notes}};
 }
 
