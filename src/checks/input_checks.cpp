@@ -1,6 +1,7 @@
 // Plausibility checks of a flight log before any estimate (docs/input-checks.md):
 // angle/rate units, z direction, thrust units, aliasing, saturation, time gaps.
 #include "quadid/checks.hpp"
+#include "quadid/signal/median_step.hpp"
 
 #include <fmt/format.h>
 
@@ -69,9 +70,7 @@ std::vector<InputFinding> check_input(const FlightLog& log, const InputCheckOpti
 
   // --- Time gaps --------------------------------------------------------------
   Eigen::VectorXd dt = t.tail(n - 1) - t.head(n - 1);
-  std::vector<double> sorted(dt.data(), dt.data() + dt.size());
-  std::nth_element(sorted.begin(), sorted.begin() + static_cast<long>(sorted.size() / 2), sorted.end());
-  const double T = sorted[sorted.size() / 2];
+  const double T = signal::median_step(std::span<const double>(t.data(), static_cast<std::size_t>(t.size())));
   if (!(T > 0.0)) {
     add("time-gaps", Severity::Error, "the median time step is not positive (time does not increase)",
         "sort the log by time and remove repeated samples");

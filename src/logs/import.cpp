@@ -6,6 +6,7 @@
 // max_bridge_s are bridged by that interpolation; a longer one splits the
 // log (the longest part is kept, or the import is refused).
 #include "quadid/logs.hpp"
+#include "quadid/signal/median_step.hpp"
 
 #include "quadid/signal.hpp"
 
@@ -34,13 +35,6 @@ struct Series {
   /// overshoots to ~1.006), which a rotor model would refuse as out of range.
   bool bounded = false;
 };
-
-double median_period(const std::vector<double>& t) {
-  std::vector<double> d(t.size() - 1);
-  for (std::size_t i = 1; i < t.size(); ++i) d[i - 1] = t[i] - t[i - 1];
-  std::nth_element(d.begin(), d.begin() + static_cast<long>(d.size() / 2), d.end());
-  return d[d.size() / 2];
-}
 
 // Keeps strictly increasing times (a repeated or backward time stamp is
 // dropped); NaN values become 0 and are counted.
@@ -222,7 +216,7 @@ FlightLog assemble(std::vector<Series> series, const ImportOptions& opt, ImportR
         if (s.x.row(i).dot(s.x.row(i - 1)) < 0) s.x.row(i) *= -1.0;
     }
     std::string how;
-    const double fs = 1.0 / median_period(s.t);
+    const double fs = 1.0 / signal::median_step(s.t);
     Eigen::MatrixXd y = resample(s, fs, grid, opt, how);
     if (s.bounded)
       for (Eigen::Index j = 0; j < y.cols(); ++j)
