@@ -11,6 +11,7 @@
 #include "quadid/signal.hpp"
 
 #include "bytes.hpp"
+#include "frames.hpp"
 
 #include <fmt/format.h>
 
@@ -329,15 +330,15 @@ FlightLog import_ulog(const ULog& log, const ImportOptions& opt, ImportReport* r
     rep.dropouts.push_back({static_cast<double>(d.timestamp) * 1e-6, d.duration_ms * 1e-3});
   std::vector<Series> series;
   // NED -> z up: positions (x, -y, -z) (docs/import.md).
-  series.push_back(from_topic(log, opt.position_topic, {"x", "y", "z"}, {"x", "y", "z"}, {1, -1, -1}));
+  series.push_back(from_topic(log, opt.position_topic, {"x", "y", "z"}, {"x", "y", "z"}, detail::kFrdToFluSigns));
   // Quaternion FRD->NED to FLU->ENU-like z-up: (q0, q1, -q2, -q3).
   Series q = from_topic(log, opt.attitude_topic, {"q[0]", "q[1]", "q[2]", "q[3]"}, {"q0", "q1", "q2", "q3"},
-                        {1, 1, -1, -1});
+                        detail::kFrdToFluQuaternionSigns);
   q.quaternion = true;
   series.push_back(std::move(q));
   // Body rates FRD -> FLU: (x, -y, -z).
   if (log.find_topic(opt.rates_topic)) {
-    series.push_back(from_topic(log, opt.rates_topic, {"xyz[0]", "xyz[1]", "xyz[2]"}, {"p", "q", "r"}, {1, -1, -1}));
+    series.push_back(from_topic(log, opt.rates_topic, {"xyz[0]", "xyz[1]", "xyz[2]"}, {"p", "q", "r"}, detail::kFrdToFluSigns));
   } else {
     const ULogTopic* att = log.find_topic(opt.attitude_topic);
     if (!att || !att->find("rollspeed"))
@@ -346,7 +347,7 @@ FlightLog import_ulog(const ULog& log, const ImportOptions& opt, ImportReport* r
     rep.warnings.push_back(fmt::format("no '{}': body rates from {}.rollspeed/pitchspeed/yawspeed", opt.rates_topic,
                                        opt.attitude_topic));
     series.push_back(from_topic(log, opt.attitude_topic, {"rollspeed", "pitchspeed", "yawspeed"}, {"p", "q", "r"},
-                                {1, -1, -1}));
+                                detail::kFrdToFluSigns));
   }
   // Rotor signals under the log's own names.
   std::string motors = opt.motors_topic;

@@ -4,6 +4,7 @@
 #include "quadid/signal/median_step.hpp"
 
 #include "bytes.hpp"
+#include "frames.hpp"
 
 #include <fmt/format.h>
 
@@ -240,8 +241,8 @@ RotorGeometry px4_rotor_geometry(const ULog& log) {
   };
   for (int i = 0; i < g.count; ++i) {
     // FRD -> FLU: (x, y, z) -> (x, -y, -z) (docs/import.md).
-    g.position.emplace_back(param(i, "PX", std::nullopt), -param(i, "PY", std::nullopt), -param(i, "PZ", 0.0));
-    Eigen::Vector3d a(param(i, "AX", 0.0), -param(i, "AY", 0.0), -param(i, "AZ", -1.0));
+    g.position.push_back(detail::frd_to_flu(param(i, "PX", std::nullopt), param(i, "PY", std::nullopt), param(i, "PZ", 0.0)));
+    Eigen::Vector3d a = detail::frd_to_flu(param(i, "AX", 0.0), param(i, "AY", 0.0), param(i, "AZ", -1.0));
     if (a.norm() > 0) a.normalize();
     g.axis.push_back(a);
     g.ct.push_back(param(i, "CT", 6.5));      // PX4's default
