@@ -158,11 +158,7 @@ void register_design(CLI::App& app) {
       };
     const DesignResult res = design_trajectory(opt, progress);
     if (!res.check.all_hold())
-      throw std::runtime_error(fmt::format(
-          "no start met every limit on the {:g} ms grid (best violation {:.3g}): the best start's {}; relax "
-          "that limit (an identification flight needs room to tilt and turn), or try more --starts or a different "
-          "--seed when it is close",
-          opt.check_dt * 1e3, res.starts[static_cast<size_t>(res.best)].worst_violation, res.check.violations()));
+      throw std::runtime_error(infeasible_design_message(res, opt));
     nlohmann::json j = design_to_json(res, opt);
     std::optional<PrecisionResult> pred;
     if (popt) {

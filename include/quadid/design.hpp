@@ -244,6 +244,10 @@ using DesignProgress = std::function<void(const StartSummary&, int total)>;
 /// and the 12 start conditions (eliminated: the search runs in their null
 /// space). Throws std::invalid_argument for bad options.
 DesignResult design_trajectory(const DesignOptions& opt, const DesignProgress& progress = {});
+/// Why a design failed (no start met every limit): the best start's broken
+/// limits with their options, and what to do. The one message of `quadid
+/// design` and the Python module.
+std::string infeasible_design_message(const DesignResult& res, const DesignOptions& opt);
 
 /// The optimization problem on fixed grids, exposed for tests and benchmarks.
 /// Variables are the stacked coefficients of FourierTrajectory::coefficients().

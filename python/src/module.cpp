@@ -209,10 +209,7 @@ py::dict design(const py::dict& opts, const std::string& out) {
     py::gil_scoped_release nogil;
     const quadid::DesignResult res = quadid::design_trajectory(opt);
     if (!res.check.all_hold())  // the message of `quadid design`
-      throw std::runtime_error(fmt::format(
-          "no start met every limit on the {:g} ms grid (best violation {:.3g}); try more --starts or a "
-          "different --seed",
-          opt.check_dt * 1e3, res.starts[static_cast<size_t>(res.best)].worst_violation));
+      throw std::runtime_error(quadid::infeasible_design_message(res, opt));
     j = quadid::design_to_json(res, opt);
     if (!out.empty()) quadid::write_file_atomic(out, j.dump(2) + "\n");
   }

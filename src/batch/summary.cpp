@@ -8,6 +8,7 @@
 // (bench/fleet_outliers.py).
 #include "quadid/batch.hpp"
 
+#include "quadid/core/json.hpp"
 #include "quadid/estimation.hpp"
 #include "quadid/model.hpp"
 #include "quadid/report.hpp"
@@ -19,6 +20,7 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <optional>
 #include <stdexcept>
 
 namespace quadid {
@@ -64,6 +66,136 @@ void FleetSummaryOptions::validate() const {
         fmt::format("--outlier-level {}: expected a probability in (0, 1) (of a false flag over the whole table)", level));
 }
 
+namespace {
+
+// One record's flight in the compared set, or nullopt with the reason it is skipped.
+std::optional<Flight> flight_of(const nlohmann::json& r, const FleetSummaryOptions& opt, FleetSummary& s) {
+  const std::string path = r.contains("path") && r["path"].is_string() ? r["path"].get<std::string>() : "(no path)";
+  if (!r.value("ok", false)) {
+    s.skipped.push_back(fmt::format("{}: not identified", path));
+    return std::nullopt;
+  }
+  Flight f;
+  f.path = path;
+  f.set = opt.set;
+  if (opt.set == "recommended") {
+    const auto* rec = r.contains("recommended") ? &r["recommended"] : nullptr;
+    if (!rec || !rec->contains("set") || !(*rec)["set"].is_string()) {
+      s.skipped.push_back(fmt::format("{}: no recommended set", path));
+      return std::nullopt;
+    }
+    f.set = (*rec)["set"].get<std::string>();
+  }
+  if (!r.contains("estimates") || !r["estimates"].contains(f.set) || !r["estimates"][f.set].is_object()) {
+    s.skipped.push_back(fmt::format("{}: no {} estimate (a diverged gradient descent?)", path, f.set));
+    return std::nullopt;
+  }
+  const auto& est = r["estimates"][f.set];
+  const nlohmann::json* unc = nullptr;
+  if (has_std_errors(f.set) && r.contains("uncertainty") && r["uncertainty"].contains(f.set))
+    unc = &r["uncertainty"][f.set];
+  bool finite = true;
+  for (std::size_t j = 0; j < 7; ++j) {
+    f.value[j] = est.contains(kThetaNames[j]) ? number_or_nan(est[kThetaNames[j]]) : kNaN;
+    finite = finite && std::isfinite(f.value[j]);
+    f.std_error[j] = kNaN;
+    if (unc && unc->contains(kThetaNames[j]) && (*unc)[kThetaNames[j]].contains("std_error"))
+      f.std_error[j] = number_or_nan((*unc)[kThetaNames[j]]["std_error"]);
+  }
+  if (!finite) {
+    s.skipped.push_back(fmt::format("{}: {} has a value that is not a finite number", path, f.set));
+    return std::nullopt;
+  }
+  return f;
+}
+
+// Parameter j over the flights: mean, standard deviation, range, the flights'
+// median standard error; a note when the spread is far beyond those errors.
+FleetParameter parameter_over(const std::vector<Flight>& flights, std::size_t j, FleetSummary& s) {
+  const std::size_t n = flights.size();
+  FleetParameter p;
+  p.name = kThetaNames[j];
+  p.flights = n;
+  std::vector<double> v(n), se;
+  for (std::size_t i = 0; i < n; ++i) {
+    v[i] = flights[i].value[j];
+    if (std::isfinite(flights[i].std_error[j])) se.push_back(flights[i].std_error[j]);
+  }
+  double sum = 0.0;
+  for (double x : v) sum += x;
+  p.mean = sum / static_cast<double>(n);
+  double ss = 0.0;  // sum of squares about the mean (two passes: no cancellation)
+  for (double x : v) ss += (x - p.mean) * (x - p.mean);
+  p.std_dev = n > 1 ? std::sqrt(ss / static_cast<double>(n - 1)) : kNaN;
+  p.min = *std::min_element(v.begin(), v.end());
+  p.max = *std::max_element(v.begin(), v.end());
+  p.median_std_error = median(se);
+  p.fixed = p.min == p.max && n > 1;
+  if (n >= 3 && !p.fixed && std::isfinite(p.median_std_error) && p.median_std_error > 0.0 &&
+      p.std_dev > kSpreadNoteRatio * p.median_std_error)
+    s.notes.push_back(fmt::format(
+        "{}: the flights' standard deviation is {:.3g} times their own standard errors: the vehicle changed "
+        "between flights, or the standard errors leave out model errors (docs/uncertainty.md)",
+        p.name, p.std_dev / p.median_std_error));
+  return p;
+}
+
+// Flight i's parameter j against the other flights': their mean, and flag_outliers' t.
+std::pair<double, double> leave_one_out_t(const std::vector<Flight>& flights, const FleetParameter& p, std::size_t j,
+                                          std::size_t i) {
+  const std::size_t n = flights.size();
+  const double nd = static_cast<double>(n);
+  const double ss_all = p.std_dev * p.std_dev * (nd - 1.0);
+  const double x = flights[i].value[j], d = x - p.mean;
+  // The others' mean and sum of squares from the whole sample's, without
+  // flight i (O(1) each). When flight i holds nearly all of the sum of
+  // squares (a far outlier), that difference cancels: then both are
+  // summed again over the others, in two passes.
+  double m_o = p.mean - d / (nd - 1.0);
+  double ss_o = ss_all - d * d * nd / (nd - 1.0);
+  if (!(ss_o > 1e-6 * ss_all)) {
+    double sum = 0.0;
+    for (std::size_t k = 0; k < n; ++k)
+      if (k != i) sum += flights[k].value[j];
+    m_o = sum / (nd - 1.0);
+    ss_o = 0.0;
+    for (std::size_t k = 0; k < n; ++k)
+      if (k != i) ss_o += (flights[k].value[j] - m_o) * (flights[k].value[j] - m_o);
+  }
+  const double sd_o = std::sqrt(ss_o / (nd - 2.0));
+  const double diff = std::abs(x - m_o), scale = sd_o * std::sqrt(1.0 + 1.0 / (nd - 1.0));
+  // The others agree exactly: any difference is one.
+  const double t = scale > 0.0 ? diff / scale : (diff > 0.0 ? std::numeric_limits<double>::infinity() : 0.0);
+  return {m_o, t};
+}
+
+// Each flight against the others (leave one out): if the n flights are
+// normal about one value, t = (x_i - mean_others) / (sd_others sqrt(1 + 1/(n-1)))
+// is Student's t with n - 2 degrees of freedom (a prediction interval), for
+// any spread. One critical value for the whole table: Bonferroni over the
+// flights x the parameters that vary, so that `level` is the probability of
+// any false flag.
+void flag_outliers(const std::vector<Flight>& flights, const FleetSummaryOptions& opt, FleetSummary& s) {
+  const std::size_t n = flights.size();
+  std::size_t tests = 0;
+  for (const auto& p : s.parameters)
+    if (!p.fixed) tests += n;
+  if (tests == 0) return;
+  const int nu = static_cast<int>(n - 2);
+  const double per_test = opt.level / static_cast<double>(tests);
+  s.critical_t = student_t_two_sided_critical(per_test, nu);
+  for (std::size_t j = 0; j < 7; ++j) {
+    const FleetParameter& p = s.parameters[j];
+    if (p.fixed) continue;
+    for (std::size_t i = 0; i < n; ++i) {
+      const auto [m_o, t] = leave_one_out_t(flights, p, j, i);
+      if (t > s.critical_t) s.outliers.push_back({flights[i].path, p.name, flights[i].value[j], m_o, t});
+    }
+  }
+}
+
+}  // namespace
+
 FleetSummary summarize_fleet(const std::vector<nlohmann::json>& records, const FleetSummaryOptions& opt) {
   opt.validate();
   FleetSummary s;
@@ -72,44 +204,10 @@ FleetSummary summarize_fleet(const std::vector<nlohmann::json>& records, const F
   std::vector<Flight> flights;
   std::map<std::string, int> sets_used;
   for (const auto& r : records) {
-    const std::string path = r.contains("path") && r["path"].is_string() ? r["path"].get<std::string>() : "(no path)";
-    if (!r.value("ok", false)) {
-      s.skipped.push_back(fmt::format("{}: not identified", path));
-      continue;
-    }
-    Flight f;
-    f.path = path;
-    f.set = opt.set;
-    if (opt.set == "recommended") {
-      const auto* rec = r.contains("recommended") ? &r["recommended"] : nullptr;
-      if (!rec || !rec->contains("set") || !(*rec)["set"].is_string()) {
-        s.skipped.push_back(fmt::format("{}: no recommended set", path));
-        continue;
-      }
-      f.set = (*rec)["set"].get<std::string>();
-    }
-    if (!r.contains("estimates") || !r["estimates"].contains(f.set) || !r["estimates"][f.set].is_object()) {
-      s.skipped.push_back(fmt::format("{}: no {} estimate (a diverged gradient descent?)", path, f.set));
-      continue;
-    }
-    const auto& est = r["estimates"][f.set];
-    const nlohmann::json* unc = nullptr;
-    if (has_std_errors(f.set) && r.contains("uncertainty") && r["uncertainty"].contains(f.set))
-      unc = &r["uncertainty"][f.set];
-    bool finite = true;
-    for (std::size_t j = 0; j < 7; ++j) {
-      f.value[j] = est.contains(kThetaNames[j]) ? number_or_nan(est[kThetaNames[j]]) : kNaN;
-      finite = finite && std::isfinite(f.value[j]);
-      f.std_error[j] = kNaN;
-      if (unc && unc->contains(kThetaNames[j]) && (*unc)[kThetaNames[j]].contains("std_error"))
-        f.std_error[j] = number_or_nan((*unc)[kThetaNames[j]]["std_error"]);
-    }
-    if (!finite) {
-      s.skipped.push_back(fmt::format("{}: {} has a value that is not a finite number", path, f.set));
-      continue;
-    }
-    ++sets_used[f.set];
-    flights.push_back(std::move(f));
+    std::optional<Flight> f = flight_of(r, opt, s);
+    if (!f) continue;
+    ++sets_used[f->set];
+    flights.push_back(std::move(*f));
   }
   s.flights = flights.size();
   const std::size_t n = flights.size();
@@ -124,78 +222,8 @@ FleetSummary summarize_fleet(const std::vector<nlohmann::json>& records, const F
         "the flights' recommended sets differ ({}): --summary-set compares one set on every flight", sets));
   }
   if (n < 3) s.notes.push_back(fmt::format("{} flight{}: outliers need 3 or more", n, n == 1 ? "" : "s"));
-
-  for (std::size_t j = 0; j < 7; ++j) {
-    FleetParameter p;
-    p.name = kThetaNames[j];
-    p.flights = n;
-    std::vector<double> v(n), se;
-    for (std::size_t i = 0; i < n; ++i) {
-      v[i] = flights[i].value[j];
-      if (std::isfinite(flights[i].std_error[j])) se.push_back(flights[i].std_error[j]);
-    }
-    double sum = 0.0;
-    for (double x : v) sum += x;
-    p.mean = sum / static_cast<double>(n);
-    double ss = 0.0;  // sum of squares about the mean (two passes: no cancellation)
-    for (double x : v) ss += (x - p.mean) * (x - p.mean);
-    p.std_dev = n > 1 ? std::sqrt(ss / static_cast<double>(n - 1)) : kNaN;
-    p.min = *std::min_element(v.begin(), v.end());
-    p.max = *std::max_element(v.begin(), v.end());
-    p.median_std_error = median(se);
-    p.fixed = p.min == p.max && n > 1;
-    if (n >= 3 && !p.fixed && std::isfinite(p.median_std_error) && p.median_std_error > 0.0 &&
-        p.std_dev > kSpreadNoteRatio * p.median_std_error)
-      s.notes.push_back(fmt::format(
-          "{}: the flights' standard deviation is {:.3g} times their own standard errors: the vehicle changed "
-          "between flights, or the standard errors leave out model errors (docs/uncertainty.md)",
-          p.name, p.std_dev / p.median_std_error));
-    s.parameters.push_back(p);
-  }
-  if (n < 3) return s;
-
-  // Each flight against the others (leave one out): if the n flights are
-  // normal about one value, t = (x_i - mean_others) / (sd_others sqrt(1 + 1/(n-1)))
-  // is Student's t with n - 2 degrees of freedom (a prediction interval), for
-  // any spread. One critical value for the whole table: Bonferroni over the
-  // flights x the parameters that vary, so that `level` is the probability of
-  // any false flag.
-  std::size_t tests = 0;
-  for (const auto& p : s.parameters)
-    if (!p.fixed) tests += n;
-  if (tests == 0) return s;
-  const int nu = static_cast<int>(n - 2);
-  const double per_test = opt.level / static_cast<double>(tests);
-  s.critical_t = student_t_two_sided_critical(per_test, nu);
-  const double nd = static_cast<double>(n);
-  for (std::size_t j = 0; j < 7; ++j) {
-    const FleetParameter& p = s.parameters[j];
-    if (p.fixed) continue;
-    const double ss_all = p.std_dev * p.std_dev * (nd - 1.0);
-    for (std::size_t i = 0; i < n; ++i) {
-      const double x = flights[i].value[j], d = x - p.mean;
-      // The others' mean and sum of squares from the whole sample's, without
-      // flight i (O(1) each). When flight i holds nearly all of the sum of
-      // squares (a far outlier), that difference cancels: then both are
-      // summed again over the others, in two passes.
-      double m_o = p.mean - d / (nd - 1.0);
-      double ss_o = ss_all - d * d * nd / (nd - 1.0);
-      if (!(ss_o > 1e-6 * ss_all)) {
-        double sum = 0.0;
-        for (std::size_t k = 0; k < n; ++k)
-          if (k != i) sum += flights[k].value[j];
-        m_o = sum / (nd - 1.0);
-        ss_o = 0.0;
-        for (std::size_t k = 0; k < n; ++k)
-          if (k != i) ss_o += (flights[k].value[j] - m_o) * (flights[k].value[j] - m_o);
-      }
-      const double sd_o = std::sqrt(ss_o / (nd - 2.0));
-      const double diff = std::abs(x - m_o), scale = sd_o * std::sqrt(1.0 + 1.0 / (nd - 1.0));
-      // The others agree exactly: any difference is one.
-      const double t = scale > 0.0 ? diff / scale : (diff > 0.0 ? std::numeric_limits<double>::infinity() : 0.0);
-      if (t > s.critical_t) s.outliers.push_back({flights[i].path, p.name, x, m_o, t});
-    }
-  }
+  for (std::size_t j = 0; j < 7; ++j) s.parameters.push_back(parameter_over(flights, j, s));
+  if (n >= 3) flag_outliers(flights, opt, s);
   return s;
 }
 
@@ -233,11 +261,10 @@ std::string FleetSummary::table() const {
 }
 
 nlohmann::json to_json(const FleetSummary& s) {
-  const auto num = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); };
   nlohmann::json params = nlohmann::json::object();
   for (const auto& p : s.parameters)
-    params[p.name] = {{"flights", p.flights}, {"mean", num(p.mean)}, {"std_dev", num(p.std_dev)},
-                      {"min", num(p.min)},    {"max", num(p.max)},       {"median_std_error", num(p.median_std_error)},
+    params[p.name] = {{"flights", p.flights}, {"mean", finite_or_null(p.mean)}, {"std_dev", finite_or_null(p.std_dev)},
+                      {"min", finite_or_null(p.min)},    {"max", finite_or_null(p.max)},       {"median_std_error", finite_or_null(p.median_std_error)},
                       {"fixed", p.fixed}};
   nlohmann::json outliers = nlohmann::json::array();
   for (const auto& x : s.outliers)
@@ -245,9 +272,9 @@ nlohmann::json to_json(const FleetSummary& s) {
                         {"parameter", x.parameter},
                         {"value", x.value},
                         {"others_mean", x.others_mean},
-                        {"t", num(x.t)}});  // null: the others agree exactly
+                        {"t", finite_or_null(x.t)}});  // null: the others agree exactly
   return {{"set", s.set},           {"flights", s.flights},   {"level", s.level},
-          {"critical_t", num(s.critical_t)}, {"parameters", params},
+          {"critical_t", finite_or_null(s.critical_t)}, {"parameters", params},
           {"outliers", outliers},   {"skipped", s.skipped},   {"notes", s.notes}};
 }
 

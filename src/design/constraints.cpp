@@ -198,6 +198,14 @@ std::string CheckReport::violations() const {
   return fmt::format("{}", fmt::join(out, "; "));
 }
 
+std::string infeasible_design_message(const DesignResult& res, const DesignOptions& opt) {
+  return fmt::format(
+      "no start met every limit on the {:g} ms grid (best violation {:.3g}): the best start's {}; relax that limit "
+      "(an identification flight needs room to tilt and turn), or try more --starts or a different --seed when it "
+      "is close",
+      opt.check_dt * 1e3, res.starts[static_cast<size_t>(res.best)].worst_violation, res.check.violations());
+}
+
 CheckReport check_trajectory(const Trajectory& traj, const CheckOptions& opt) {
   opt.validate();
   using namespace design_detail;

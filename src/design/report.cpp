@@ -2,6 +2,7 @@
 // radians; the text tables convert angles to degrees for people.
 #include "design_internal.hpp"
 
+#include "quadid/core/json.hpp"
 #include "quadid/io.hpp"
 
 #include <fmt/format.h>
@@ -12,7 +13,6 @@ using nlohmann::json;
 
 namespace {
 
-json number_or_null(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
 
 // Angles are shown in degrees; the unit string says which.
 struct Shown {
@@ -50,20 +50,20 @@ std::string table(const std::vector<std::string>& head, const std::vector<std::v
 }  // namespace
 
 json to_json(const Constraints& c) {
-  json j = {{"x_max", number_or_null(c.x_max)},
-          {"y_max", number_or_null(c.y_max)},
-          {"z_min", number_or_null(c.z_min)},
-          {"z_max", number_or_null(c.z_max)},
-          {"psi_max", number_or_null(c.psi_max)},
-          {"tilt_max", number_or_null(c.tilt_max)},
-          {"xdot_max", number_or_null(c.xdot_max)},
-          {"ydot_max", number_or_null(c.ydot_max)},
-          {"zdot_max", number_or_null(c.zdot_max)},
-          {"psidot_max", number_or_null(c.psidot_max)},
-          {"zddot_min", number_or_null(c.zddot_min)},
-          {"zddot_max", number_or_null(c.zddot_max)},
-          {"psiddot_max", number_or_null(c.psiddot_max)},
-          {"rate_max", number_or_null(c.rate_max)},
+  json j = {{"x_max", finite_or_null(c.x_max)},
+          {"y_max", finite_or_null(c.y_max)},
+          {"z_min", finite_or_null(c.z_min)},
+          {"z_max", finite_or_null(c.z_max)},
+          {"psi_max", finite_or_null(c.psi_max)},
+          {"tilt_max", finite_or_null(c.tilt_max)},
+          {"xdot_max", finite_or_null(c.xdot_max)},
+          {"ydot_max", finite_or_null(c.ydot_max)},
+          {"zdot_max", finite_or_null(c.zdot_max)},
+          {"psidot_max", finite_or_null(c.psidot_max)},
+          {"zddot_min", finite_or_null(c.zddot_min)},
+          {"zddot_max", finite_or_null(c.zddot_max)},
+          {"psiddot_max", finite_or_null(c.psiddot_max)},
+          {"rate_max", finite_or_null(c.rate_max)},
           {"start", {{"x", c.x0}, {"y", c.y0}, {"z", c.z0}, {"psi", c.psi0}}},
           {"units", "SI: m, m/s, m/s^2, rad, rad/s, rad/s^2; null = unbounded"}};
   if (c.rotor_mixer.rows() > 0) {
@@ -148,13 +148,13 @@ json to_json(const CheckReport& r) {
           {"cond_dt", r.cond_dt},
           {"constraints", cons},
           {"endpoints", ends},
-          {"cond", number_or_null(cv.cond)},
+          {"cond", finite_or_null(cv.cond)},
           {"criteria",
-           {{"cond", number_or_null(cv.cond)},
-            {"cond_scaled", number_or_null(cv.cond_scaled)},
-            {"dopt", number_or_null(cv.dopt)},
-            {"precision", number_or_null(cv.precision)},
-            {"worst_relative_std", number_or_null(cv.worst_relative_std)},
+           {{"cond", finite_or_null(cv.cond)},
+            {"cond_scaled", finite_or_null(cv.cond_scaled)},
+            {"dopt", finite_or_null(cv.dopt)},
+            {"precision", finite_or_null(cv.precision)},
+            {"worst_relative_std", finite_or_null(cv.worst_relative_std)},
             {"samples", cv.samples},
             {"eigenvalues", std::vector<double>(cv.eigenvalues.data(), cv.eigenvalues.data() + 7)}}},
           {"constraints_hold", r.constraints_hold},
@@ -164,8 +164,8 @@ json to_json(const CheckReport& r) {
 
 json to_json(const StartSummary& s) {
   return {{"index", s.index},
-          {"criterion", number_or_null(s.criterion)},
-          {"cond", number_or_null(s.cond)},
+          {"criterion", finite_or_null(s.criterion)},
+          {"cond", finite_or_null(s.cond)},
           {"feasible", s.feasible},
           {"worst_violation", s.worst_violation},
           {"evaluations", s.evaluations},
@@ -176,7 +176,7 @@ json to_json(const StartSummary& s) {
 json design_to_json(const DesignResult& r, const DesignOptions& opt) {
   json j = to_json(r.trajectory);
   j["criterion"] = {{"name", std::string(criterion_name(opt.criterion))},
-                    {"value", number_or_null(r.check.criteria.value(opt.criterion))}};
+                    {"value", finite_or_null(r.check.criteria.value(opt.criterion))}};
   if (opt.criterion != Criterion::Cond) {
     j["criterion"]["reference"] = to_json(opt.reference);
     j["criterion"]["product_floor"] = opt.product_floor;

@@ -1,5 +1,6 @@
 // Text tables (Table 3, Tables 5-6), JSON and evolution CSV of an identification.
 #include "quadid/identification.hpp"
+#include "quadid/core/json.hpp"
 #include "quadid/report.hpp"
 
 #include "quadid/identification/extended.hpp"
@@ -25,8 +26,6 @@ std::string num(double v) {
   return fmt::format("{:.6g}", v);
 }
 
-json finite_or_null(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
-
 json vec_json(const Eigen::VectorXd& v) {
   json a = json::array();
   for (Eigen::Index i = 0; i < v.size(); ++i) a.push_back(finite_or_null(v(i)));
@@ -45,8 +44,11 @@ json matrix_json(const Eigen::MatrixXd& m) {
   return rows;
 }
 
-json window_json(const TimeWindow& w) {
-  return {{"t0", w.t0}, {"t1", finite_or_null(w.t1)}};
+// The estimation window and the regression rows it holds.
+json window_json(const TimeWindow& w, Eigen::Index samples) {
+  json j = to_json(w);
+  j["samples"] = samples;
+  return j;
 }
 
 json ls_json(const LeastSquaresSolution& s) {
@@ -295,7 +297,7 @@ json to_json(const PredictionErrorTable& t) {
   }
   return {{"model", to_string(t.model)},
           {"equation", t.model == RegressionModel::Standard ? 34 : 38},
-          {"window", window_json(t.window)},
+          {"window", to_json(t.window)},
           {"samples", t.samples},
           {"components", kComponents},
           {"units", kComponentUnits},
@@ -344,7 +346,7 @@ json to_json(const IdentificationResult& r) {
   const auto& p = r.processing;
   json out = {{"estimates", est},
           {"reference", {{"name", r.reference.name}, {"params", to_json(r.reference.params)}}},
-          {"window", {{"t0", r.window.t0}, {"t1", r.window.t1}, {"samples", r.window_samples}}},
+          {"window", window_json(r.window, r.window_samples)},
           {"processing",
            {{"samples", p.samples},
             {"sample_rate_hz", p.fs},
@@ -407,7 +409,7 @@ json to_json(const ExtendedResult& x) {
                     {"poorly_determined", e.poorly_determined}};
   }
   json out = {{"sets", sets},
-              {"window", {{"t0", x.window.t0}, {"t1", x.window.t1}, {"samples", x.window_samples}}},
+              {"window", window_json(x.window, x.window_samples)},
               {"force_prefilter", x.force_processing.filter},
               {"moment_prefilter", x.moment_processing.filter}};
   out["moment_highpass_hz"] = x.moment_highpass_hz;

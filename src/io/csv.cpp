@@ -398,8 +398,10 @@ class RowLines {
 
 }  // namespace
 
-FlightLog read_flight_log(const std::filesystem::path& path, const CsvReadOptions& opt) {
-  const std::string file = path.string();
+namespace {
+
+// The options' own ranges, before any file is touched.
+void validate_read_options(const CsvReadOptions& opt) {
   if (!(opt.period_tolerance >= 0.0 && opt.period_tolerance < 0.5))
     throw std::invalid_argument(
         fmt::format("CsvReadOptions: period_tolerance={} must be in [0, 0.5)", opt.period_tolerance));
@@ -408,91 +410,152 @@ FlightLog read_flight_log(const std::filesystem::path& path, const CsvReadOption
   if (!(opt.time_units_per_second > 0.0) || !std::isfinite(opt.time_units_per_second))
     throw std::invalid_argument(fmt::format("CsvReadOptions: time_units_per_second={} must be positive (--time-unit)",
                                             opt.time_units_per_second));
-  LineReader in(path);
-  FlightLog log;
+}
 
-  // Comments and header.
-  std::string_view line;
-  bool have_header = false;
-  char delim = ',';  // the header's (header_delimiter): a spreadsheet may save tabs or semicolons
-  std::vector<std::string> header;
-  while (in.next(line)) {
-    if (trim(line).empty()) continue;
-    if (line.front() == '#') {
-      log.comments.emplace_back(trim(line.substr(1)));
-      continue;
+// A block of text split into lines: the data lines are kept (blank and comment
+// lines skipped), with their numbers counted from the part's first line.
+struct TextPart {
+  std::string_view text;
+  std::vector<std::string_view> lines;  // the data lines
+  std::vector<size_t> line_no;          // their line numbers, counted from the part's first line (0)
+  size_t count = 0;                     // all lines, data or not
+  size_t first_line = 0, first_row = 0;  // of the part's first line and first data line (block-relative row)
+
+  void split() {
+    lines.clear();
+    line_no.clear();
+    count = 0;
+    const char* b = text.data();
+    const char* end = b + text.size();
+    while (b < end) {
+      const char* nl = static_cast<const char*>(std::memchr(b, '\n', static_cast<size_t>(end - b)));
+      std::string_view line(b, static_cast<size_t>((nl ? nl : end) - b));
+      if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+      if (!trim(line).empty() && line.front() != '#') {
+        lines.push_back(line);
+        line_no.push_back(count);
+      }
+      ++count;
+      b = nl ? nl + 1 : end;
     }
-    delim = header_delimiter(line);
-    size_t start = 0;
-    while (true) {
-      const size_t comma = line.find(delim, start);
-      header.emplace_back(unquote(line.substr(start, comma == std::string_view::npos ? line.npos : comma - start)));
-      if (comma == std::string_view::npos) break;
-      start = comma + 1;
-    }
-    have_header = true;
-    break;
   }
-  if (!have_header)
-    throw InputError(fmt::format("{}: no header line (expected column names such as t,x,y,z,...)", file));
-  const size_t header_line = in.line_no();
-  auto find_in = [&](std::string_view name) -> int {
-    for (size_t i = 0; i < header.size(); ++i)
-      if (header[i] == name) return static_cast<int>(i);
+};
+
+// One read of a flight-log CSV, in the file's order: comments and header, the
+// header's checks and --map, the required columns, the rows, then the time column.
+class CsvRead {
+ public:
+  CsvRead(const std::filesystem::path& path, const CsvReadOptions& opt) : file_(path.string()), opt_(opt), in_(path) {}
+
+  FlightLog run() {
+    read_header();
+    check_header_names();
+    apply_map();
+    check_required_columns();
+    choose_columns();
+    read_rows();
+    const auto nrow = store_.rows();
+    if (nrow < 2)
+      throw InputError(fmt::format("{}: only {} data row(s); a flight log needs many samples", file_, nrow));
+    log_.data = store_.take();
+    if (from_quaternion_) attitude_from_quaternion(log_, [&](Eigen::Index k) {
+        return fmt::format("{}:{}", file_, row_lines_.line_of(static_cast<size_t>(k)));
+      });
+    check_time();
+    return std::move(log_);
+  }
+
+ private:
+  int find_in(std::string_view name) const {
+    for (size_t i = 0; i < header_.size(); ++i)
+      if (header_[i] == name) return static_cast<int>(i);
     return -1;
-  };
-  {
+  }
+  bool requires_column(std::string_view n) const {
+    return std::find(required_.begin(), required_.end(), n) != required_.end();
+  }
+
+  // Comments, then the header line; its separator names the file's.
+  void read_header() {
+    std::string_view line;
+    bool have_header = false;
+    while (in_.next(line)) {
+      if (trim(line).empty()) continue;
+      if (line.front() == '#') {
+        log_.comments.emplace_back(trim(line.substr(1)));
+        continue;
+      }
+      delim_ = header_delimiter(line);
+      size_t start = 0;
+      while (true) {
+        const size_t comma = line.find(delim_, start);
+        header_.emplace_back(unquote(line.substr(start, comma == std::string_view::npos ? line.npos : comma - start)));
+        if (comma == std::string_view::npos) break;
+        start = comma + 1;
+      }
+      have_header = true;
+      break;
+    }
+    if (!have_header)
+      throw InputError(fmt::format("{}: no header line (expected column names such as t,x,y,z,...)", file_));
+    header_line_ = in_.line_no();
+  }
+
+  // Every column named, and no name twice.
+  void check_header_names() const {
     std::unordered_map<std::string_view, size_t> seen;  // wide logs have thousands of columns
-    for (size_t i = 0; i < header.size(); ++i) {
-      if (header[i].empty())
-        throw InputError(fmt::format("{}:{}: column {} has an empty name{}", file, header_line, i + 1,
-                                     i + 1 == header.size() && i > 0
+    for (size_t i = 0; i < header_.size(); ++i) {
+      if (header_[i].empty())
+        throw InputError(fmt::format("{}:{}: column {} has an empty name{}", file_, header_line_, i + 1,
+                                     i + 1 == header_.size() && i > 0
                                          ? " (a separator at the end of the header line? remove it from every line)"
                                          : ""));
-      const auto [it, fresh] = seen.emplace(header[i], i);
+      const auto [it, fresh] = seen.emplace(header_[i], i);
       if (!fresh)
-        throw InputError(fmt::format("{}:{}: column '{}' appears twice (columns {} and {})", file, header_line,
-                                     header[i], it->second + 1, i + 1));
+        throw InputError(fmt::format("{}:{}: column '{}' appears twice (columns {} and {})", file_, header_line_,
+                                     header_[i], it->second + 1, i + 1));
     }
   }
+
   // --map canonical=name: rename the file's column to the canonical one. All
   // renames are checked against the original header, so they cannot chain.
-  std::vector<std::string> renamed = header;
-  std::vector<std::string> sources;  // file columns renamed away by the map
-  for (const auto& kv : opt.map) sources.push_back(kv.second);
-  for (const auto& [canon, name] : opt.map) {
-    const int i = find_in(name);
-    if (i < 0)
-      throw InputError(fmt::format("{}:{}: --map {}={}: the file has no column '{}' (it has: {})", file,
-                                   header_line, canon, name, name, fmt::join(header, ",")));
-    const int j = find_in(canon);
-    if (j >= 0 && canon != name && std::find(sources.begin(), sources.end(), canon) == sources.end())
-      throw InputError(fmt::format("{}:{}: --map {}={}: the file already has a column '{}'", file, header_line,
-                                   canon, name, canon));
-    renamed[static_cast<size_t>(i)] = canon;
+  void apply_map() {
+    std::vector<std::string> renamed = header_;
+    std::vector<std::string> sources;  // file columns renamed away by the map
+    for (const auto& kv : opt_.map) sources.push_back(kv.second);
+    for (const auto& [canon, name] : opt_.map) {
+      const int i = find_in(name);
+      if (i < 0)
+        throw InputError(fmt::format("{}:{}: --map {}={}: the file has no column '{}' (it has: {})", file_,
+                                     header_line_, canon, name, name, fmt::join(header_, ",")));
+      const int j = find_in(canon);
+      if (j >= 0 && canon != name && std::find(sources.begin(), sources.end(), canon) == sources.end())
+        throw InputError(fmt::format("{}:{}: --map {}={}: the file already has a column '{}'", file_, header_line_,
+                                     canon, name, canon));
+      renamed[static_cast<size_t>(i)] = canon;
+    }
+    header_ = std::move(renamed);
   }
-  header = std::move(renamed);
+
   // The attitude as a quaternion (docs/file-formats.md): qw qx qy qz stand for
-  // phi theta psi when the file has none of the three.
-  std::vector<std::string> required = opt.required;
-  const auto requires_column = [&](std::string_view n) {
-    return std::find(required.begin(), required.end(), n) != required.end();
-  };
-  bool from_quaternion = false;
-  if (requires_column("phi") && requires_column("theta") && requires_column("psi") && find_in("phi") < 0 &&
-      find_in("theta") < 0 && find_in("psi") < 0 && find_in("qw") >= 0) {
-    std::erase_if(required, [](const std::string& n) { return n == "phi" || n == "theta" || n == "psi"; });
-    required.insert(required.end(), kQuaternionColumns.begin(), kQuaternionColumns.end());
-    from_quaternion = true;
-  }
-  std::vector<std::string> missing;
-  for (const auto& r : required)
-    if (find_in(r) < 0) missing.push_back(r);
-  if (!missing.empty()) {
-    const std::vector<std::string> maps = suggested_maps(missing, header);
+  // phi theta psi when the file has none of the three. Then every required
+  // column must be there, with a hint for the usual other names.
+  void check_required_columns() {
+    required_ = opt_.required;
+    if (requires_column("phi") && requires_column("theta") && requires_column("psi") && find_in("phi") < 0 &&
+        find_in("theta") < 0 && find_in("psi") < 0 && find_in("qw") >= 0) {
+      std::erase_if(required_, [](const std::string& n) { return n == "phi" || n == "theta" || n == "psi"; });
+      required_.insert(required_.end(), kQuaternionColumns.begin(), kQuaternionColumns.end());
+      from_quaternion_ = true;
+    }
+    std::vector<std::string> missing;
+    for (const auto& r : required_)
+      if (find_in(r) < 0) missing.push_back(r);
+    if (missing.empty()) return;
+    const std::vector<std::string> maps = suggested_maps(missing, header_);
     throw InputError(fmt::format("{}:{}: missing required column(s): {} (the file has: {}; use --map CANONICAL=NAME "
                                  "for other names{})",
-                                 file, header_line, fmt::join(missing, ", "), fmt::join(header, ","),
+                                 file_, header_line_, fmt::join(missing, ", "), fmt::join(header_, ","),
                                  maps.empty() ? std::string()
                                               : fmt::format("; perhaps {} (check their units and axes against "
                                                             "the flight-log format: SI, body FLU, z up)",
@@ -500,26 +563,29 @@ FlightLog read_flight_log(const std::filesystem::path& path, const CsvReadOption
   }
 
   // Which file columns are stored, and where.
-  const size_t nfile = header.size();
-  std::vector<int> slot(nfile, -1);
-  for (size_t i = 0; i < nfile; ++i) {
-    const bool keep = opt.keep_extra_columns || requires_column(header[i]);
-    if (keep) {
-      slot[i] = static_cast<int>(log.columns.size());
-      log.columns.push_back(header[i]);
+  void choose_columns() {
+    nfile_ = header_.size();
+    slot_.assign(nfile_, -1);
+    for (size_t i = 0; i < nfile_; ++i) {
+      const bool keep = opt_.keep_extra_columns || requires_column(header_[i]);
+      if (keep) {
+        slot_[i] = static_cast<int>(log_.columns.size());
+        log_.columns.push_back(header_[i]);
+      }
     }
+    store_ = ColumnStore(static_cast<Eigen::Index>(log_.columns.size()));
   }
-  const size_t nkeep = log.columns.size();
 
   // Blanks around a number are allowed; a tab only when it does not separate the fields.
-  const auto blank = [delim](char ch) { return ch == ' ' || (ch == '\t' && delim != '\t'); };
+  bool blank(char ch) const { return ch == ' ' || (ch == '\t' && delim_ != '\t'); }
+
   // One data row into row[slot * stride]; throws InputError naming the line.
-  auto parse_row = [&](std::string_view line, size_t line_no, double* row, Eigen::Index stride) {
+  void parse_row(std::string_view line, size_t line_no, double* row, Eigen::Index stride) const {
     const char* q = line.data();
     const char* le = q + line.size();
-    for (size_t c = 0; c < nfile; ++c) {
+    for (size_t c = 0; c < nfile_; ++c) {
       const char* field_end;
-      if (slot[c] >= 0) {
+      if (slot_[c] >= 0) {
         // Parse in place: from_chars stops at the separator, then only blanks may follow.
         const char* s = q;
         while (s < le && blank(*s)) ++s;
@@ -528,149 +594,141 @@ FlightLog read_flight_log(const std::filesystem::path& path, const CsvReadOption
         const auto [ptr, ec] = std::from_chars(s, le, val);
         const char* e = ptr;
         while (e < le && blank(*e)) ++e;
-        if (ec != std::errc() || (e < le && *e != delim) || !std::isfinite(val)) {
-          const char* fe = static_cast<const char*>(std::memchr(q, delim, static_cast<size_t>(le - q)));
-          const std::string_view field = trim(std::string_view(q, static_cast<size_t>((fe ? fe : le) - q)));
-          if (q >= le && c > 0)
-            throw InputError(fmt::format("{}:{}: row has {} field(s), expected {} (one per header column)", file,
-                                         line_no, c, nfile));
-          const bool decimal_comma = delim != ',' && field.find(',') != std::string_view::npos;
-          throw InputError(fmt::format("{}:{}: column {} ('{}'): {} is not a finite number{}", file, line_no, c + 1,
-                                       header[c], field.empty() ? "an empty field" : fmt::format("'{}'", field),
-                                       decimal_comma ? " (a decimal comma? write numbers with a decimal point)" : ""));
-        }
-        row[slot[c] * stride] = val;
+        if (ec != std::errc() || (e < le && *e != delim_) || !std::isfinite(val)) bad_field(q, le, c, line_no);
+        row[slot_[c] * stride] = val;
         field_end = e;
       } else {
-        const char* fe = static_cast<const char*>(std::memchr(q, delim, static_cast<size_t>(le - q)));
+        const char* fe = static_cast<const char*>(std::memchr(q, delim_, static_cast<size_t>(le - q)));
         field_end = fe ? fe : le;
       }
       const bool more = field_end < le;  // a separator follows
-      if (!more && c + 1 < nfile)
-        throw InputError(fmt::format("{}:{}: row has {} field(s), expected {} (one per header column)", file,
-                                     line_no, c + 1, nfile));
-      if (more && c + 1 == nfile)
-        throw InputError(fmt::format("{}:{}: row has more than {} fields", file, line_no, nfile));
+      if (!more && c + 1 < nfile_)
+        throw InputError(fmt::format("{}:{}: row has {} field(s), expected {} (one per header column)", file_,
+                                     line_no, c + 1, nfile_));
+      if (more && c + 1 == nfile_)
+        throw InputError(fmt::format("{}:{}: row has more than {} fields", file_, line_no, nfile_));
       q = field_end + 1;
     }
-  };
+  }
+
+  // The error of field c (from q to the line's end le), which is no finite number.
+  [[noreturn]] void bad_field(const char* q, const char* le, size_t c, size_t line_no) const {
+    const char* fe = static_cast<const char*>(std::memchr(q, delim_, static_cast<size_t>(le - q)));
+    const std::string_view field = trim(std::string_view(q, static_cast<size_t>((fe ? fe : le) - q)));
+    if (q >= le && c > 0)
+      throw InputError(fmt::format("{}:{}: row has {} field(s), expected {} (one per header column)", file_, line_no,
+                                   c, nfile_));
+    const bool decimal_comma = delim_ != ',' && field.find(',') != std::string_view::npos;
+    throw InputError(fmt::format("{}:{}: column {} ('{}'): {} is not a finite number{}", file_, line_no, c + 1,
+                                 header_[c], field.empty() ? "an empty field" : fmt::format("'{}'", field),
+                                 decimal_comma ? " (a decimal comma? write numbers with a decimal point)" : ""));
+  }
 
   // The rows, a buffer's worth of text at a time, in two phases each split
   // between two threads when allowed (the halves cut at a newline): the data
   // lines are picked out (blank and comment lines skipped), then given their
   // rows and parsed. Each half stops at its first bad line; the first half's
   // error is the earlier one.
-  ColumnStore store(static_cast<Eigen::Index>(nkeep));
-  const bool two = detail::use_second_thread(opt.threads);
-  constexpr size_t kParallelBytes = size_t{1} << 17;  // below this a second thread costs more than it saves
-  RowLines row_lines;
-  struct Part {
+  void read_rows() {
+    const bool two = detail::use_second_thread(opt_.threads);
+    constexpr size_t kParallelBytes = size_t{1} << 17;  // below this a second thread costs more than it saves
+    std::array<TextPart, 2> parts;
+    // Capacity: after the first block, the rest of the file at the first rows'
+    // mean length, with 10% to spare (growing by copies costs time and fresh
+    // pages; capacity never written is never touched, so the spare costs little).
+    const std::uint64_t data_start = in_.consumed(), file_bytes = in_.file_size();
+    bool estimated = false;
     std::string_view text;
-    std::vector<std::string_view> lines;  // the data lines
-    std::vector<size_t> line_no;          // their line numbers, counted from the part's first line (0)
-    size_t count = 0;                     // all lines, data or not
-    size_t first_line = 0, first_row = 0;  // of the part's first line and first data line (block-relative row)
-  };
-  std::array<Part, 2> parts;
-  auto split = [](Part& part) {
-    part.lines.clear();
-    part.line_no.clear();
-    part.count = 0;
-    const char* b = part.text.data();
-    const char* end = b + part.text.size();
-    while (b < end) {
-      const char* nl = static_cast<const char*>(std::memchr(b, '\n', static_cast<size_t>(end - b)));
-      std::string_view line(b, static_cast<size_t>((nl ? nl : end) - b));
-      if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
-      if (!trim(line).empty() && line.front() != '#') {
-        part.lines.push_back(line);
-        part.line_no.push_back(part.count);
+    size_t first_line_no = 0;
+    while (in_.next_text(text, first_line_no)) {
+      const bool parallel = two && text.size() >= kParallelBytes;
+      size_t cut = text.size();
+      if (parallel) {  // just after the newline nearest the middle
+        const size_t nl = text.rfind('\n', text.size() / 2);
+        cut = nl == std::string_view::npos ? text.size() : nl + 1;
       }
-      ++part.count;
-      b = nl ? nl + 1 : end;
-    }
-  };
-  // Capacity: after the first block, the rest of the file at the first rows'
-  // mean length, with 10% to spare (growing by copies costs time and fresh
-  // pages; capacity never written is never touched, so the spare costs little).
-  const std::uint64_t data_start = in.consumed(), file_bytes = in.file_size();
-  bool estimated = false;
-  std::string_view text;
-  size_t first_line_no = 0;
-  while (in.next_text(text, first_line_no)) {
-    const bool parallel = two && text.size() >= kParallelBytes;
-    size_t cut = text.size();
-    if (parallel) {  // just after the newline nearest the middle
-      const size_t nl = text.rfind('\n', text.size() / 2);
-      cut = nl == std::string_view::npos ? text.size() : nl + 1;
-    }
-    parts[0].text = text.substr(0, cut);
-    parts[1].text = text.substr(cut);
-    detail::run_both(parallel, [&] { split(parts[0]); }, [&] { split(parts[1]); });
-    in.lines_taken(parts[0].count + parts[1].count);
-    parts[0].first_line = first_line_no;
-    parts[1].first_line = first_line_no + parts[0].count;
-    parts[1].first_row = parts[0].lines.size();
-    const size_t n0 = parts[0].lines.size(), n1 = parts[1].lines.size();
-    if (n0 + n1 == 0) continue;
-    for (const Part& part : parts)
-      for (size_t r = 0; r < part.lines.size(); ++r)
-        row_lines.add(static_cast<size_t>(store.rows()) + part.first_row + r, part.first_line + part.line_no[r]);
-    const Eigen::Index count = static_cast<Eigen::Index>(n0 + n1);
-    if (!estimated) {
-      estimated = true;
-      const std::uint64_t used = in.consumed() - data_start;
-      if (file_bytes > in.consumed() && used > 0) {
-        const double per_row = static_cast<double>(used) / static_cast<double>(count);
-        const double left = static_cast<double>(file_bytes - in.consumed());
-        store.reserve(count + 16 + static_cast<Eigen::Index>(1.1 * left / per_row));
+      parts[0].text = text.substr(0, cut);
+      parts[1].text = text.substr(cut);
+      detail::run_both(parallel, [&] { parts[0].split(); }, [&] { parts[1].split(); });
+      in_.lines_taken(parts[0].count + parts[1].count);
+      parts[0].first_line = first_line_no;
+      parts[1].first_line = first_line_no + parts[0].count;
+      parts[1].first_row = parts[0].lines.size();
+      const size_t n0 = parts[0].lines.size(), n1 = parts[1].lines.size();
+      if (n0 + n1 == 0) continue;
+      for (const TextPart& part : parts)
+        for (size_t r = 0; r < part.lines.size(); ++r)
+          row_lines_.add(static_cast<size_t>(store_.rows()) + part.first_row + r, part.first_line + part.line_no[r]);
+      const Eigen::Index count = static_cast<Eigen::Index>(n0 + n1);
+      if (!estimated) {
+        estimated = true;
+        const std::uint64_t used = in_.consumed() - data_start;
+        if (file_bytes > in_.consumed() && used > 0) {
+          const double per_row = static_cast<double>(used) / static_cast<double>(count);
+          const double left = static_cast<double>(file_bytes - in_.consumed());
+          store_.reserve(count + 16 + static_cast<Eigen::Index>(1.1 * left / per_row));
+        }
       }
+      double* base = store_.add_rows(count);
+      const Eigen::Index stride = store_.capacity();
+      auto parse_part = [&](const TextPart& part) {
+        for (size_t r = 0; r < part.lines.size(); ++r)
+          parse_row(part.lines[r], part.first_line + part.line_no[r],
+                    base + static_cast<Eigen::Index>(part.first_row + r), stride);
+      };
+      detail::run_both(parallel && n0 > 0 && n1 > 0, [&] { parse_part(parts[0]); }, [&] { parse_part(parts[1]); });
     }
-    double* base = store.add_rows(count);
-    const Eigen::Index stride = store.capacity();
-    auto parse_part = [&](const Part& part) {
-      for (size_t r = 0; r < part.lines.size(); ++r)
-        parse_row(part.lines[r], part.first_line + part.line_no[r],
-                  base + static_cast<Eigen::Index>(part.first_row + r), stride);
-    };
-    detail::run_both(parallel && n0 > 0 && n1 > 0, [&] { parse_part(parts[0]); }, [&] { parse_part(parts[1]); });
   }
-  const auto nrow = store.rows();
-  if (nrow < 2)
-    throw InputError(fmt::format("{}: only {} data row(s); a flight log needs many samples", file, nrow));
-  log.data = store.take();
-  if (from_quaternion) attitude_from_quaternion(log, [&](Eigen::Index k) {
-      return fmt::format("{}:{}", file, row_lines.line_of(static_cast<size_t>(k)));
-    });
 
   // Time: strictly increasing and uniform (the filters assume one period).
-  const int ti = log.find("t");
-  if (ti >= 0) {
+  void check_time() {
+    const int ti = log_.find("t");
+    if (ti < 0) return;
     // Divided, not multiplied by 1e-3: integer milliseconds then give the
     // doubles that the same instants written in seconds would.
-    if (opt.time_units_per_second != 1.0) log.data.col(ti) /= opt.time_units_per_second;
-    const auto t = log.data.col(ti);
-    const signal::SamplePeriodCheck chk = signal::check_sample_period(t, opt.period_tolerance);
+    if (opt_.time_units_per_second != 1.0) log_.data.col(ti) /= opt_.time_units_per_second;
+    const auto t = log_.data.col(ti);
+    const signal::SamplePeriodCheck chk = signal::check_sample_period(t, opt_.period_tolerance);
     if (!chk.ok()) {
       const Eigen::Index k = chk.bad;
-      const size_t line = row_lines.line_of(static_cast<size_t>(k));
+      const size_t line = row_lines_.line_of(static_cast<size_t>(k));
       if (!(chk.step > 0.0))
         throw InputError(fmt::format("{}:{}: column 't': time {} is not after the previous sample's {}; time must be "
                                      "strictly increasing",
-                                     file, line, t(k), t(k - 1)));
+                                     file_, line, t(k), t(k - 1)));
       throw InputError(fmt::format(
           "{}:{}: column 't': sample period {:.6g} s (from t = {:.9g} to {:.9g}) where the log's period is {:.6g} s (its median "
           "step): {:+.3g}%, more than the {:g}% tolerated; the log must be uniformly sampled (a gap or a rate "
           "change? resample it first){}",
-          file, line, chk.step, t(k - 1), t(k), chk.median, 100.0 * (chk.step / chk.median - 1.0),
-          100.0 * opt.period_tolerance, time_unit_hint(chk.median)));
+          file_, line, chk.step, t(k - 1), t(k), chk.median, 100.0 * (chk.step / chk.median - 1.0),
+          100.0 * opt_.period_tolerance, time_unit_hint(chk.median)));
     }
     if (chk.median > kSlowestLogPeriod)
       throw InputError(fmt::format("{}: column 't': the median time step is {:.6g} s, a rate of {:.4g} Hz: too slow "
                                    "for a flight log{}",
-                                   file, chk.median, 1.0 / chk.median, time_unit_hint(chk.median)));
+                                   file_, chk.median, 1.0 / chk.median, time_unit_hint(chk.median)));
   }
-  return log;
+
+  const std::string file_;
+  const CsvReadOptions& opt_;
+  LineReader in_;
+  FlightLog log_;
+  std::vector<std::string> header_;  // the file's column names, after --map
+  char delim_ = ',';  // the header's (header_delimiter): a spreadsheet may save tabs or semicolons
+  size_t header_line_ = 0;
+  std::vector<std::string> required_;  // opt.required, with qw qx qy qz for phi theta psi from a quaternion
+  bool from_quaternion_ = false;
+  size_t nfile_ = 0;       // columns in the file
+  std::vector<int> slot_;  // each file column's column in the log, or -1 (not stored)
+  ColumnStore store_{0};
+  RowLines row_lines_;
+};
+
+}  // namespace
+
+FlightLog read_flight_log(const std::filesystem::path& path, const CsvReadOptions& opt) {
+  validate_read_options(opt);
+  return CsvRead(path, opt).run();
 }
 
 double parse_time_unit(std::string_view name) {

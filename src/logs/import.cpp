@@ -6,10 +6,12 @@
 // max_bridge_s are bridged by that interpolation; a longer one splits the
 // log (the longest part is kept, or the import is refused).
 #include "quadid/logs.hpp"
+#include "quadid/signal/median_step.hpp"
 
 #include "quadid/signal.hpp"
 
 #include "bytes.hpp"
+#include "frames.hpp"
 
 #include <fmt/format.h>
 
@@ -34,13 +36,6 @@ struct Series {
   /// overshoots to ~1.006), which a rotor model would refuse as out of range.
   bool bounded = false;
 };
-
-double median_period(const std::vector<double>& t) {
-  std::vector<double> d(t.size() - 1);
-  for (std::size_t i = 1; i < t.size(); ++i) d[i - 1] = t[i] - t[i - 1];
-  std::nth_element(d.begin(), d.begin() + static_cast<long>(d.size() / 2), d.end());
-  return d[d.size() / 2];
-}
 
 // Keeps strictly increasing times (a repeated or backward time stamp is
 // dropped); NaN values become 0 and are counted.
@@ -139,10 +134,9 @@ Series from_topic(const ULog& log, const std::string& topic, const std::vector<s
   return s;
 }
 
-FlightLog assemble(std::vector<Series> series, const ImportOptions& opt, ImportReport& rep,
-                   const std::string& kind) {
-  rep.kind = kind;
-  rep.rate_hz = opt.rate_hz;
+// Each series cleaned (increasing times, NaN counted), and PX4's zero
+// quaternions from before its estimator runs dropped.
+void prepare_series(std::vector<Series>& series, ImportReport& rep) {
   for (auto& s : series) {
     if (s.t.size() < 2) throw InputError(fmt::format("{}: {} samples, too few to import", s.source, s.t.size()));
     clean(s, rep.warnings);
@@ -164,7 +158,11 @@ FlightLog assemble(std::vector<Series> series, const ImportOptions& opt, ImportR
     }
     if (s.t.size() < 2) throw InputError(fmt::format("{}: too few increasing time stamps to import", s.source));
   }
-  // Common span, and the long gaps that split it.
+}
+
+// The series' common span, and the long gaps that split it: the longest part
+// between gaps not bridged (or refused, --on-gap refuse).
+std::pair<double, double> longest_span(const std::vector<Series>& series, const ImportOptions& opt, ImportReport& rep) {
   double t_start = -INFINITY, t_end = INFINITY;
   for (const auto& s : series) {
     t_start = std::max(t_start, s.t.front());
@@ -200,21 +198,13 @@ FlightLog assemble(std::vector<Series> series, const ImportOptions& opt, ImportR
   if (!cuts.empty())
     rep.warnings.push_back(fmt::format("long gaps split the log: kept the longest part, {:.3f}..{:.3f} s (log clock)",
                                        best_a, best_b));
-  const auto rows = static_cast<Eigen::Index>(std::floor((best_b - best_a) * opt.rate_hz + 1e-9)) + 1;
-  if (rows < 10)
-    throw InputError(fmt::format("only {} samples at {:g} Hz between the gaps ({:.3f}..{:.3f} s)", rows, opt.rate_hz,
-                                 best_a, best_b));
-  Eigen::VectorXd grid(rows);
-  for (Eigen::Index i = 0; i < rows; ++i) grid[i] = best_a + static_cast<double>(i) / opt.rate_hz;
-  rep.t0 = best_a;
-  rep.duration = static_cast<double>(rows - 1) / opt.rate_hz;
+  return {best_a, best_b};
+}
 
-  FlightLog out;
-  out.columns = {"t"};
-  std::vector<Eigen::MatrixXd> blocks = {grid.array() - best_a};
-  if (rows > 10'000'000)
-    throw InputError(fmt::format("the topics span {:.0f} s: more than 10^7 samples at {:g} Hz (corrupt time stamps?)",
-                                 best_b - best_a, opt.rate_hz));
+// Each series resampled onto the grid (a block of columns), its columns named
+// and their sources reported; a quaternion becomes phi theta psi.
+void resample_series(std::vector<Series>& series, const Eigen::VectorXd& grid, const ImportOptions& opt,
+                     ImportReport& rep, FlightLog& out, std::vector<Eigen::MatrixXd>& blocks) {
   for (auto& s : series) {
     if (s.quaternion) {
       // q and -q are the same attitude: make the sign continuous first.
@@ -222,7 +212,7 @@ FlightLog assemble(std::vector<Series> series, const ImportOptions& opt, ImportR
         if (s.x.row(i).dot(s.x.row(i - 1)) < 0) s.x.row(i) *= -1.0;
     }
     std::string how;
-    const double fs = 1.0 / median_period(s.t);
+    const double fs = 1.0 / signal::median_step(s.t);
     Eigen::MatrixXd y = resample(s, fs, grid, opt, how);
     if (s.bounded)
       for (Eigen::Index j = 0; j < y.cols(); ++j)
@@ -239,6 +229,12 @@ FlightLog assemble(std::vector<Series> series, const ImportOptions& opt, ImportR
     }
     blocks.push_back(std::move(y));
   }
+}
+
+// The blocks side by side (each finite), then in the canonical order: t x y z
+// phi theta psi p q r, then the rest.
+void join_blocks(const std::vector<Eigen::MatrixXd>& blocks, const std::vector<Series>& series, Eigen::Index rows,
+                 FlightLog& out) {
   Eigen::Index cols = 0;
   for (const auto& b : blocks) cols += b.cols();
   for (std::size_t k = 0; k < blocks.size(); ++k)
@@ -251,7 +247,6 @@ FlightLog assemble(std::vector<Series> series, const ImportOptions& opt, ImportR
     out.data.middleCols(c, b.cols()) = b;
     c += b.cols();
   }
-  // Canonical order first: t x y z phi theta psi p q r, then the rest.
   std::vector<std::string> order = {"t", "x", "y", "z", "phi", "theta", "psi", "p", "q", "r"};
   for (const auto& n : out.columns)
     if (std::find(order.begin(), order.end(), n) == order.end()) order.push_back(n);
@@ -263,6 +258,31 @@ FlightLog assemble(std::vector<Series> series, const ImportOptions& opt, ImportR
   }
   out.columns = order;
   out.data = std::move(sorted);
+}
+
+FlightLog assemble(std::vector<Series> series, const ImportOptions& opt, ImportReport& rep,
+                   const std::string& kind) {
+  rep.kind = kind;
+  rep.rate_hz = opt.rate_hz;
+  prepare_series(series, rep);
+  const auto [best_a, best_b] = longest_span(series, opt, rep);
+  const auto rows = static_cast<Eigen::Index>(std::floor((best_b - best_a) * opt.rate_hz + 1e-9)) + 1;
+  if (rows < 10)
+    throw InputError(fmt::format("only {} samples at {:g} Hz between the gaps ({:.3f}..{:.3f} s)", rows, opt.rate_hz,
+                                 best_a, best_b));
+  Eigen::VectorXd grid(rows);
+  for (Eigen::Index i = 0; i < rows; ++i) grid[i] = best_a + static_cast<double>(i) / opt.rate_hz;
+  rep.t0 = best_a;
+  rep.duration = static_cast<double>(rows - 1) / opt.rate_hz;
+
+  FlightLog out;
+  out.columns = {"t"};
+  std::vector<Eigen::MatrixXd> blocks = {grid.array() - best_a};
+  if (rows > 10'000'000)
+    throw InputError(fmt::format("the topics span {:.0f} s: more than 10^7 samples at {:g} Hz (corrupt time stamps?)",
+                                 best_b - best_a, opt.rate_hz));
+  resample_series(series, grid, opt, rep, out, blocks);
+  join_blocks(blocks, series, rows, out);
   return out;
 }
 
@@ -335,15 +355,15 @@ FlightLog import_ulog(const ULog& log, const ImportOptions& opt, ImportReport* r
     rep.dropouts.push_back({static_cast<double>(d.timestamp) * 1e-6, d.duration_ms * 1e-3});
   std::vector<Series> series;
   // NED -> z up: positions (x, -y, -z) (docs/import.md).
-  series.push_back(from_topic(log, opt.position_topic, {"x", "y", "z"}, {"x", "y", "z"}, {1, -1, -1}));
+  series.push_back(from_topic(log, opt.position_topic, {"x", "y", "z"}, {"x", "y", "z"}, detail::kFrdToFluSigns));
   // Quaternion FRD->NED to FLU->ENU-like z-up: (q0, q1, -q2, -q3).
   Series q = from_topic(log, opt.attitude_topic, {"q[0]", "q[1]", "q[2]", "q[3]"}, {"q0", "q1", "q2", "q3"},
-                        {1, 1, -1, -1});
+                        detail::kFrdToFluQuaternionSigns);
   q.quaternion = true;
   series.push_back(std::move(q));
   // Body rates FRD -> FLU: (x, -y, -z).
   if (log.find_topic(opt.rates_topic)) {
-    series.push_back(from_topic(log, opt.rates_topic, {"xyz[0]", "xyz[1]", "xyz[2]"}, {"p", "q", "r"}, {1, -1, -1}));
+    series.push_back(from_topic(log, opt.rates_topic, {"xyz[0]", "xyz[1]", "xyz[2]"}, {"p", "q", "r"}, detail::kFrdToFluSigns));
   } else {
     const ULogTopic* att = log.find_topic(opt.attitude_topic);
     if (!att || !att->find("rollspeed"))
@@ -352,7 +372,7 @@ FlightLog import_ulog(const ULog& log, const ImportOptions& opt, ImportReport* r
     rep.warnings.push_back(fmt::format("no '{}': body rates from {}.rollspeed/pitchspeed/yawspeed", opt.rates_topic,
                                        opt.attitude_topic));
     series.push_back(from_topic(log, opt.attitude_topic, {"rollspeed", "pitchspeed", "yawspeed"}, {"p", "q", "r"},
-                                {1, -1, -1}));
+                                detail::kFrdToFluSigns));
   }
   // Rotor signals under the log's own names.
   std::string motors = opt.motors_topic;

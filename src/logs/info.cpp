@@ -1,8 +1,10 @@
 // What an autopilot log holds (quadid log-info), and PX4's rotor geometry
 // from the CA_ROTOR* parameters.
 #include "quadid/logs.hpp"
+#include "quadid/signal/median_step.hpp"
 
 #include "bytes.hpp"
+#include "frames.hpp"
 
 #include <fmt/format.h>
 
@@ -17,14 +19,6 @@ namespace {
 std::string hms(std::uint64_t us) {
   const std::uint64_t s = us / 1000000u;
   return fmt::format("{}:{:02}:{:02}", s / 3600u, (s / 60u) % 60u, s % 60u);
-}
-
-double median_period(const std::vector<double>& t) {
-  if (t.size() < 2) return 0.0;
-  std::vector<double> d(t.size() - 1);
-  for (std::size_t i = 1; i < t.size(); ++i) d[i - 1] = t[i] - t[i - 1];
-  std::nth_element(d.begin(), d.begin() + static_cast<long>(d.size() / 2), d.end());
-  return d[d.size() / 2];
 }
 
 nlohmann::json value_json(const ULogValue& v) {
@@ -43,7 +37,7 @@ std::vector<double> seconds(const std::vector<std::uint64_t>& us) {
 
 std::vector<TimeGap> find_gaps(const std::vector<double>& t, double factor) {
   std::vector<TimeGap> gaps;
-  const double T = median_period(t);
+  const double T = signal::median_step(t);
   if (T <= 0.0) return gaps;
   for (std::size_t i = 1; i < t.size(); ++i)
     if (t[i] - t[i - 1] > factor * T) gaps.push_back({t[i - 1], t[i] - t[i - 1]});
@@ -149,7 +143,7 @@ nlohmann::json ulog_info_json(const ULog& log) {
   j["topics"] = nlohmann::json::array();
   for (const auto& t : log.topics) {
     const auto ts = seconds(t.timestamps());
-    const double T = median_period(ts);
+    const double T = signal::median_step(ts);
     j["topics"].push_back({{"name", t.name},
                            {"multi_id", t.multi_id},
                            {"message_size", t.size},
@@ -183,7 +177,7 @@ std::string format_usd_info(const UsdLog& log) {
   fmt::format_to(out, "Events: {}\n", log.events.size());
   for (const auto& e : log.events) {
     const auto t = seconds(e.timestamps_us);
-    const double T = median_period(t);
+    const double T = signal::median_step(t);
     const double span = t.size() > 1 ? t.back() - t.front() : 0.0;
     fmt::format_to(out, " {} (id {}): {} records", e.name, e.id, e.count());
     if (t.size() > 1)
@@ -215,7 +209,7 @@ nlohmann::json usd_info_json(const UsdLog& log) {
   j["events"] = nlohmann::json::array();
   for (const auto& e : log.events) {
     const auto t = seconds(e.timestamps_us);
-    const double T = median_period(t);
+    const double T = signal::median_step(t);
     nlohmann::json ev = {{"name", e.name}, {"id", e.id}, {"count", e.count()}};
     ev["variables"] = nlohmann::json::array();
     for (const auto& v : e.variables) ev["variables"].push_back({{"name", v.name}, {"type", std::string(1, v.type)}});
@@ -247,8 +241,8 @@ RotorGeometry px4_rotor_geometry(const ULog& log) {
   };
   for (int i = 0; i < g.count; ++i) {
     // FRD -> FLU: (x, y, z) -> (x, -y, -z) (docs/import.md).
-    g.position.emplace_back(param(i, "PX", std::nullopt), -param(i, "PY", std::nullopt), -param(i, "PZ", 0.0));
-    Eigen::Vector3d a(param(i, "AX", 0.0), -param(i, "AY", 0.0), -param(i, "AZ", -1.0));
+    g.position.push_back(detail::frd_to_flu(param(i, "PX", std::nullopt), param(i, "PY", std::nullopt), param(i, "PZ", 0.0)));
+    Eigen::Vector3d a = detail::frd_to_flu(param(i, "AX", 0.0), param(i, "AY", 0.0), param(i, "AZ", -1.0));
     if (a.norm() > 0) a.normalize();
     g.axis.push_back(a);
     g.ct.push_back(param(i, "CT", 6.5));      // PX4's default

@@ -2,6 +2,8 @@
 // files from data with it, and simulated flights can be written as PX4 logs.
 #include "quadid/logs.hpp"
 
+#include "frames.hpp"
+
 #include <fmt/format.h>
 
 #include <cmath>
@@ -152,10 +154,11 @@ std::string px4_ulog_from_flight_log(const FlightLog& log, const Px4UlogWriteOpt
     w.parameter("CA_ROTOR_COUNT", std::int32_t{g.count});
     for (int i = 0; i < g.count; ++i) {
       const auto k = static_cast<std::size_t>(i);
-      // FLU -> FRD: y and z change sign; KM > 0 for a counter-clockwise rotor.
-      w.parameter(fmt::format("CA_ROTOR{}_PX", i), static_cast<float>(g.position[k].x()));
-      w.parameter(fmt::format("CA_ROTOR{}_PY", i), static_cast<float>(-g.position[k].y()));
-      w.parameter(fmt::format("CA_ROTOR{}_PZ", i), static_cast<float>(-g.position[k].z()));
+      // FLU -> FRD; KM > 0 for a counter-clockwise rotor.
+      const Eigen::Vector3d frd = detail::flu_to_frd(g.position[k]);
+      w.parameter(fmt::format("CA_ROTOR{}_PX", i), static_cast<float>(frd.x()));
+      w.parameter(fmt::format("CA_ROTOR{}_PY", i), static_cast<float>(frd.y()));
+      w.parameter(fmt::format("CA_ROTOR{}_PZ", i), static_cast<float>(frd.z()));
       if (k < g.ct.size()) w.parameter(fmt::format("CA_ROTOR{}_CT", i), static_cast<float>(g.ct[k]));
       if (k < g.km.size() && k < g.spin.size())
         w.parameter(fmt::format("CA_ROTOR{}_KM", i), static_cast<float>(g.spin[k] == "cw" ? -g.km[k] : g.km[k]));
@@ -175,14 +178,16 @@ std::string px4_ulog_from_flight_log(const FlightLog& log, const Px4UlogWriteOpt
   for (const auto& c : opt.output_columns) outputs.push_back(col(c));
   for (Eigen::Index i = 0; i < t.size(); ++i) {
     const auto ts = opt.start_timestamp_us + static_cast<std::uint64_t>(std::llround((t[i] - t[0]) * 1e6));
-    w.data(pos, ULogPayload().put(ts).put(float(x[i])).put(float(-y[i])).put(float(-z[i])).str());
+    const Eigen::Vector3d p_ned = detail::flu_to_frd(Eigen::Vector3d(x[i], y[i], z[i]));
+    w.data(pos, ULogPayload().put(ts).put(float(p_ned.x())).put(float(p_ned.y())).put(float(p_ned.z())).str());
     // ZYX Euler -> quaternion (body FLU -> world z up), then (q0, q1, -q2, -q3).
     const double cr = std::cos(phi[i] / 2), sr = std::sin(phi[i] / 2), cp = std::cos(theta[i] / 2),
                  sp = std::sin(theta[i] / 2), cy = std::cos(psi[i] / 2), sy = std::sin(psi[i] / 2);
     const double q0 = cr * cp * cy + sr * sp * sy, q1 = sr * cp * cy - cr * sp * sy,
                  q2 = cr * sp * cy + sr * cp * sy, q3 = cr * cp * sy - sr * sp * cy;
     w.data(att, ULogPayload().put(ts).put(float(q0)).put(float(q1)).put(float(-q2)).put(float(-q3)).str());
-    w.data(rat, ULogPayload().put(ts).put(float(p[i])).put(float(-q[i])).put(float(-r[i])).str());
+    const Eigen::Vector3d rates_frd = detail::flu_to_frd(Eigen::Vector3d(p[i], q[i], r[i]));
+    w.data(rat, ULogPayload().put(ts).put(float(rates_frd.x())).put(float(rates_frd.y())).put(float(rates_frd.z())).str());
     if (!motors.empty()) {
       ULogPayload m;
       m.put(ts);

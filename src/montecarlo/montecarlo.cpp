@@ -1,6 +1,7 @@
 // Monte Carlo identification flights on a thread pool (docs/montecarlo.md).
 #include "quadid/montecarlo.hpp"
 #include "quadid/core.hpp"
+#include "quadid/core/json.hpp"
 #include "quadid/vehicle.hpp"
 #include "quadid/core/parallel.hpp"
 
@@ -161,7 +162,7 @@ namespace {
 nlohmann::json theta_obj(const Theta& t) {
   nlohmann::json j = nlohmann::json::object();
   for (int i = 0; i < 7; ++i)
-    j[kThetaNames[static_cast<size_t>(i)]] = std::isfinite(t(i)) ? nlohmann::json(t(i)) : nlohmann::json(nullptr);
+    j[kThetaNames[static_cast<size_t>(i)]] = finite_or_null(t(i));
   return j;
 }
 
@@ -195,9 +196,7 @@ nlohmann::json to_json(const MonteCarloResult& r) {
                      {"yaw", o.simulation.sensors.noise.yaw},
                      {"attitude", o.simulation.sensors.noise.attitude},
                      {"gyro", o.simulation.sensors.noise.gyro}}},
-          {"window", {{"t0", o.identification.window.t0},
-                      {"t1", std::isfinite(o.identification.window.t1) ? nlohmann::json(o.identification.window.t1)
-                                                                       : nlohmann::json(nullptr)}}},
+          {"window", to_json(o.identification.window)},
           {"prefilter_cutoff_hz", o.identification.processing.lowpass.cutoff_hz},
           {"lambda", o.identification.lambda},
           {"truth", theta_obj(r.truth)},

@@ -83,14 +83,14 @@ FlightLog load_validation_log(const std::string& path, const ValidateRequest& re
   return log;
 }
 
-LogValidation validate_log(const FlightLog& log, const ValidateRequest& req,
-                           const std::function<void(const std::string&)>& note) {
-  auto say = [&](const std::string& s) {
-    if (note) note(s);
-  };
-  LogValidation v;
-  std::vector<NamedParams>& sets = v.sets;
-  std::vector<std::string> source;  // each set's --params file, for names that repeat
+namespace {
+
+using Say = std::function<void(const std::string&)>;
+
+// The --params sets in the order given, each with the file it came from; a set
+// that cannot be flown is kept (judged by prediction error only).
+void load_sets(const ValidateRequest& req, const Say& say, std::vector<NamedParams>& sets,
+               std::vector<std::string>& source) {
   for (const auto& spec : req.params) {
     // An identify result records its vehicle: terms found for another one
     // (its thrust scale, rotor inertia) would be judged on this one's rotors.
@@ -113,8 +113,11 @@ LogValidation validate_log(const FlightLog& log, const ValidateRequest& req,
     }
   }
   if (sets.empty()) throw std::invalid_argument("give at least one --params set");
-  // Two identify results both hold an LS, ...: a repeated name takes its file's
-  // name first ("flight1:LS"), and a number if that still repeats.
+}
+
+// Two identify results both hold an LS, ...: a repeated name takes its file's
+// name first ("flight1:LS"), and a number if that still repeats.
+void unique_names(std::vector<NamedParams>& sets, const std::vector<std::string>& source) {
   auto count = [&](const std::string& n) {
     return std::count_if(sets.begin(), sets.end(), [&](const NamedParams& s) { return s.name == n; });
   };
@@ -126,60 +129,49 @@ LogValidation validate_log(const FlightLog& log, const ValidateRequest& req,
   for (size_t i = 0; i < sets.size(); ++i) sets[i].name = names[i];
   for (size_t i = 0; i < sets.size(); ++i)
     if (count(sets[i].name) > 1) sets[i].name += fmt::format("#{}", i + 1);
-  if (req.reference.empty() && req.vehicle) {
-    v.reference = NamedParams{"nom", req.vehicle->nominal};
-  } else {
-    const std::string spec = req.reference.empty() ? "qball2-nominal" : req.reference;
-    v.reference = NamedParams{param_set_name(spec), load_params(spec)};
-  }
-  const NamedParams& reference = v.reference;
+}
 
-  // Table 4 needs the reference the log was flown with and the controller: a
-  // simulated log carries both; for another log, --trajectory and defaults.
-  std::optional<SimulationComparison>& sim = v.simulation;
+// The reference set: the vehicle's nominal, or --reference (default the QBall 2's).
+NamedParams reference_set(const ValidateRequest& req) {
+  if (req.reference.empty() && req.vehicle) return NamedParams{"nom", req.vehicle->nominal};
+  const std::string spec = req.reference.empty() ? "qball2-nominal" : req.reference;
+  return NamedParams{param_set_name(spec), load_params(spec)};
+}
+
+// Table 4 needs the reference the log was flown with and the controller: a
+// simulated log carries both; for another log, --trajectory and defaults.
+void simulation_comparison(const FlightLog& log, const ValidateRequest& req, const Say& say, LogValidation& v) {
   if (req.vehicle && !req.no_simulation)
     say("no simulation comparison (Table 4) with a vehicle: it re-flies the virtual QBall 2; the output prediction "
         "error below judges the sets on this log");
-  if (!req.no_simulation && !req.vehicle) {
-    std::unique_ptr<Trajectory> traj;
-    SimulationOptions base;
-    bool have_metadata = true;
-    try {
-      base = simulation_options_from_log(log);
-    } catch (const InputError&) {
-      have_metadata = false;
-    }
-    if (!req.trajectory.empty()) traj = load_trajectory(req.trajectory);
-    else if (have_metadata) traj = trajectory_from_log(log);
-    if (!traj) {
-      say("no simulation comparison (Table 4): the log has no quadid-simulate metadata; give --trajectory "
-          "to re-fly its reference with the default controller");
-    } else {
-      if (!have_metadata) {
-        const auto t = log.column("t");
-        // The log's own rate; sensors no faster than it, RK4 step ~1 ms dividing its period.
-        base.set_rate(static_cast<double>(t.size() - 1) / (t(t.size() - 1) - t(0)));
-        say(fmt::format("re-flying '{}' with the default controller at {:g} Hz", traj->describe(),
-                        base.controller.rate));
-      }
-      say(fmt::format("re-flying the log with {} parameter sets...", sets.size() + 1));
-      sim = compare_simulations(log, *traj, base, sets, reference, req.simulation);
-    }
+  if (req.no_simulation || req.vehicle) return;
+  std::unique_ptr<Trajectory> traj;
+  SimulationOptions base;
+  bool have_metadata = true;
+  try {
+    base = simulation_options_from_log(log);
+  } catch (const InputError&) {
+    have_metadata = false;
   }
-  if (req.ignore_input_errors)
-    if (const auto f = rotor_mapping_finding(log, req)) say("warning: input check rotor-mapping: " + *f + " (ignored)");
-  PredictionValidationOptions popt = req.prediction;
-  if (req.vehicle) {
-    popt.centre_torque_errors = true;
-    say("the torque rows' errors are taken about their means over the window: a constant torque (centre of mass "
-        "off the rotors' centre, a rotor's trim) belongs to the flight, not to the body");
+  if (!req.trajectory.empty()) traj = load_trajectory(req.trajectory);
+  else if (have_metadata) traj = trajectory_from_log(log);
+  if (!traj) {
+    say("no simulation comparison (Table 4): the log has no quadid-simulate metadata; give --trajectory "
+        "to re-fly its reference with the default controller");
+    return;
   }
-  v.torque_errors_centred = popt.centre_torque_errors;
-  // A set's real-flight terms (identify --vehicle): applied with the vehicle's
-  // rotor signals, those that belong to the vehicle; the paper's rows have no
-  // place for them.
-  popt.real_flight_terms = req.vehicle.has_value();
-  v.real_flight_terms = popt.real_flight_terms;
+  if (!have_metadata) {
+    const auto t = log.column("t");
+    // The log's own rate; sensors no faster than it, RK4 step ~1 ms dividing its period.
+    base.set_rate(static_cast<double>(t.size() - 1) / (t(t.size() - 1) - t(0)));
+    say(fmt::format("re-flying '{}' with the default controller at {:g} Hz", traj->describe(), base.controller.rate));
+  }
+  say(fmt::format("re-flying the log with {} parameter sets...", v.sets.size() + 1));
+  v.simulation = compare_simulations(log, *traj, base, v.sets, v.reference, req.simulation);
+}
+
+// Says which of each set's real-flight terms are applied to this log, and why the others are not.
+void describe_terms(const std::vector<NamedParams>& sets, const ValidateRequest& req, const Say& say) {
   for (const auto& s : sets) {
     if (s.terms.empty()) continue;
     std::vector<std::string> used, own;
@@ -200,6 +192,25 @@ LogValidation validate_log(const FlightLog& log, const ValidateRequest& req,
       line += fmt::format("; not {} (the identification flight's own: a trim, that day's wind)", fmt::join(own, ", "));
     say(line);
   }
+}
+
+// The output prediction error's options for this log: the vehicle's rows and
+// terms, and the window kept to the part in the air.
+PredictionValidationOptions prediction_options(const FlightLog& log, const ValidateRequest& req, const Say& say,
+                                               LogValidation& v) {
+  PredictionValidationOptions popt = req.prediction;
+  if (req.vehicle) {
+    popt.centre_torque_errors = true;
+    say("the torque rows' errors are taken about their means over the window: a constant torque (centre of mass "
+        "off the rotors' centre, a rotor's trim) belongs to the flight, not to the body");
+  }
+  v.torque_errors_centred = popt.centre_torque_errors;
+  // A set's real-flight terms (identify --vehicle): applied with the vehicle's
+  // rotor signals, those that belong to the vehicle; the paper's rows have no
+  // place for them.
+  popt.real_flight_terms = req.vehicle.has_value();
+  v.real_flight_terms = popt.real_flight_terms;
+  describe_terms(v.sets, req, say);
   // On the ground at an end of the log the ground carries part of the weight,
   // which no set's model holds: the tables cover the part in the air.
   if (!req.error_window_given)
@@ -208,8 +219,27 @@ LogValidation validate_log(const FlightLog& log, const ValidateRequest& req,
       say(fmt::format("prediction error over {}: the log is {} (--error-window T0:T1 to choose)",
                       air->window.to_string(), air->describe()));
     }
-  v.prediction = validate_prediction(log, sets, reference, popt);
-  if (req.vehicle) judge_with_timing(log, sets, reference, popt, req.vehicle->rotors, v.prediction, say);
+  return popt;
+}
+
+}  // namespace
+
+LogValidation validate_log(const FlightLog& log, const ValidateRequest& req,
+                           const std::function<void(const std::string&)>& note) {
+  const Say say = [&](const std::string& s) {
+    if (note) note(s);
+  };
+  LogValidation v;
+  std::vector<std::string> source;  // each set's --params file, for names that repeat
+  load_sets(req, say, v.sets, source);
+  unique_names(v.sets, source);
+  v.reference = reference_set(req);
+  simulation_comparison(log, req, say, v);
+  if (req.ignore_input_errors)
+    if (const auto f = rotor_mapping_finding(log, req)) say("warning: input check rotor-mapping: " + *f + " (ignored)");
+  const PredictionValidationOptions popt = prediction_options(log, req, say, v);
+  v.prediction = validate_prediction(log, v.sets, v.reference, popt);
+  if (req.vehicle) judge_with_timing(log, v.sets, v.reference, popt, req.vehicle->rotors, v.prediction, say);
   return v;
 }
 

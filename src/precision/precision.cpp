@@ -244,182 +244,234 @@ Vec4 regression_row_noise(const PrecisionOptions& opt, double hover_z) {
   return (ss / static_cast<double>(reg.size())).cwiseSqrt();
 }
 
-PrecisionResult predict_precision(const Trajectory& traj, const PrecisionOptions& opt) {
-  opt.validate();
-  const double T = 1.0 / opt.rate;
-  const Eigen::Index n = static_cast<Eigen::Index>(std::floor(opt.duration * opt.rate + 1e-9)) + 1;
-  const Theta theta = opt.params.theta();
+namespace {
 
-  // Noise-free log of the reference, and the nominal states for the Jacobians.
-  FlightLog log;
-  log.columns = standard_log_columns();
-  log.data.resize(n, static_cast<Eigen::Index>(log.columns.size()));
-  std::vector<Reference> ref(static_cast<size_t>(n));
-  Eigen::Matrix<double, Eigen::Dynamic, 4> wrench(n, 4);
-  for (Eigen::Index k = 0; k < n; ++k) {
-    const double t = static_cast<double>(k) * T;
-    const Reference& r = ref[static_cast<size_t>(k)] = reference_at(traj, t, opt.g);
-    const Eigen::Vector4d F = regressor<double>(r.v, r.omega, r.eta, r.v_dot, r.omega_dot, opt.g) * theta;  // eq. (11)
-    wrench.row(k) = F.transpose();
-    log.data.row(k) << t, r.p(0), r.p(1), r.p(2), r.eta(0), r.eta(1), r.eta(2), r.omega(0), r.omega(1), r.omega(2),
-        F(0), F(1), F(2), F(3);
+using StateJacobian = Eigen::Matrix<double, 15, kIn>;
+
+// J_k: d x_k (15 processed signals) / d [p_dot eta omega F] at one nominal state.
+StateJacobian state_jacobian(const Reference& r, double g) {
+  const Mat3 Rt = rotation<double>(r.eta).transpose();
+  Mat3 dv_deta;  // d (R^T p_dot) / d eta, central differences (error ~1e-10 relative)
+  for (int i = 0; i < 3; ++i) {
+    constexpr double h = 1e-6;
+    Vec3 ep = r.eta, em = r.eta;
+    ep(i) += h;
+    em(i) -= h;
+    dv_deta.col(i) = (rotation<double>(ep).transpose() - rotation<double>(em).transpose()) * r.p_dot / (2.0 * h);
   }
-  const std::pair<double, double> fc = cutoffs(opt);
-  const double f_force = fc.first, f_moment = fc.second;
-  const auto signals = row_signals(log, opt.processing, f_force, f_moment);
+  const Vec3 v = Rt * r.p_dot;
+  const double p = r.omega(0), q = r.omega(1), rr = r.omega(2);
+  const double phi = r.eta(0), th = r.eta(1);
+  StateJacobian Jk;
+  Jk.setZero();
+  Jk.block<1, 3>(0, kPdot) = Rt.row(2);     // w = (R^T p_dot)_z, eq. (3)
+  Jk.block<1, 3>(0, kEta) = dv_deta.row(2);
+  Jk.block<3, 3>(1, kOmega).setIdentity();  // p q r
+  // c = p v - q u + g cos(theta) cos(phi), eq. (7)
+  Jk.block<1, 3>(4, kPdot) = p * Rt.row(1) - q * Rt.row(0);
+  Jk.block<1, 3>(4, kEta) = p * dv_deta.row(1) - q * dv_deta.row(0);
+  Jk(4, kEta + 0) += -g * std::sin(phi) * std::cos(th);
+  Jk(4, kEta + 1) += -g * std::cos(phi) * std::sin(th);
+  Jk(4, kOmega + 0) = v(1);
+  Jk(4, kOmega + 1) = -v(0);
+  // pq pr qr p^2 q^2 r^2
+  Jk(5, kOmega + 0) = q;  Jk(5, kOmega + 1) = p;
+  Jk(6, kOmega + 0) = rr; Jk(6, kOmega + 2) = p;
+  Jk(7, kOmega + 1) = rr; Jk(7, kOmega + 2) = q;
+  Jk(8, kOmega + 0) = 2.0 * p;
+  Jk(9, kOmega + 1) = 2.0 * q;
+  Jk(10, kOmega + 2) = 2.0 * rr;
+  Jk.block<4, 4>(11, kF).setIdentity();     // Fz tau
+  return Jk;
+}
+
+// One call of predict_precision in the steps of this file's header comment. The
+// members are what the steps share; once run() has built them they are only read,
+// as linear_part runs on several threads.
+class PrecisionRun {
+ public:
+  PrecisionRun(const Trajectory& traj, const PrecisionOptions& opt)
+      : traj_(traj),
+        opt_(opt),
+        T_(1.0 / opt.rate),
+        n_(static_cast<Eigen::Index>(std::floor(opt.duration * opt.rate + 1e-9)) + 1),
+        theta_(opt.params.theta()),
+        alpha_(std::exp(-opt.lambda * T_)),
+        one_minus_(-std::expm1(-opt.lambda * T_)),
+        c_((opt.gd_variant == signal::GdVariant::Printed) ? opt.lambda : one_minus_ / T_) {}
+
+  PrecisionResult run() {
+    nominal_log();
+    const std::pair<double, double> fc = cutoffs(opt_);
+    f_force_ = fc.first;
+    f_moment_ = fc.second;
+    signals_ = row_signals(log_, opt_.processing, f_force_, f_moment_);
+    linear_signal_maps();
+    jacobians();
+    rotor_speed_jacobian();
+    fly_plan();
+    prefilters();
+    PrecisionResult res = described();
+    for (int m = 0; m < 2; ++m) predict_set(m, res);
+    return res;
+  }
+
+ private:
+  // Noise-free log of the reference, and the nominal states for the Jacobians.
+  void nominal_log() {
+    log_.columns = standard_log_columns();
+    log_.data.resize(n_, static_cast<Eigen::Index>(log_.columns.size()));
+    ref_.resize(static_cast<size_t>(n_));
+    wrench_.resize(n_, 4);
+    for (Eigen::Index k = 0; k < n_; ++k) {
+      const double t = static_cast<double>(k) * T_;
+      const Reference& r = ref_[static_cast<size_t>(k)] = reference_at(traj_, t, opt_.g);
+      const Eigen::Vector4d F = regressor<double>(r.v, r.omega, r.eta, r.v_dot, r.omega_dot, opt_.g) * theta_;  // eq. (11)
+      wrench_.row(k) = F.transpose();
+      log_.data.row(k) << t, r.p(0), r.p(1), r.p(2), r.eta(0), r.eta(1), r.eta(2), r.omega(0), r.omega(1), r.omega(2),
+          F(0), F(1), F(2), F(3);
+    }
+  }
 
   // Gamma theta = M_a a + M_b b: the regressor is linear in its 4 + 7 signals.
-  Eigen::Matrix4d Ma;
-  Eigen::Matrix<double, 4, 7> Mb;
-  for (int i = 0; i < 4; ++i)
-    Ma.col(i) = assemble_regressor(Vec4::Unit(i), Eigen::Matrix<double, 7, 1>::Zero()) * theta;
-  for (int j = 0; j < 7; ++j) Mb.col(j) = assemble_regressor(Vec4::Zero(), Eigen::Matrix<double, 7, 1>::Unit(j)) * theta;
-
-  // J_k: d x_k (15 processed signals) / d [p_dot eta omega F] at the nominal state.
-  std::vector<Eigen::Matrix<double, 15, kIn>> J(static_cast<size_t>(n));
-  for (Eigen::Index k = 0; k < n; ++k) {
-    const Reference& r = ref[static_cast<size_t>(k)];
-    const Mat3 Rt = rotation<double>(r.eta).transpose();
-    Mat3 dv_deta;  // d (R^T p_dot) / d eta, central differences (error ~1e-10 relative)
-    for (int i = 0; i < 3; ++i) {
-      constexpr double h = 1e-6;
-      Vec3 ep = r.eta, em = r.eta;
-      ep(i) += h;
-      em(i) -= h;
-      dv_deta.col(i) = (rotation<double>(ep).transpose() - rotation<double>(em).transpose()) * r.p_dot / (2.0 * h);
-    }
-    const Vec3 v = Rt * r.p_dot;
-    const double p = r.omega(0), q = r.omega(1), rr = r.omega(2);
-    const double phi = r.eta(0), th = r.eta(1);
-    auto& Jk = J[static_cast<size_t>(k)];
-    Jk.setZero();
-    Jk.block<1, 3>(0, kPdot) = Rt.row(2);     // w = (R^T p_dot)_z, eq. (3)
-    Jk.block<1, 3>(0, kEta) = dv_deta.row(2);
-    Jk.block<3, 3>(1, kOmega).setIdentity();  // p q r
-    // c = p v - q u + g cos(theta) cos(phi), eq. (7)
-    Jk.block<1, 3>(4, kPdot) = p * Rt.row(1) - q * Rt.row(0);
-    Jk.block<1, 3>(4, kEta) = p * dv_deta.row(1) - q * dv_deta.row(0);
-    Jk(4, kEta + 0) += -opt.g * std::sin(phi) * std::cos(th);
-    Jk(4, kEta + 1) += -opt.g * std::cos(phi) * std::sin(th);
-    Jk(4, kOmega + 0) = v(1);
-    Jk(4, kOmega + 1) = -v(0);
-    // pq pr qr p^2 q^2 r^2
-    Jk(5, kOmega + 0) = q;  Jk(5, kOmega + 1) = p;
-    Jk(6, kOmega + 0) = rr; Jk(6, kOmega + 2) = p;
-    Jk(7, kOmega + 1) = rr; Jk(7, kOmega + 2) = q;
-    Jk(8, kOmega + 0) = 2.0 * p;
-    Jk(9, kOmega + 1) = 2.0 * q;
-    Jk(10, kOmega + 2) = 2.0 * rr;
-    Jk.block<4, 4>(11, kF).setIdentity();     // Fz tau
+  void linear_signal_maps() {
+    for (int i = 0; i < 4; ++i)
+      Ma_.col(i) = assemble_regressor(Vec4::Unit(i), Eigen::Matrix<double, 7, 1>::Zero()) * theta_;
+    for (int j = 0; j < 7; ++j)
+      Mb_.col(j) = assemble_regressor(Vec4::Zero(), Eigen::Matrix<double, 7, 1>::Unit(j)) * theta_;
   }
 
-  // J's structure: ~30 of its 195 entries are ever non-zero. V J_k over those
-  // alone, in the order of a dense product's sum (skipped terms are exact zeros):
-  // 6x less work than the dense product, the same bits.
-  std::vector<std::pair<int, int>> j_nonzero;  // (s, i), by i then s
-  for (int i = 0; i < kIn; ++i)
-    for (int s = 0; s < 15; ++s)
-      if (std::any_of(J.begin(), J.end(), [&](const auto& Jk) { return Jk(s, i) != 0.0; })) j_nonzero.emplace_back(s, i);
-  auto sparse_product = [&](const Eigen::Matrix<double, 7, 15>& V, const Eigen::Matrix<double, 15, kIn>& Jk) {
+  // J_k at every sample, and the entries of J any sample makes non-zero.
+  void jacobians() {
+    J_.resize(static_cast<size_t>(n_));
+    for (Eigen::Index k = 0; k < n_; ++k) J_[static_cast<size_t>(k)] = state_jacobian(ref_[static_cast<size_t>(k)], opt_.g);
+    // J's structure: ~30 of its 195 entries are ever non-zero (sparse_product).
+    for (int i = 0; i < kIn; ++i)
+      for (int s = 0; s < 15; ++s)
+        if (std::any_of(J_.begin(), J_.end(), [&](const auto& Jk) { return Jk(s, i) != 0.0; }))
+          j_nonzero_.emplace_back(s, i);
+  }
+
+  // V J_k over J's non-zero entries alone, in the order of a dense product's sum
+  // (skipped terms are exact zeros): 6x less work than the dense product, the same bits.
+  Eigen::Matrix<double, 7, kIn> sparse_product(const Eigen::Matrix<double, 7, 15>& V, const StateJacobian& Jk) const {
     Eigen::Matrix<double, 7, kIn> W = Eigen::Matrix<double, 7, kIn>::Zero();
-    for (const auto& [s, i] : j_nonzero) W.col(i) += V.col(s) * Jk(s, i);
+    for (const auto& [s, i] : j_nonzero_) W.col(i) += V.col(s) * Jk(s, i);
     return W;
-  };
+  }
 
   // Rotor-speed noise -> wrench: dF/dw_i = B_i 2 k w_i at the nominal rotor speeds
   // (columns 4 i .. 4 i + 3 of row k: rotor i's column of dF/dw at sample k).
-  const bool rotor_mode = opt.rotors && opt.rotor_noise > 0.0;
-  Eigen::MatrixXd dF_dw;
-  if (rotor_mode) {
-    const RotorModel& rm = *opt.rotors;
+  void rotor_speed_jacobian() {
+    rotor_mode_ = opt_.rotors && opt_.rotor_noise > 0.0;
+    if (!rotor_mode_) return;
+    const RotorModel& rm = *opt_.rotors;
     const Eigen::Matrix<double, 4, Eigen::Dynamic> B = rm.allocation();
     const Eigen::Matrix<double, Eigen::Dynamic, 4> mixer = rm.mixer();
-    dF_dw.resize(n, 4 * rm.count());
-    for (Eigen::Index k = 0; k < n; ++k) {
-      const Eigen::VectorXd thrusts = mixer * wrench.row(k).transpose();
+    dF_dw_.resize(n_, 4 * rm.count());
+    for (Eigen::Index k = 0; k < n_; ++k) {
+      const Eigen::VectorXd thrusts = mixer * wrench_.row(k).transpose();
       for (int i = 0; i < rm.count(); ++i) {
         const double w = rm.speed_for_thrust(thrusts(i));
-        dF_dw.block<1, 4>(k, 4 * i) = (B.col(i) * (2.0 * rm.thrust_coefficient() * w)).transpose();  // T = k w^2
+        dF_dw_.block<1, 4>(k, 4 * i) = (B.col(i) * (2.0 * rm.thrust_coefficient() * w)).transpose();  // T = k w^2
       }
     }
   }
 
   // Simulated flights of the plan (closed_loop_flights > 0): the regressor series of
   // each (its true states processed as a log), and its residual for the closed-loop term.
-  std::vector<std::shared_ptr<const RegressionSignals>> flown;
-  std::vector<std::array<Vec4, 2>> flown_w2;  // squared row weights of LS and FMLS on each flight's log
-  if (opt.closed_loop_flights > 0) {
-    SimulationOptions so = flight_options(opt);
+  void fly_plan() {
+    if (opt_.closed_loop_flights <= 0) return;
+    SimulationOptions so = flight_options(opt_);
     so.record_truth = true;
     // The rotor noise only reaches the log (the flight is the same): it is there for the row weights.
-    so.rotor_noise = opt.weight_rows ? opt.rotor_noise : 0.0;
+    so.rotor_noise = opt_.weight_rows ? opt_.rotor_noise : 0.0;
     // The flights are independent (each its own seed): on every core.
-    flown.resize(static_cast<size_t>(opt.closed_loop_flights));
-    flown_w2.resize(static_cast<size_t>(opt.closed_loop_flights));
-    detail::parallel_for(opt.closed_loop_flights, 0, [&](int f) {
+    flown_.resize(static_cast<size_t>(opt_.closed_loop_flights));
+    flown_w2_.resize(static_cast<size_t>(opt_.closed_loop_flights));
+    detail::parallel_for(opt_.closed_loop_flights, 0, [&](int f) {
       SimulationOptions sf = so;
       sf.sensors.seed = static_cast<std::uint64_t>(f + 1);
-      const SimulationResult flight = [&] {
-        try {
-          return simulate(traj, sf);
-        } catch (const SimulationDiverged& e) {
-          throw InputError(fmt::format(
-              "predicted precision: the simulated flight of {} diverged at t = {:.3f} s ({}): the vehicle cannot fly "
-              "this plan with its controller; --closed-loop-flights 0 leaves the closed-loop term out",
-              traj.describe(), e.time(), e.reason()));
-        }
-      }();
-      if (flight.truth.rows() != n) throw std::logic_error("precision: a simulated flight of another length");
-      flown[static_cast<size_t>(f)] = row_signals(flight.truth, opt.processing, f_force, f_moment);
+      const SimulationResult flight = fly(sf);
+      if (flight.truth.rows() != n_) throw std::logic_error("precision: a simulated flight of another length");
+      flown_[static_cast<size_t>(f)] = row_signals(flight.truth, opt_.processing, f_force_, f_moment_);
       std::array<Vec4, 2> w2{Vec4::Ones(), Vec4::Ones()};
-      if (opt.weight_rows) {
-        // The weights identify gives this flight's log: the real-flight regression with
-        // its row weighting alone (extended.cpp: three passes, 1 / residual RMS per row).
-        ExtendedOptions xo;
-        xo.processing = opt.processing;
-        xo.force_cutoff_hz = f_force;
-        xo.moment_cutoff_hz = f_moment;
-        xo.window = opt.window;
-        xo.lambda = opt.lambda;
-        xo.gd_variant = opt.gd_variant;
-        xo.terms.weight_rows = true;
-        xo.reference = opt.params;
-        const ExtendedResult x =
-            identify_extended(sf.rotors ? with_rotor_wrench(flight.log, *sf.rotors) : flight.log, xo);
-        for (int m = 0; m < 2; ++m)
-          w2[static_cast<size_t>(m)] = x.estimates[static_cast<size_t>(m)].row_weight.cwiseAbs2();
-      }
-      flown_w2[static_cast<size_t>(f)] = w2;
+      if (opt_.weight_rows) w2 = flown_row_weights(flight, sf);
+      flown_w2_[static_cast<size_t>(f)] = w2;
     });
   }
 
-  signal::LowpassOptions lp_force = opt.processing.lowpass, lp_moment = opt.processing.lowpass;
-  lp_force.cutoff_hz = f_force;
-  lp_moment.cutoff_hz = f_moment;
-  const bool two_cutoffs = f_force != f_moment;
-  PrecisionResult res;
-  res.trajectory = traj.describe();
-  res.regression = opt.weight_rows ? "real-flight, rows weighted by 1/residual RMS" : "paper";
-  res.regression += two_cutoffs
-                        ? fmt::format(" (force row pre-filtered at {:g} Hz, moment rows at {:g} Hz)", f_force, f_moment)
-                        : fmt::format(" (pre-filter {:g} Hz)", f_force);
-  res.truth = theta;
-  res.sources = {"position", "yaw", "attitude", "gyro", rotor_mode ? "rotor" : "wrench", "closed loop"};
-  const Theta scale = relative_error_scale(theta);
-  const double alpha = std::exp(-opt.lambda * T), one_minus = -std::expm1(-opt.lambda * T);
-  const double c = (opt.gd_variant == signal::GdVariant::Printed) ? opt.lambda : one_minus / T;
+  // One simulated flight; a divergence is the plan's fault, said as such.
+  SimulationResult fly(const SimulationOptions& sf) const {
+    try {
+      return simulate(traj_, sf);
+    } catch (const SimulationDiverged& e) {
+      throw InputError(fmt::format(
+          "predicted precision: the simulated flight of {} diverged at t = {:.3f} s ({}): the vehicle cannot fly "
+          "this plan with its controller; --closed-loop-flights 0 leaves the closed-loop term out",
+          traj_.describe(), e.time(), e.reason()));
+    }
+  }
+
+  // The weights identify gives this flight's log: the real-flight regression with
+  // its row weighting alone (extended.cpp: three passes, 1 / residual RMS per row).
+  std::array<Vec4, 2> flown_row_weights(const SimulationResult& flight, const SimulationOptions& sf) const {
+    ExtendedOptions xo;
+    xo.processing = opt_.processing;
+    xo.force_cutoff_hz = f_force_;
+    xo.moment_cutoff_hz = f_moment_;
+    xo.window = opt_.window;
+    xo.lambda = opt_.lambda;
+    xo.gd_variant = opt_.gd_variant;
+    xo.terms.weight_rows = true;
+    xo.reference = opt_.params;
+    const ExtendedResult x = identify_extended(sf.rotors ? with_rotor_wrench(flight.log, *sf.rotors) : flight.log, xo);
+    std::array<Vec4, 2> w2;
+    for (int m = 0; m < 2; ++m)
+      w2[static_cast<size_t>(m)] = x.estimates[static_cast<size_t>(m)].row_weight.cwiseAbs2();
+    return w2;
+  }
+
+  // The pre-filters of the force row and of the moment rows.
+  void prefilters() {
+    lp_force_ = opt_.processing.lowpass;
+    lp_moment_ = opt_.processing.lowpass;
+    lp_force_.cutoff_hz = f_force_;
+    lp_moment_.cutoff_hz = f_moment_;
+    two_cutoffs_ = f_force_ != f_moment_;
+  }
+
+  // The result's description: the plan, the regression, the truth and the noise sources.
+  PrecisionResult described() const {
+    PrecisionResult res;
+    res.trajectory = traj_.describe();
+    res.regression = opt_.weight_rows ? "real-flight, rows weighted by 1/residual RMS" : "paper";
+    res.regression += two_cutoffs_
+                          ? fmt::format(" (force row pre-filtered at {:g} Hz, moment rows at {:g} Hz)", f_force_, f_moment_)
+                          : fmt::format(" (pre-filter {:g} Hz)", f_force_);
+    res.truth = theta_;
+    res.sources = {"position", "yaw", "attitude", "gyro", rotor_mode_ ? "rotor" : "wrench", "closed loop"};
+    return res;
+  }
 
   // The linear part for one regressor series S with P = (sum S.G^T W^2 S.G)^-1 (the
   // weights P Gamma_k^T W^2): the covariance of each noise source 0..4.
-  auto linear_part = [&](RegressionModel model, const RegressorSeries& S, const Mat7& P) {
-    // Weight series on the processed signals: columns [a(4) b(7) y(4)] x 7 parameters.
-    // Every row in the window is written below; only those outside need zeros.
-    // Rows are computed kBlock at a time into a row-major buffer, then stored
-    // column by column: row k of a column-major n x 105 matrix spans 105 pages,
-    // and writing it sample by sample cost 5x the arithmetic.
-    Eigen::MatrixXd U(n, 15 * 7);
+  std::array<Mat7, 5> linear_part(RegressionModel model, const RegressorSeries& S, const Mat7& P) const {
+    Eigen::MatrixXd U = signal_weights(S, P);
+    regression_adjoint(model, U);
+    const Eigen::MatrixXd Z = input_weights(U);
+    return by_source(Z);
+  }
+
+  // Weight series on the processed signals: columns [a(4) b(7) y(4)] x 7 parameters.
+  // Every row in the window is written below; only those outside need zeros.
+  // Rows are computed kBlock at a time into a row-major buffer, then stored
+  // column by column: row k of a column-major n x 105 matrix spans 105 pages,
+  // and writing it sample by sample cost 5x the arithmetic.
+  Eigen::MatrixXd signal_weights(const RegressorSeries& S, const Mat7& P) const {
+    Eigen::MatrixXd U(n_, 15 * 7);
     U.topRows(S.begin).setZero();
-    U.bottomRows(n - S.end).setZero();
+    U.bottomRows(n_ - S.end).setZero();
     RowBlock buf(kBlock, 15 * 7);
     for (Eigen::Index b0 = S.begin; b0 < S.end; b0 += kBlock) {
       const Eigen::Index nb = std::min<Eigen::Index>(kBlock, S.end - b0);
@@ -427,34 +479,57 @@ PrecisionResult predict_precision(const Trajectory& traj, const PrecisionOptions
         const auto k = static_cast<size_t>(b0 + r);
         const Eigen::Matrix<double, 7, 4> Q = P * S.G[k].transpose() * S.w2.asDiagonal();
         Eigen::Matrix<double, 7, 15> V;
-        V << Q * Ma, Q * Mb, -Q;
+        V << Q * Ma_, Q * Mb_, -Q;
         for (int s = 0; s < 15; ++s) buf.block<1, 7>(r, 7 * s) = V.col(s).transpose();
       }
       store_rows(buf, nb, U, b0);
     }
-    // Adjoint of the regression's operators on a, b and y.
+    return U;
+  }
+
+  // Adjoint of the regression's operators on a, b and y.
+  void regression_adjoint(RegressionModel model, Eigen::MatrixXd& U) const {
     for (int col = 0; col < 15 * 7; ++col) {
       double* u = U.col(col).data();
       const bool is_a = col < 4 * 7;
       if (model == RegressionModel::Standard) {
-        if (is_a) difference_adjoint(u, n, T);  // a = D [w p q r], eq. (33)
-      } else if (is_a) {                       // a = g_D x = c (x - f_D x), eq. (36)
+        if (is_a) difference_adjoint(u, n_, T_);  // a = D [w p q r], eq. (33)
+      } else if (is_a) {                         // a = g_D x = c (x - f_D x), eq. (36)
         Eigen::VectorXd f = U.col(col);
-        fD_adjoint(f.data(), n, alpha, one_minus);
-        U.col(col) = c * (U.col(col) - f);
-      } else {                                 // b = f_D x, y = f_D F, eq. (35)
-        fD_adjoint(u, n, alpha, one_minus);
+        fD_adjoint(f.data(), n_, alpha_, one_minus_);
+        U.col(col) = c_ * (U.col(col) - f);
+      } else {                                   // b = f_D x, y = f_D F, eq. (35)
+        fD_adjoint(u, n_, alpha_, one_minus_);
       }
     }
-    // Through J_k onto the 13 pre-filtered inputs, then the pre-filter's adjoint
-    // (filtfilt is symmetric: H^T = H away from the edges, which the window leaves out).
-    // With two cutoffs the force row's signals and the others come from inputs filtered
-    // by each filter: Z = H_F^T (V_F J)^T + H_M^T (V_M J)^T.
-    Eigen::MatrixXd Z(n, kIn * 7), Zm;  // every row written below, kBlock at a time as U
-    if (two_cutoffs) Zm.resize(n, kIn * 7);
-    RowBlock zbuf(kBlock, kIn * 7), zmbuf(two_cutoffs ? kBlock : 0, kIn * 7);
-    for (Eigen::Index b0 = 0; b0 < n; b0 += kBlock) {
-      const Eigen::Index nb = std::min<Eigen::Index>(kBlock, n - b0);
+  }
+
+  // Through J_k onto the 13 pre-filtered inputs, then the pre-filter's adjoint
+  // (filtfilt is symmetric: H^T = H away from the edges, which the window leaves out).
+  // With two cutoffs the force row's signals and the others come from inputs filtered
+  // by each filter: Z = H_F^T (V_F J)^T + H_M^T (V_M J)^T.
+  Eigen::MatrixXd input_weights(const Eigen::MatrixXd& U) const {
+    Eigen::MatrixXd Z(n_, kIn * 7), Zm;  // every row written below, kBlock at a time as U
+    if (two_cutoffs_) Zm.resize(n_, kIn * 7);
+    jacobian_adjoint(U, Z, Zm);
+    // Filters of this call's own (their work space is per object: linear_part runs on
+    // several threads), each applied to all its columns at once (same bits as one by one).
+    signal::ZeroPhaseFilter zf_force(lp_force_, opt_.rate);
+    filter_adjoint(Z, zf_force);
+    if (two_cutoffs_) {
+      signal::ZeroPhaseFilter zf_moment(lp_moment_, opt_.rate);
+      filter_adjoint(Zm, zf_moment);
+      Z += Zm;
+    }
+    return Z;
+  }
+
+  // Z = (V J)^T row by row (Zm: the moment filter's part, with two cutoffs).
+  void jacobian_adjoint(const Eigen::MatrixXd& U, Eigen::MatrixXd& Z, Eigen::MatrixXd& Zm) const {
+    RowBlock buf(kBlock, 15 * 7);
+    RowBlock zbuf(kBlock, kIn * 7), zmbuf(two_cutoffs_ ? kBlock : 0, kIn * 7);
+    for (Eigen::Index b0 = 0; b0 < n_; b0 += kBlock) {
+      const Eigen::Index nb = std::min<Eigen::Index>(kBlock, n_ - b0);
       load_rows(U, b0, nb, buf);
       for (Eigen::Index r = 0; r < nb; ++r) {
         const auto k = static_cast<size_t>(b0 + r);
@@ -462,10 +537,10 @@ PrecisionResult predict_precision(const Trajectory& traj, const PrecisionOptions
         for (int s = 0; s < 15; ++s) V.col(s) = buf.block<1, 7>(r, 7 * s).transpose();
         if (V.isZero(0.0)) {
           zbuf.row(r).setZero();
-          if (two_cutoffs) zmbuf.row(r).setZero();
+          if (two_cutoffs_) zmbuf.row(r).setZero();
           continue;
         }
-        if (two_cutoffs) {
+        if (two_cutoffs_) {
           Vm.setZero();
           for (int s = 0; s < 15; ++s)
             if (!is_force_signal(s)) {
@@ -473,161 +548,206 @@ PrecisionResult predict_precision(const Trajectory& traj, const PrecisionOptions
               V.col(s).setZero();
             }
         }
-        const Eigen::Matrix<double, 7, kIn> W = sparse_product(V, J[k]);
+        const Eigen::Matrix<double, 7, kIn> W = sparse_product(V, J_[k]);
         for (int i = 0; i < kIn; ++i) zbuf.block<1, 7>(r, 7 * i) = W.col(i).transpose();
-        if (two_cutoffs) {
-          const Eigen::Matrix<double, 7, kIn> Wm = sparse_product(Vm, J[k]);
+        if (two_cutoffs_) {
+          const Eigen::Matrix<double, 7, kIn> Wm = sparse_product(Vm, J_[k]);
           for (int i = 0; i < kIn; ++i) zmbuf.block<1, 7>(r, 7 * i) = Wm.col(i).transpose();
         }
       }
       store_rows(zbuf, nb, Z, b0);
-      if (two_cutoffs) store_rows(zmbuf, nb, Zm, b0);
+      if (two_cutoffs_) store_rows(zmbuf, nb, Zm, b0);
     }
-    // Filters of this call's own (their work space is per object: linear_part runs on
-    // several threads), each applied to all its columns at once (same bits as one by one).
-    signal::ZeroPhaseFilter zf_force(lp_force, opt.rate);
-    auto filter_columns = [&](Eigen::MatrixXd& M, signal::ZeroPhaseFilter& zf) {
-      std::vector<double*> cols(static_cast<size_t>(kIn * 7));
-      for (int col = 0; col < kIn * 7; ++col) {
-        cols[static_cast<size_t>(col)] = M.col(col).data();
-        if (col < 3 * 7) difference_adjoint(M.col(col).data(), n, T);  // p_dot = D H x, eq. (33)
-      }
-      zf.apply(cols.data(), kIn * 7, n);
-    };
-    filter_columns(Z, zf_force);
-    if (two_cutoffs) {
-      signal::ZeroPhaseFilter zf_moment(lp_moment, opt.rate);
-      filter_columns(Zm, zf_moment);
-      Z += Zm;
-    }
+  }
 
+  // The pre-filter's adjoint on every column of M, after the difference's on p_dot's.
+  void filter_adjoint(Eigen::MatrixXd& M, signal::ZeroPhaseFilter& zf) const {
+    std::vector<double*> cols(static_cast<size_t>(kIn * 7));
+    for (int col = 0; col < kIn * 7; ++col) {
+      cols[static_cast<size_t>(col)] = M.col(col).data();
+      if (col < 3 * 7) difference_adjoint(M.col(col).data(), n_, T_);  // p_dot = D H x, eq. (33)
+    }
+    zf.apply(cols.data(), kIn * 7, n_);
+  }
+
+  // The covariance of each noise source from the weights Z on the raw inputs.
+  std::array<Mat7, 5> by_source(const Eigen::MatrixXd& Z) const {
     std::array<Mat7, 5> by{};
     for (auto& m : by) m.setZero();
-    // sigma^2 sum_blocks (sum_{k in block} g_k)(...)^T for one input held at `rate`.
     auto add = [&](int src, const Eigen::Ref<const Eigen::MatrixXd>& g, double sigma, double rate) {
-      if (!(sigma > 0.0)) return;
-      Mat7 C = Mat7::Zero();
-      Theta s = Theta::Zero();
-      long long blk = held_index(0, rate, opt.rate);
-      for (Eigen::Index k = 0; k < n; ++k) {
-        const long long b = held_index(k, rate, opt.rate);
-        if (b != blk) {
-          C.noalias() += s * s.transpose();
-          s.setZero();
-          blk = b;
-        }
-        s += g.row(k).transpose();
-      }
-      C.noalias() += s * s.transpose();
-      by[static_cast<size_t>(src)] += sigma * sigma * C;
+      if (sigma > 0.0) by[static_cast<size_t>(src)] += sigma * sigma * held_sum(g, rate);
     };
     auto input = [&](int i) { return Z.middleCols(7 * i, 7); };
-    const NoiseSigmas& ns = opt.sensors.noise;
-    for (int i = 0; i < 3; ++i) add(0, input(kPdot + i), ns.position, opt.sensors.mocap_rate);
-    add(1, input(kEta + 2), ns.yaw, opt.sensors.mocap_rate);
-    for (int i = 0; i < 2; ++i) add(2, input(kEta + i), ns.attitude, opt.sensors.imu_rate);
-    for (int i = 0; i < 3; ++i) add(3, input(kOmega + i), ns.gyro, opt.sensors.imu_rate);
-    if (rotor_mode) {
-      for (Eigen::Index i = 0; i < dF_dw.cols() / 4; ++i) {
-        Eigen::MatrixXd g = Eigen::MatrixXd::Zero(n, 7);
-        for (Eigen::Index k = 0; k < n; ++k)
-          for (int j = 0; j < 4; ++j) g.row(k) += dF_dw(k, 4 * i + j) * Z.block<1, 7>(k, 7 * (kF + j));
-        add(4, g, opt.rotor_noise, opt.rate);  // white on each logged sample (simulation/simulate.cpp)
+    const NoiseSigmas& ns = opt_.sensors.noise;
+    for (int i = 0; i < 3; ++i) add(0, input(kPdot + i), ns.position, opt_.sensors.mocap_rate);
+    add(1, input(kEta + 2), ns.yaw, opt_.sensors.mocap_rate);
+    for (int i = 0; i < 2; ++i) add(2, input(kEta + i), ns.attitude, opt_.sensors.imu_rate);
+    for (int i = 0; i < 3; ++i) add(3, input(kOmega + i), ns.gyro, opt_.sensors.imu_rate);
+    if (rotor_mode_) {
+      for (Eigen::Index i = 0; i < dF_dw_.cols() / 4; ++i) {
+        Eigen::MatrixXd g = Eigen::MatrixXd::Zero(n_, 7);
+        for (Eigen::Index k = 0; k < n_; ++k)
+          for (int j = 0; j < 4; ++j) g.row(k) += dF_dw_(k, 4 * i + j) * Z.block<1, 7>(k, 7 * (kF + j));
+        add(4, g, opt_.rotor_noise, opt_.rate);  // white on each logged sample (simulation/simulate.cpp)
       }
     } else {
-      for (int j = 0; j < 4; ++j) add(4, input(kF + j), opt.wrench_noise(j), opt.rate);
+      for (int j = 0; j < 4; ++j) add(4, input(kF + j), opt_.wrench_noise(j), opt_.rate);
     }
     return by;
-  };
+  }
 
-  for (int m = 0; m < 2; ++m) {
+  // sum_blocks (sum_{k in block} g_k)(...)^T for one input held at `rate` (times
+  // sigma^2 it is that input's covariance).
+  Mat7 held_sum(const Eigen::Ref<const Eigen::MatrixXd>& g, double rate) const {
+    Mat7 C = Mat7::Zero();
+    Theta s = Theta::Zero();
+    long long blk = held_index(0, rate, opt_.rate);
+    for (Eigen::Index k = 0; k < n_; ++k) {
+      const long long b = held_index(k, rate, opt_.rate);
+      if (b != blk) {
+        C.noalias() += s * s.transpose();
+        s.setZero();
+        blk = b;
+      }
+      s += g.row(k).transpose();
+    }
+    C.noalias() += s * s.transpose();
+    return C;
+  }
+
+  // The predicted covariance of set m (0: LS, 1: FMLS), by source and in all.
+  void predict_set(int m, PrecisionResult& res) const {
     const RegressionModel model = m == 0 ? RegressionModel::Standard : RegressionModel::Filtered;
-    const Regression reg(signals, model, opt.window, opt.lambda, opt.gd_variant);
+    const Regression reg(signals_, model, opt_.window, opt_.lambda, opt_.gd_variant);
     const std::string what = fmt::format("{} regression along {}", to_string(model), res.trajectory);
     PredictedSet& out = res.sets[static_cast<size_t>(m)];
     out.name = m == 0 ? "LS" : "FMLS";
     out.variance_by_source = Eigen::Matrix<double, 7, Eigen::Dynamic>::Zero(7, 6);
     Mat7 cov = Mat7::Zero();
-    if (flown.empty()) {
-      // The information along the reference itself.
-      const RegressorSeries S = regressor_series(reg, n, theta, Vec4::Ones());
-      const Mat7 P = information_inverse(S.A, &out.condition, what);
-      const auto by = linear_part(model, S, P);
-      for (int src = 0; src < 5; ++src) {
-        cov += by[static_cast<size_t>(src)];
-        out.variance_by_source.col(src) = by[static_cast<size_t>(src)].diagonal();
-      }
-    } else {
-      // Each flight's own regressor series: the vehicle flies the plan plus the jitter
-      // its sensors' noise drives through the controller, and that jitter excites the
-      // regression too (for a small vehicle, or an axis the plan barely moves, it adds
-      // much of the information). The estimate of a flight uses that flight's
-      // information, so the covariances are averaged over the flights.
-      // Per flight on every core; the sums below run in flight order, so the result is
-      // the same bits whatever the thread count.
-      const int nf = static_cast<int>(flown.size());
-      std::vector<RegressorSeries> S(flown.size());
-      detail::parallel_for(nf, 0, [&](int f) {
-        const auto fs = static_cast<size_t>(f);
-        S[fs] = regressor_series(Regression(flown[fs], model, opt.window, opt.lambda, opt.gd_variant), n, theta,
-                                 flown_w2[fs][static_cast<size_t>(m)]);
-      });
-      Mat7 A_mean = Mat7::Zero();
-      for (size_t f = 0; f < S.size(); ++f) A_mean += S[f].A / static_cast<double>(flown.size());
-      information_inverse(A_mean, &out.condition, what + " (as flown)");
-      // Closed loop: the influence P_f Gamma_f,k^T e_f,k of each flight's residual on its
-      // true states, less its mean over the flights at the same sample (which removes
-      // what every flight shares: the processing's deterministic error and the mean of
-      // the second-order terms, a bias); its HAC covariance (the uncertainty code's
-      // estimator, docs/uncertainty.md) is the second-order spread of the jitter.
-      std::vector<Mat7> P(S.size());
-      std::vector<Eigen::MatrixXd> psi(S.size());
-      Eigen::MatrixXd psi_mean = Eigen::MatrixXd::Zero(n, 7);
-      for (size_t f = 0; f < S.size(); ++f) {
-        P[f] = information_inverse(S[f].A, nullptr, what + " (as flown)");
-        psi[f] = Eigen::MatrixXd::Zero(n, 7);
-        for (Eigen::Index k = S[f].begin; k < S[f].end; ++k)
-          psi[f].row(k) = (P[f] * S[f].G[static_cast<size_t>(k)].transpose() * S[f].w2.asDiagonal() *
-                           S[f].e.row(k).transpose()).transpose();
-        psi_mean += psi[f] / static_cast<double>(S.size());
-      }
-      std::vector<std::array<Mat7, 5>> by_flight(S.size());
-      std::vector<Mat7> cl_flight(S.size());
-      detail::parallel_for(nf, 0, [&](int fi) {
-        const auto f = static_cast<size_t>(fi);
-        by_flight[f] = linear_part(model, S[f], P[f]);
-        std::vector<double> d;
-        d.reserve(static_cast<size_t>(7 * (S[f].end - S[f].begin)));
-        for (Eigen::Index k = S[f].begin; k < S[f].end; ++k)
-          for (int j = 0; j < 7; ++j) d.push_back(psi[f](k, j) - psi_mean(k, j));
-        cl_flight[f] = long_run_covariance(d, 7, UncertaintyOptions{}).covariance;
-      });
-      Mat7 C_cl = Mat7::Zero();
-      for (size_t f = 0; f < S.size(); ++f) {
-        for (int src = 0; src < 5; ++src) {
-          const Mat7 C = by_flight[f][static_cast<size_t>(src)] / static_cast<double>(S.size());
-          cov += C;
-          out.variance_by_source.col(src) += C.diagonal();
-        }
-        C_cl += cl_flight[f];
-      }
-      // sum_f (d_f d_f^T) / (F - 1) estimates one flight's covariance (d_f = e_f - mean).
-      C_cl /= static_cast<double>(std::max<size_t>(1, S.size() - 1));
-      out.variance_by_source.col(5) = C_cl.diagonal();
-      out.closed_loop_std_error = C_cl.diagonal().cwiseSqrt();
+    if (flown_.empty()) {
+      reference_covariance(model, reg, what, out, cov);
       out.linear_std_error = cov.diagonal().cwiseSqrt();
-      cov += C_cl;
+    } else {
+      flown_covariance(model, m, what, out, cov);
     }
-    if (flown.empty()) out.linear_std_error = cov.diagonal().cwiseSqrt();
     out.covariance = cov;
     out.std_error = cov.diagonal().cwiseSqrt();
-    out.relative = out.std_error.cwiseQuotient(scale);
+    out.relative = out.std_error.cwiseQuotient(relative_error_scale(theta_));
     if (m == 0) {
       res.samples = reg.size();
       res.window = reg.window();
     }
   }
-  return res;
+
+  // The information along the reference itself.
+  void reference_covariance(RegressionModel model, const Regression& reg, const std::string& what, PredictedSet& out,
+                            Mat7& cov) const {
+    const RegressorSeries S = regressor_series(reg, n_, theta_, Vec4::Ones());
+    const Mat7 P = information_inverse(S.A, &out.condition, what);
+    const auto by = linear_part(model, S, P);
+    for (int src = 0; src < 5; ++src) {
+      cov += by[static_cast<size_t>(src)];
+      out.variance_by_source.col(src) = by[static_cast<size_t>(src)].diagonal();
+    }
+  }
+
+  // Each flight's own regressor series: the vehicle flies the plan plus the jitter
+  // its sensors' noise drives through the controller, and that jitter excites the
+  // regression too (for a small vehicle, or an axis the plan barely moves, it adds
+  // much of the information). The estimate of a flight uses that flight's
+  // information, so the covariances are averaged over the flights.
+  // Per flight on every core; the sums below run in flight order, so the result is
+  // the same bits whatever the thread count.
+  void flown_covariance(RegressionModel model, int m, const std::string& what, PredictedSet& out, Mat7& cov) const {
+    const int nf = static_cast<int>(flown_.size());
+    std::vector<RegressorSeries> S(flown_.size());
+    detail::parallel_for(nf, 0, [&](int f) {
+      const auto fs = static_cast<size_t>(f);
+      S[fs] = regressor_series(Regression(flown_[fs], model, opt_.window, opt_.lambda, opt_.gd_variant), n_, theta_,
+                               flown_w2_[fs][static_cast<size_t>(m)]);
+    });
+    Mat7 A_mean = Mat7::Zero();
+    for (size_t f = 0; f < S.size(); ++f) A_mean += S[f].A / static_cast<double>(flown_.size());
+    information_inverse(A_mean, &out.condition, what + " (as flown)");
+    std::vector<Mat7> P(S.size());
+    std::vector<Eigen::MatrixXd> psi(S.size());
+    Eigen::MatrixXd psi_mean;
+    residual_influence(S, what, P, psi, psi_mean);
+    std::vector<std::array<Mat7, 5>> by_flight(S.size());
+    std::vector<Mat7> cl_flight(S.size());
+    detail::parallel_for(nf, 0, [&](int fi) {
+      const auto f = static_cast<size_t>(fi);
+      by_flight[f] = linear_part(model, S[f], P[f]);
+      std::vector<double> d;
+      d.reserve(static_cast<size_t>(7 * (S[f].end - S[f].begin)));
+      for (Eigen::Index k = S[f].begin; k < S[f].end; ++k)
+        for (int j = 0; j < 7; ++j) d.push_back(psi[f](k, j) - psi_mean(k, j));
+      cl_flight[f] = long_run_covariance(d, 7, UncertaintyOptions{}).covariance;
+    });
+    Mat7 C_cl = Mat7::Zero();
+    for (size_t f = 0; f < S.size(); ++f) {
+      for (int src = 0; src < 5; ++src) {
+        const Mat7 C = by_flight[f][static_cast<size_t>(src)] / static_cast<double>(S.size());
+        cov += C;
+        out.variance_by_source.col(src) += C.diagonal();
+      }
+      C_cl += cl_flight[f];
+    }
+    // sum_f (d_f d_f^T) / (F - 1) estimates one flight's covariance (d_f = e_f - mean).
+    C_cl /= static_cast<double>(std::max<size_t>(1, S.size() - 1));
+    out.variance_by_source.col(5) = C_cl.diagonal();
+    out.closed_loop_std_error = C_cl.diagonal().cwiseSqrt();
+    out.linear_std_error = cov.diagonal().cwiseSqrt();
+    cov += C_cl;
+  }
+
+  // Closed loop: the influence P_f Gamma_f,k^T e_f,k of each flight's residual on its
+  // true states, less its mean over the flights at the same sample (which removes
+  // what every flight shares: the processing's deterministic error and the mean of
+  // the second-order terms, a bias); its HAC covariance (the uncertainty code's
+  // estimator, docs/uncertainty.md) is the second-order spread of the jitter.
+  void residual_influence(const std::vector<RegressorSeries>& S, const std::string& what, std::vector<Mat7>& P,
+                          std::vector<Eigen::MatrixXd>& psi, Eigen::MatrixXd& psi_mean) const {
+    psi_mean = Eigen::MatrixXd::Zero(n_, 7);
+    for (size_t f = 0; f < S.size(); ++f) {
+      P[f] = information_inverse(S[f].A, nullptr, what + " (as flown)");
+      psi[f] = Eigen::MatrixXd::Zero(n_, 7);
+      for (Eigen::Index k = S[f].begin; k < S[f].end; ++k)
+        psi[f].row(k) = (P[f] * S[f].G[static_cast<size_t>(k)].transpose() * S[f].w2.asDiagonal() *
+                         S[f].e.row(k).transpose()).transpose();
+      psi_mean += psi[f] / static_cast<double>(S.size());
+    }
+  }
+
+  const Trajectory& traj_;
+  const PrecisionOptions& opt_;
+  const double T_;        // s, the log's sample period
+  const Eigen::Index n_;  // samples of the planned flight
+  const Theta theta_;     // the true parameters
+  // f_D's recursion s_k = alpha s_{k-1} + (1 - alpha) x_{k-1} and g_D's factor c (eqs. 35-36).
+  const double alpha_, one_minus_, c_;
+  FlightLog log_;                // noise-free log of the reference
+  std::vector<Reference> ref_;   // its nominal states
+  Eigen::Matrix<double, Eigen::Dynamic, 4> wrench_;
+  double f_force_ = 0.0, f_moment_ = 0.0;  // Hz, the pre-filter cutoffs of the force and moment rows
+  signal::LowpassOptions lp_force_, lp_moment_;
+  bool two_cutoffs_ = false;
+  std::shared_ptr<const RegressionSignals> signals_;  // the reference's processed signals
+  Eigen::Matrix4d Ma_;
+  Eigen::Matrix<double, 4, 7> Mb_;
+  std::vector<StateJacobian> J_;
+  std::vector<std::pair<int, int>> j_nonzero_;  // (s, i), by i then s
+  bool rotor_mode_ = false;
+  Eigen::MatrixXd dF_dw_;
+  std::vector<std::shared_ptr<const RegressionSignals>> flown_;
+  std::vector<std::array<Vec4, 2>> flown_w2_;  // squared row weights of LS and FMLS on each flight's log
+};
+
+}  // namespace
+
+PrecisionResult predict_precision(const Trajectory& traj, const PrecisionOptions& opt) {
+  opt.validate();
+  return PrecisionRun(traj, opt).run();
 }
 
 std::string format_precision(const PrecisionResult& r) {

@@ -57,9 +57,12 @@ void ProcessingOptions::validate() const {
   // lowpass is validated against the log's sample rate in process_log.
 }
 
-std::shared_ptr<const RegressionSignals> process_log(const FlightLog& log, const ProcessingOptions& opt,
-                                                     ProcessingSummary* summary) {
-  opt.validate();
+namespace {
+
+using SignalColumns = Eigen::Matrix<double, Eigen::Dynamic, RegressionSignals::kCols>;
+
+// The log's columns of the standard names, in their order; every one must be there.
+std::vector<int> standard_columns(const FlightLog& log) {
   const auto& names = standard_log_columns();  // t x y z phi theta psi p q r Fz tau_phi tau_theta tau_psi
   std::vector<int> col(names.size());
   std::vector<std::string> missing;
@@ -68,6 +71,13 @@ std::shared_ptr<const RegressionSignals> process_log(const FlightLog& log, const
   if (!missing.empty())
     throw InputError(fmt::format("flight log: missing column(s) {} (has: {})", fmt::join(missing, ", "),
                                  fmt::join(log.columns, ",")));
+  return col;
+}
+
+// The filters' period: the mean step over the log, once the samples are
+// enough, finite and uniform (check_sample_period).
+double checked_period(const FlightLog& log, const std::vector<int>& col, const ProcessingOptions& opt) {
+  const auto& names = standard_log_columns();
   const Eigen::Index n = log.rows();
   if (n < 3) throw InputError(fmt::format("flight log: {} sample(s); identification needs a long log", n));
   const auto t = log.data.col(col[0]);
@@ -85,10 +95,12 @@ std::shared_ptr<const RegressionSignals> process_log(const FlightLog& log, const
         "more than the {:g}% tolerated; the log must be uniformly sampled",
         k + 1, t(k), chk.step, chk.median, 100.0 * (chk.step / chk.median - 1.0), 100.0 * opt.period_tolerance));
   }
-  const double T = chk.mean;  // the filters' period: the mean step over the log
-  const double fs = 1.0 / T;
-  // The pre-filter (second-order sections or FIR); refused, naming it, when it
-  // is invalid at this rate or cannot be realised stably.
+  return chk.mean;
+}
+
+// The pre-filter (second-order sections or FIR); refused, naming it, when it
+// is invalid at this rate or cannot be realised stably, or longer than the log.
+signal::ZeroPhaseFilter prefilter(const ProcessingOptions& opt, Eigen::Index n, double T, double fs) {
   signal::ZeroPhaseFilter zf = [&] {
     try {
       return signal::ZeroPhaseFilter(opt.lowpass, fs);
@@ -102,34 +114,33 @@ std::shared_ptr<const RegressionSignals> process_log(const FlightLog& log, const
         "flight log: {} samples ({:g} s at {:g} Hz) is shorter than the {} pre-filter needs (more than {} samples "
         "of edge padding)",
         n, static_cast<double>(n - 1) * T, fs, opt.lowpass.name(), padlen));
-  const double settling = settling_time(zf, T);
-  if (summary) {
-    summary->filter_settling = settling;
-    summary->samples = n;
-    summary->T = T;
-    summary->fs = fs;
-    summary->duration = static_cast<double>(n - 1) * T;
-    summary->filter = opt.lowpass.name();
-    summary->padlen = padlen;
-    summary->filter_f3db = zero_phase_f3db(zf, fs);
-  }
+  return zf;
+}
 
-  // Everything happens inside the 15 columns of the result (see the header for
-  // the final layout); the columns that end up holding products first hold the
-  // filtered position (5-7, then p_dot) and attitude (8-10). Row k is read
-  // before it is overwritten, so the last loop can work in place.
-  auto out = std::make_shared<RegressionSignals>();
-  out->t_start = t(0);
-  out->T = T;
-  out->edge = opt.exclude_edges ? settling : 0.0;
-  auto& X = out->x;
-  X.resize(n, RegressionSignals::kCols);
-  // Step 1: zero-phase low-pass (as scipy sosfiltfilt: odd padding, steady-state
-  // starts), and step 2: p_dot by eq. (33) from the filtered position. The
-  // columns are independent: rates and wrench on one thread, attitude and
-  // position on the other (each with its own filter work buffer).
-  // The columns of each half are filtered together (ZeroPhaseFilter's
-  // several-column apply: the same bits as one at a time, faster).
+// The processing as the report states it: samples, rate, the pre-filter.
+void summarize_processing(const signal::ZeroPhaseFilter& zf, const ProcessingOptions& opt, Eigen::Index n, double T,
+                          double fs, double settling, ProcessingSummary& summary) {
+  summary.filter_settling = settling;
+  summary.samples = n;
+  summary.T = T;
+  summary.fs = fs;
+  summary.duration = static_cast<double>(n - 1) * T;
+  summary.filter = opt.lowpass.name();
+  summary.padlen = zf.padlen();
+  summary.filter_f3db = zero_phase_f3db(zf, fs);
+}
+
+// Step 1: zero-phase low-pass (as scipy sosfiltfilt: odd padding, steady-state
+// starts), and step 2: p_dot by eq. (33) from the filtered position. The
+// columns are independent: rates and wrench on one thread, attitude and
+// position on the other (each with its own filter work buffer).
+// The columns of each half are filtered together (ZeroPhaseFilter's
+// several-column apply: the same bits as one at a time, faster).
+// Returns the pose columns' held samples (x y z psi phi theta).
+std::array<signal::HeldSamples, 6> filter_and_differentiate(const FlightLog& log, const std::vector<int>& col,
+                                                            const ProcessingOptions& opt, signal::ZeroPhaseFilter& zf,
+                                                            double T, double fs, SignalColumns& X) {
+  const Eigen::Index n = log.rows();
   auto filter_into = [&](signal::ZeroPhaseFilter& f, std::initializer_list<std::pair<int, int>> log_to_x) {
     std::array<double*, 7> cols{};
     int count = 0;
@@ -169,20 +180,29 @@ std::shared_ptr<const RegressionSignals> process_log(const FlightLog& log, const
     rates_and_wrench();
     attitude_and_position(zf);
   }
-  if (summary) {
-    static constexpr std::array<const char*, 6> kPose{"x", "y", "z", "psi", "phi", "theta"};
-    for (size_t i : {0, 1, 2, 4, 5, 3})  // listed x y z phi theta psi
-      if (held[i].held) {
-        summary->held_columns.emplace_back(kPose[i]);
-        const double rate = static_cast<double>(held[i].samples) / (static_cast<double>(n) * T);
-        summary->held_rate_hz = summary->held_rate_hz > 0.0 ? std::min(summary->held_rate_hz, rate) : rate;
-      }
-  }
-  // Step 3: v = R(eta)^T p_dot (eq. 3), then the Phi_b signals.
+  return held;
+}
+
+// The held pose columns and the slowest of their sensors' rates, for the report.
+void summarize_held(const std::array<signal::HeldSamples, 6>& held, Eigen::Index n, double T,
+                    ProcessingSummary& summary) {
+  static constexpr std::array<const char*, 6> kPose{"x", "y", "z", "psi", "phi", "theta"};
+  for (size_t i : {0, 1, 2, 4, 5, 3})  // listed x y z phi theta psi
+    if (held[i].held) {
+      summary.held_columns.emplace_back(kPose[i]);
+      const double rate = static_cast<double>(held[i].samples) / (static_cast<double>(n) * T);
+      summary.held_rate_hz = summary.held_rate_hz > 0.0 ? std::min(summary.held_rate_hz, rate) : rate;
+    }
+}
+
+// Step 3: v = R(eta)^T p_dot (eq. 3), then the Phi_b signals, in place.
+void body_signals(const ProcessingOptions& opt, RegressionSignals& out) {
+  auto& X = out.x;
+  const Eigen::Index n = X.rows();
   const double g = opt.g;
   if (opt.keep_body_velocity) {
-    out->uv.resize(n, 2);
-    out->world_axes.resize(n, 4);
+    out.uv.resize(n, 2);
+    out.world_axes.resize(n, 4);
   }
   for (Eigen::Index k = 0; k < n; ++k) {
     const double phi = X(k, 8), theta = X(k, 9);
@@ -193,8 +213,8 @@ std::shared_ptr<const RegressionSignals> process_log(const FlightLog& log, const
     const double p = X(k, 1), q = X(k, 2), r = X(k, 3);
     X(k, 0) = v(2);
     if (opt.keep_body_velocity) {
-      out->uv.row(k) = v.head<2>().transpose();
-      out->world_axes.row(k) << R(0, 0), R(1, 0), R(0, 1), R(1, 1);
+      out.uv.row(k) = v.head<2>().transpose();
+      out.world_axes.row(k) << R(0, 0), R(1, 0), R(0, 1), R(1, 1);
     }
     X(k, 4) = p * v(1) - q * v(0) + g * std::cos(theta) * std::cos(phi);  // eq. (7): p v - q u + g_bz
     X(k, 5) = p * q;
@@ -204,6 +224,33 @@ std::shared_ptr<const RegressionSignals> process_log(const FlightLog& log, const
     X(k, 9) = q * q;
     X(k, 10) = r * r;
   }
+}
+
+}  // namespace
+
+std::shared_ptr<const RegressionSignals> process_log(const FlightLog& log, const ProcessingOptions& opt,
+                                                     ProcessingSummary* summary) {
+  opt.validate();
+  const std::vector<int> col = standard_columns(log);
+  const Eigen::Index n = log.rows();
+  const double T = checked_period(log, col, opt);
+  const double fs = 1.0 / T;
+  signal::ZeroPhaseFilter zf = prefilter(opt, n, T, fs);
+  const double settling = settling_time(zf, T);
+  if (summary) summarize_processing(zf, opt, n, T, fs, settling, *summary);
+
+  // Everything happens inside the 15 columns of the result (see the header for
+  // the final layout); the columns that end up holding products first hold the
+  // filtered position (5-7, then p_dot) and attitude (8-10). Row k is read
+  // before it is overwritten, so the last loop can work in place.
+  auto out = std::make_shared<RegressionSignals>();
+  out->t_start = log.data(0, col[0]);
+  out->T = T;
+  out->edge = opt.exclude_edges ? settling : 0.0;
+  out->x.resize(n, RegressionSignals::kCols);
+  const std::array<signal::HeldSamples, 6> held = filter_and_differentiate(log, col, opt, zf, T, fs, out->x);
+  if (summary) summarize_held(held, n, T, *summary);
+  body_signals(opt, *out);
   return out;
 }
 

@@ -429,8 +429,10 @@ std::string conclusions_html(const Reproduction& r) {
 
 }  // namespace
 
-std::string reproduction_html(const Reproduction& r) {
-  report::HtmlDocument d("quadid: reproduction of Lopez-Sanchez et al. (IEEE Access 2020) on the virtual QBall 2");
+namespace {
+
+// The opening paragraphs: what was run, and where the conclusions are.
+void introduction(report::HtmlDocument& d, const Reproduction& r) {
   const auto& o = r.options;
   d.paragraph(fmt::format(
       "The paper's whole procedure, run on the built-in virtual QBall 2 (the plant is Table 3's LS set; the "
@@ -442,38 +444,42 @@ std::string reproduction_html(const Reproduction& r) {
       o.noise ? "noisy" : "noise-free", o.seed));
   d.raw("<p>What to conclude (which set to use, how far each is from the true plant, what the validation showed) "
         "is summed up at the end: <a href=\"#conclusions\">6. Conclusions</a>.</p>\n");
+}
 
+// 1. The excitation trajectory: its coefficients, its check and one period (Fig. 3).
+void trajectory_section(report::HtmlDocument& d, const Reproduction& r) {
   d.heading("1. Excitation trajectory (section III-B, Fig. 3)");
   d.table(coefficient_table(r.trajectory));
   d.table(check_table(r.check));
-  {
-    Plot pp, pa;
-    pp.title = "Desired position p_d(t)";
-    pp.xlabel = "time (s)";
-    pp.ylabel = "position (m)";
-    pa.title = "Desired attitude η_d(t) (eqs. 26-27)";
-    pa.xlabel = "time (s)";
-    pa.ylabel = "angle (deg)";
-    pp.width = pa.width = 620;
-    std::array<std::vector<double>, 6> y;
-    std::vector<double> t;
-    for (double s = 0.0; s <= r.trajectory.period() + 1e-9; s += 0.01) {
-      const Reference ref = reference_at(r.trajectory, s);
-      t.push_back(s);
-      for (int i = 0; i < 3; ++i) {
-        y[static_cast<size_t>(i)].push_back(ref.p(i));
-        y[static_cast<size_t>(3 + i)].push_back(ref.eta(i) * kRad2Deg);
-      }
+  Plot pp, pa;
+  pp.title = "Desired position p_d(t)";
+  pp.xlabel = "time (s)";
+  pp.ylabel = "position (m)";
+  pa.title = "Desired attitude η_d(t) (eqs. 26-27)";
+  pa.xlabel = "time (s)";
+  pa.ylabel = "angle (deg)";
+  pp.width = pa.width = 620;
+  std::array<std::vector<double>, 6> y;
+  std::vector<double> t;
+  for (double s = 0.0; s <= r.trajectory.period() + 1e-9; s += 0.01) {
+    const Reference ref = reference_at(r.trajectory, s);
+    t.push_back(s);
+    for (int i = 0; i < 3; ++i) {
+      y[static_cast<size_t>(i)].push_back(ref.p(i));
+      y[static_cast<size_t>(3 + i)].push_back(ref.eta(i) * kRad2Deg);
     }
-    const char* pn[] = {"x_d", "y_d", "z_d"};
-    const char* an[] = {"φ_d", "θ_d", "ψ_d"};
-    for (size_t i = 0; i < 3; ++i) {
-      pp.series.push_back({pn[i], t, y[i], report::color_for("", i), false, 1.8});
-      pa.series.push_back({an[i], t, y[3 + i], report::color_for("", i), false, 1.8});
-    }
-    d.figure_row({pp, pa}, "Optimized trajectories p_d(t) and η_d(t), one period (paper Fig. 3).");
   }
+  const char* pn[] = {"x_d", "y_d", "z_d"};
+  const char* an[] = {"φ_d", "θ_d", "ψ_d"};
+  for (size_t i = 0; i < 3; ++i) {
+    pp.series.push_back({pn[i], t, y[i], report::color_for("", i), false, 1.8});
+    pa.series.push_back({an[i], t, y[3 + i], report::color_for("", i), false, 1.8});
+  }
+  d.figure_row({pp, pa}, "Optimized trajectories p_d(t) and η_d(t), one period (paper Fig. 3).");
+}
 
+// 2. Table 3, its errors and the estimates' time evolution (Figs. 4-5).
+void identification_section(report::HtmlDocument& d, const Reproduction& r) {
   d.heading("2. Identification (section III-D, Table 3, Figs. 4-5)");
   d.table(table3(r));
   d.table(table3_errors(r));
@@ -483,50 +489,53 @@ std::string reproduction_html(const Reproduction& r) {
   d.figure_row({evolution_plot(r, 2), evolution_plot(r, 3), evolution_plot(r, 5)},
                "Time evolution of the estimated products of inertia (paper Fig. 5).");
   for (const auto& w : r.identification.warnings) d.paragraph("Warning: " + w);
+}
 
+// The intervals, physical consistency, recommendation and input checks, with the residuals.
+void uncertainty_section(report::HtmlDocument& d, const Reproduction& r) {
   d.heading("Uncertainty, physical consistency and the checks on the input", 3);
-  {
-    const IdentificationResult& id = r.identification;
-    d.paragraph("Standard errors and 95 % intervals of the least-squares sets (the residuals' correlation taken "
-                "into account, docs/uncertainty.md), whether each set is physically consistent (m > 0, I positive "
-                "definite, triangle inequalities), the set quadid recommends and why, and what the checks on the "
-                "input found.");
-    // pre-wrap: the columns stay aligned, the long notes wrap instead of overflowing.
-    const auto pre = [&](const std::string& text) {
-      d.raw("<pre style=\"white-space: pre-wrap\">" + report::html_escape(text) + "</pre>\n");
-    };
-    pre(format_uncertainty_table(id));
-    pre(format_consistency(id));  // ends with the recommendation and its reason
-    d.paragraph(id.input_findings.empty() ? "Checks on the input: nothing found."
-                                          : "Checks on the input:");
-    if (!id.input_findings.empty()) pre(format_findings(id.input_findings));
-    const auto rp = residual_plots(r);
-    d.figure_row({rp[0], rp[1]}, "Residuals Γθ − Υ of LS over the estimation window (standard regression, eq. 34).");
-    d.figure(rp[2], "Their power spectral density (Welch, Hann, 50 % overlap): a white residual would be flat; "
-                    "the slope shows the pre-filter's band and the correlation the intervals account for.");
-  }
+  const IdentificationResult& id = r.identification;
+  d.paragraph("Standard errors and 95 % intervals of the least-squares sets (the residuals' correlation taken "
+              "into account, docs/uncertainty.md), whether each set is physically consistent (m > 0, I positive "
+              "definite, triangle inequalities), the set quadid recommends and why, and what the checks on the "
+              "input found.");
+  // pre-wrap: the columns stay aligned, the long notes wrap instead of overflowing.
+  const auto pre = [&](const std::string& text) {
+    d.raw("<pre style=\"white-space: pre-wrap\">" + report::html_escape(text) + "</pre>\n");
+  };
+  pre(format_uncertainty_table(id));
+  pre(format_consistency(id));  // ends with the recommendation and its reason
+  d.paragraph(id.input_findings.empty() ? "Checks on the input: nothing found."
+                                        : "Checks on the input:");
+  if (!id.input_findings.empty()) pre(format_findings(id.input_findings));
+  const auto rp = residual_plots(r);
+  d.figure_row({rp[0], rp[1]}, "Residuals Γθ − Υ of LS over the estimation window (standard regression, eq. 34).");
+  d.figure(rp[2], "Their power spectral density (Welch, Hann, 50 % overlap): a white residual would be flat; "
+                  "the slope shows the pre-filter's band and the correlation the intervals account for.");
+}
 
-  d.heading("3. Validation using the identification experiment (section IV-B, Table 4, Figs. 6-9)");
-  d.table(table4(r.table4, "Table 4. Validation using the identification experiment"));
-  {
-    Plot path;
-    path.title = "Path drawn by the quadrotor (x-y plane)";
-    path.xlabel = "x (m)";
-    path.ylabel = "y (m)";
-    path.equal_aspect = true;
-    path.width = 620;
-    path.height = 520;
-    path.series.push_back({"Exp", col(r.flight.log, "x"), col(r.flight.log, "y"), "#000000", true, 1.4, 2});
-    path.series.push_back({"desired", col(r.flight.log, "x_d"), col(r.flight.log, "y_d"), kDesiredColor, false, 1.0, -1});
-    std::vector<std::string> names{r.table4.reference.name};
-    for (const auto& row : r.table4.rows) names.push_back(row.name);
-    for (size_t i = 0; i < r.table4.logs.size(); ++i)
-      if (r.table4.logs[i].rows() > 0)
-        path.series.push_back({sim_label(names[i]), col(r.table4.logs[i], "x"), col(r.table4.logs[i], "y"),
-                               report::color_for(names[i], i), false, 2.2, 0});
-    d.figure(path, "Validation using the identification experiment: path drawn by the quadrotor (paper Fig. 6); "
-                   "grey: the desired path; dashed black: the experiment, on top of the re-flights.");
-  }
+// The path flown, the desired one and each re-flight's, in the x-y plane (paper Fig. 6).
+Plot flown_path_plot(const Reproduction& r) {
+  Plot path;
+  path.title = "Path drawn by the quadrotor (x-y plane)";
+  path.xlabel = "x (m)";
+  path.ylabel = "y (m)";
+  path.equal_aspect = true;
+  path.width = 620;
+  path.height = 520;
+  path.series.push_back({"Exp", col(r.flight.log, "x"), col(r.flight.log, "y"), "#000000", true, 1.4, 2});
+  path.series.push_back({"desired", col(r.flight.log, "x_d"), col(r.flight.log, "y_d"), kDesiredColor, false, 1.0, -1});
+  std::vector<std::string> names{r.table4.reference.name};
+  for (const auto& row : r.table4.rows) names.push_back(row.name);
+  for (size_t i = 0; i < r.table4.logs.size(); ++i)
+    if (r.table4.logs[i].rows() > 0)
+      path.series.push_back({sim_label(names[i]), col(r.table4.logs[i], "x"), col(r.table4.logs[i], "y"),
+                             report::color_for(names[i], i), false, 2.2, 0});
+  return path;
+}
+
+// The experiment against each re-flight: position, orientation and control inputs (Figs. 7-9).
+void flight_comparison_figures(report::HtmlDocument& d, const Reproduction& r) {
   d.figure_row({compare_plot(r, "x", "x (m)", 1.0, "x", 500), compare_plot(r, "y", "y (m)", 1.0, "y", 500),
                 compare_plot(r, "z", "z (m)", 1.0, "z", 500)},
                "Position in experiment (dashed black) and simulations, with the desired value in grey (paper Fig. 7).");
@@ -550,11 +559,23 @@ std::string reproduction_html(const Reproduction& r) {
   d.figure_row({compare_plot(r, "tau_theta", "τ_θ (N m)", 1.0, "torque τ_θ", 620),
                 compare_plot(r, "tau_psi", "τ_ψ (N m)", 1.0, "torque τ_ψ", 620)},
                "Control inputs in experiment (dashed black) and simulations: pitch and yaw torques (paper Fig. 9).");
+}
+
+// 3. Validation on the identification experiment: Table 4, Figs. 6-9, Tables 5-6.
+void identification_flight_section(report::HtmlDocument& d, const Reproduction& r) {
+  d.heading("3. Validation using the identification experiment (section IV-B, Table 4, Figs. 6-9)");
+  d.table(table4(r.table4, "Table 4. Validation using the identification experiment"));
+  d.figure(flown_path_plot(r), "Validation using the identification experiment: path drawn by the quadrotor (paper Fig. 6); "
+                               "grey: the desired path; dashed black: the experiment, on top of the re-flights.");
+  flight_comparison_figures(d, r);
   d.table(prediction_table(select_rows(r.identification.errors_standard, {"LS", "GD"}),
                            "Table 5. Identification experiment"));
   d.table(prediction_table(select_rows(r.identification.errors_filtered, {"FMLS", "FMGD"}),
                            "Table 6. Identification experiment"));
+}
 
+// 4. Validation on the circular paths of eq. (44): Tables 7-12 and their paths.
+void circles_section(report::HtmlDocument& d, const Reproduction& r) {
   d.heading("4. Validation using different experiments: circular paths (section IV-C, Tables 7-12)");
   int table = 7;
   std::vector<Plot> paths;
@@ -575,7 +596,10 @@ std::string reproduction_html(const Reproduction& r) {
     paths.push_back(p);
   }
   d.figure_row(paths, "Paths of the circle experiments (eq. 44): flown (black) and desired (dashed).");
+}
 
+// 5. The files written beside the page.
+void files_section(report::HtmlDocument& d, const Reproduction& r) {
   d.heading("5. Files");
   d.raw("<ul><li><code>summary.json</code>: every number of this page</li>"
         "<li><code>trajectory.json</code>: the excitation trajectory (docs/file-formats.md)</li>"
@@ -587,7 +611,19 @@ std::string reproduction_html(const Reproduction& r) {
     d.raw("<li><code>flight_circle1..3.csv</code>: the circle experiments' flight logs</li>"
           "<li><code>simulation_&lt;set&gt;.csv</code>: the re-flights of Table 4</li>");
   d.raw("</ul>\n");
+}
 
+}  // namespace
+
+std::string reproduction_html(const Reproduction& r) {
+  report::HtmlDocument d("quadid: reproduction of Lopez-Sanchez et al. (IEEE Access 2020) on the virtual QBall 2");
+  introduction(d, r);
+  trajectory_section(d, r);
+  identification_section(d, r);
+  uncertainty_section(d, r);
+  identification_flight_section(d, r);
+  circles_section(d, r);
+  files_section(d, r);
   d.heading("6. Conclusions");
   d.raw(conclusions_html(r));
   return d.str();

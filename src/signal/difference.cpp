@@ -1,5 +1,6 @@
 // Numerical differentiation, section II-C step 2, eq. (33).
 #include "quadid/signal.hpp"
+#include "quadid/signal/median_step.hpp"
 
 #include <fmt/format.h>
 
@@ -10,6 +11,15 @@
 
 namespace quadid::signal {
 namespace {
+
+// The steps t[k] - t[k-1] of n >= 2 times, partly sorted (std::nth_element)
+// so that the one at size() / 2 is the upper median.
+std::vector<double> steps_about_middle(const double* t, std::size_t n) {
+  std::vector<double> steps(n - 1);
+  for (std::size_t k = 1; k < n; ++k) steps[k - 1] = t[k] - t[k - 1];
+  std::nth_element(steps.begin(), steps.begin() + static_cast<std::ptrdiff_t>(steps.size() / 2), steps.end());
+  return steps;
+}
 
 void check(Eigen::Index n, double T) {
   if (!std::isfinite(T) || T <= 0.0)
@@ -63,10 +73,8 @@ SamplePeriodCheck check_sample_period(const Eigen::Ref<const Eigen::VectorXd>& t
   if (!(tolerance >= 0.0 && tolerance < 0.5))
     throw std::invalid_argument(fmt::format("check_sample_period: tolerance={} must be in [0, 0.5)", tolerance));
   const Eigen::Index n = t.size();
-  std::vector<double> steps(static_cast<std::size_t>(n - 1));
-  for (Eigen::Index k = 1; k < n; ++k) steps[static_cast<std::size_t>(k - 1)] = t(k) - t(k - 1);
+  std::vector<double> steps = steps_about_middle(t.data(), static_cast<std::size_t>(n));
   auto mid = steps.begin() + static_cast<std::ptrdiff_t>(steps.size() / 2);
-  std::nth_element(steps.begin(), mid, steps.end());
   SamplePeriodCheck r;
   r.median = *mid;
   if (steps.size() % 2 == 0) r.median = 0.5 * (r.median + *std::max_element(steps.begin(), mid));
@@ -80,6 +88,12 @@ SamplePeriodCheck check_sample_period(const Eigen::Ref<const Eigen::VectorXd>& t
     }
   }
   return r;
+}
+
+double median_step(std::span<const double> t) {
+  if (t.size() < 2) return 0.0;
+  const std::vector<double> steps = steps_about_middle(t.data(), t.size());
+  return steps[steps.size() / 2];
 }
 
 void central_difference_inplace(double* x, Eigen::Index n, double T) {

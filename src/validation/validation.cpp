@@ -1,5 +1,6 @@
 #include "quadid/validation.hpp"
 
+#include "quadid/core/json.hpp"
 #include "quadid/identification/extended.hpp"
 #include "quadid/report.hpp"
 
@@ -178,8 +179,8 @@ nlohmann::json to_json(const SimulationComparison& c) {
     json rms = json::object(), imp = json::object();
     for (int i = 0; i < 10; ++i) {
       const char* k = kTable4Signals[static_cast<size_t>(i)];
-      rms[k] = std::isfinite(r.rms(i)) ? json(r.rms(i)) : json(nullptr);
-      imp[k] = std::isfinite(r.improvement_pct(i)) ? json(r.improvement_pct(i)) : json(nullptr);
+      rms[k] = finite_or_null(r.rms(i));
+      imp[k] = finite_or_null(r.improvement_pct(i));
     }
     json j = {{"name", r.name}, {"rms", rms}};
     if (with_imp) {
@@ -194,7 +195,7 @@ nlohmann::json to_json(const SimulationComparison& c) {
   };
   json rows = json::array();
   for (const auto& r : c.rows) rows.push_back(row_json(r, true));
-  return {{"window", {{"t0", c.window.t0}, {"t1", std::isfinite(c.window.t1) ? json(c.window.t1) : json(nullptr)}}},
+  return {{"window", to_json(c.window)},
           {"samples", c.samples},
           {"units", "SI (m, rad, N, N m)"},
           {"reference", row_json(c.reference, false)},
