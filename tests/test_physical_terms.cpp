@@ -4,6 +4,7 @@
 // free term), and the closed form of a quadratic with one entry held at 0
 // (Lagrange: v = x - C e_k x_k / C_kk), neither of which goes through the
 // conditional-mean algebra the code uses.
+#include "quadid/identification.hpp"
 #include "quadid/identification/extended.hpp"
 
 #include <gtest/gtest.h>
@@ -217,6 +218,26 @@ TEST(RigidBodyEstimate, KnownMassIsAPointAndTheRestIsCopied) {
   const Estimate free_mass = rigid_body_estimate(x, false);
   EXPECT_EQ(free_mass.std_error(0), sd(0));
   EXPECT_EQ(free_mass.covariance(0, 0), x.covariance(0, 0));
+}
+
+// "(already consistent)" is printed only beside a set the check calls
+// consistent (issue 37: it stood beside a NO when the rigid-body projection
+// left a set whose term broke its sign unchanged).
+TEST(PhysicalTerms, AlreadyConsistentOnlyBesideAConsistentSet) {
+  IdentificationResult r;
+  r.options.physical.term_signs = true;
+  r.estimates[0] = SetEstimate{"LS", RegressionModel::Standard, true, Params::qball2_nominal().theta(), true, "", {}, {}};
+  r.estimates[0].extra = {{"rotor_inertia", -1e-7}};  // no standard error: the strict sign fails
+  r.physical_sets = {r.estimates[0]};
+  r.physical_sets[0].name = "PC";
+  r.projections.resize(1);
+  r.projections[0].changed = false;
+  std::string text = format_consistency(r);
+  EXPECT_EQ(text.find("already consistent"), std::string::npos) << text;
+  EXPECT_NE(text.find("PC = LS: the projection left it unchanged, though LS fails"), std::string::npos) << text;
+  r.estimates[0].extra = {{"rotor_inertia", 1e-7}};
+  text = format_consistency(r);
+  EXPECT_NE(text.find("PC = LS (already consistent)"), std::string::npos) << text;
 }
 
 }  // namespace

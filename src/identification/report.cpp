@@ -221,7 +221,18 @@ std::string format_consistency(const IdentificationResult& r) {
     const auto& p = r.projections[i];
     const char* from = r.physical_sets[i].name == "PC" ? "LS" : "FMLS";
     if (!p.changed) {
-      fmt::format_to(it, "  {} = {} (already consistent)\n", r.physical_sets[i].name, from);
+      // "already consistent" only where the check above says so (issue 37: it
+      // stood beside a NO); otherwise say what the projection did not fix.
+      const SetEstimate* src = nullptr;
+      for (const auto* e : r.all_sets())
+        if (e->name == from) src = e;
+      const PhysicalConsistency c =
+          src ? check_set_consistency(*src, r.options.physical.term_signs) : PhysicalConsistency{true, ""};
+      if (c.physical)
+        fmt::format_to(it, "  {} = {} (already consistent)\n", r.physical_sets[i].name, from);
+      else
+        fmt::format_to(it, "  {} = {}: the projection left it unchanged, though {} fails the check above ({})\n",
+                       r.physical_sets[i].name, from, from, c.why);
       continue;
     }
     fmt::format_to(it, "  {} moved from {} to be consistent: least-squares cost +{:.3g} ({}, {} evaluations)\n",
