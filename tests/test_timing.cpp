@@ -395,3 +395,15 @@ TEST_F(Px4Identify, SimulateUlogNeedsAVehicleThatTakesCommands) {
   EXPECT_EQ(back.rotors.spin, j.rotors.spin);
   EXPECT_LT((back.rotors.allocation() - j.rotors.allocation()).cwiseAbs().maxCoeff(), 1e-6);  // float32 parameters
 }
+
+// A tiny negative offset prints as +0.0 ms, not "-0.0 ms" (issue 37).
+TEST(Timing, ATinyNegativeOffsetPrintsAsZero) {
+  TimingEstimate t;
+  t.gyro_offset = -4e-5;  // -0.04 ms
+  t.rotor_offset = -2e-4;  // -0.2 ms stays negative
+  const std::string s = format_timing(t);
+  EXPECT_NE(s.find("gyro offset         +0.0 ms"), std::string::npos) << s;
+  EXPECT_NE(s.find("rotor offset        -0.2 ms"), std::string::npos) << s;
+  EXPECT_EQ(s.find("-0.0"), std::string::npos) << s;
+  EXPECT_EQ(printable(-0.049, 1), 0.0);
+}

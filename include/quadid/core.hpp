@@ -3,6 +3,7 @@
 // no files (docs/architecture.md, bottom layer).
 #pragma once
 
+#include <cmath>
 #include <limits>
 #include <numbers>
 #include <stdexcept>
@@ -18,6 +19,14 @@ class InputError : public std::runtime_error {
 };
 
 inline constexpr double kDeg = std::numbers::pi / 180.0;  // rad per degree
+
+/// v, or +0 when it prints as zero with `decimals` decimals: so that a
+/// printed "-0.0 ms" (a tiny negative value) reads "+0.0 ms" (issue 37).
+inline double printable(double v, int decimals) {
+  double scale = 1.0;
+  for (int i = 0; i < decimals; ++i) scale *= 10.0;
+  return std::abs(v) * scale < 0.5 ? 0.0 : v;
+}
 inline constexpr double kInf = std::numeric_limits<double>::infinity();
 // Two-sided 95 % quantile of the standard normal, Phi^-1(0.975) (scipy.stats.norm.ppf):
 // the default interval half width in standard errors, written once.

@@ -279,7 +279,7 @@ TimingEstimate estimate_timing(const FlightLog& log, const RotorModel& rotors, c
   }
   if (want_d) {
     if (std::abs(d) >= dmax - 2.0 * tol) {
-      est.notes.push_back(fmt::format("rotor offset: at the search limit ({:+.1f} ms); not applied", 1e3 * d));
+      est.notes.push_back(fmt::format("rotor offset: at the search limit ({:+.1f} ms); not applied", printable(1e3 * d, 1)));
     } else {
       est.rotor_offset = d;
       est.rotor_offset_estimated = true;
@@ -316,9 +316,9 @@ std::string format_timing(const TimingEstimate& t) {
                      t.time_constant_estimated ? "estimated" : "the rotor model's");
   else
     s += "  motor time constant: not used (the log holds rotor speeds, which already lag)\n";
-  s += fmt::format("  gyro offset         {:+.1f} ms ({})\n", 1e3 * t.gyro_offset,
+  s += fmt::format("  gyro offset         {:+.1f} ms ({})\n", printable(1e3 * t.gyro_offset, 1),
                    t.gyro_offset_estimated ? "estimated, applied" : "not estimated");
-  s += fmt::format("  rotor offset        {:+.1f} ms ({})\n", 1e3 * t.rotor_offset,
+  s += fmt::format("  rotor offset        {:+.1f} ms ({})\n", printable(1e3 * t.rotor_offset, 1),
                    t.rotor_offset_estimated ? "estimated, applied" : "not estimated");
   if (t.evaluations > 0)
     s += fmt::format("  moment rows' residual {:.3f} of the start's (3 = unchanged), {} identifications\n", t.cost,

@@ -46,8 +46,8 @@ void judge_with_timing(const FlightLog& log, const std::vector<NamedParams>& set
     }
     std::vector<std::string> what;
     if (t.time_constant_estimated) what.push_back(fmt::format("motor time constant {:.1f} ms", 1e3 * t.time_constant));
-    if (t.gyro_offset_estimated) what.push_back(fmt::format("gyro offset {:+.1f} ms", 1e3 * t.gyro_offset));
-    if (t.rotor_offset_estimated) what.push_back(fmt::format("rotor offset {:+.1f} ms", 1e3 * t.rotor_offset));
+    if (t.gyro_offset_estimated) what.push_back(fmt::format("gyro offset {:+.1f} ms", printable(1e3 * t.gyro_offset, 1)));
+    if (t.rotor_offset_estimated) what.push_back(fmt::format("rotor offset {:+.1f} ms", printable(1e3 * t.rotor_offset, 1)));
     say(fmt::format("{}: judged with the timing identify estimated ({})", fmt::join(names, ", "), fmt::join(what, ", ")));
     const PredictionValidation timed = validate_prediction(apply_timing(log, rotors, t), group, reference, popt);
     for (auto [table, from] : {std::pair{&pv.standard, &timed.standard}, std::pair{&pv.filtered, &timed.filtered}})
