@@ -166,7 +166,7 @@ TEST_F(CliIdentify, BadInputFailsClearlyAndWritesNothing) {
   EXPECT_NE(r.err.find(where), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(path("r.json")));
   // Bad options name themselves.
-  EXPECT_NE(run(path("log.csv") + " --filter median").err.find("--filter median: expected butter or fir"),
+  EXPECT_NE(run(path("log.csv") + " --filter median").err.find("--filter: median: expected butter, fir"),
             std::string::npos);
   EXPECT_NE(run(path("log.csv") + " --window 50").err.find("window '50'"), std::string::npos);
   EXPECT_NE(run(path("log.csv") + " --nominal nosuch").err.find("nosuch"), std::string::npos);
@@ -202,7 +202,7 @@ TEST_F(CliIdentify, HelpTeachesUnitsAndDefaults) {
   const quadid::testing::CliRun r = run("--help");
   EXPECT_EQ(r.rc, 0);
   for (const char* s : {"--window", "10:50", "--cutoff", "Hz", "--lambda", "rad/s", "--sigma", "--map", "--json",
-                        "--evolution", "--gd-discretization", "--derivative-filter", "--nominal", "qball2-nominal"})
+                        "--evolution", "--gd-discretization", "--derivative-filter", "--reference", "qball2-nominal"})
     EXPECT_NE(r.out.find(s), std::string::npos) << s;
 }
 

@@ -1,8 +1,10 @@
 // quadid batch: identify many logs on one machine with threads -> JSON Lines
-// (docs/fleet.md). The identify options are those of `quadid identify`, taken
-// from the library's table (command_option_specs) and read by
-// identify_options_from_json, so the names, defaults and checks are one.
+// (docs/fleet.md). The identify options are those of `quadid identify`: batch's
+// option table holds identify's rows (option_table("batch")) and identify_request
+// reads them, so the names, defaults and checks are one.
 #include "commands.hpp"
+#include "options_cli.hpp"
+#include "quadid/pipeline.hpp"
 #include "quadid/batch.hpp"
 #include "quadid/io.hpp"
 
@@ -20,32 +22,26 @@
 namespace quadid::cli {
 namespace {
 
+/// The command line's part: the logs, the outputs, the comparison of the flights.
 struct BatchArgs {
   std::vector<std::string> logs;
-  std::string list;
-  std::string out;
+  std::string list, out, summary;
   int threads = 0;
   bool quiet = false;
-  std::string summary;  // --summary FILE: the flights compared, as JSON
   FleetSummaryOptions summary_opt;
-  // identify options as typed, by long name (numbers stay text: the library parses them)
-  std::map<std::string, std::string> values;
-  std::map<std::string, bool> flags;
-  std::map<std::string, std::vector<std::string>> lists;
 };
 
-nlohmann::json identify_json(const BatchArgs& a) {
-  nlohmann::json j = nlohmann::json::object();
-  for (const auto& [k, v] : a.values) j[k] = v;
-  for (const auto& [k, v] : a.flags)
-    if (v) j[k] = true;
-  for (const auto& [k, v] : a.lists)
-    if (!v.empty()) j[k] = v;
-  return j;
-}
-
-void run(const BatchArgs& a) {
-  const IdentifyRequest req = identify_options_from_json(identify_json(a));
+void run(const OptionValues& v) {
+  BatchArgs a;
+  a.logs = v.list("log");
+  a.list = v.string("list").value_or("");
+  a.out = v.string("out").value_or("");
+  a.summary = v.string("summary").value_or("");
+  a.threads = *v.integer32("threads");
+  a.quiet = v.flag("quiet");
+  a.summary_opt.set = *v.string("summary-set");
+  a.summary_opt.level = *v.number("outlier-level");
+  const IdentifyRequest req = identify_request(v);  // identify's options, from batch's table (the same rows)
   BatchOptions bopt;
   bopt.threads = a.threads;
   bopt.validate();
@@ -106,7 +102,6 @@ void run(const BatchArgs& a) {
 }  // namespace
 
 void register_batch(CLI::App& app) {
-  auto a = std::make_shared<BatchArgs>();
   auto* sub = app.add_subcommand(
       "batch", "identify many flight logs on this machine (threads) -> JSON Lines, one object per log");
   sub->footer(
@@ -124,32 +119,8 @@ void register_batch(CLI::App& app) {
       "  quadid batch logs/*.csv > results.jsonl\n"
       "  find logs -name '*.csv' | quadid batch --list - --threads 2 --cutoff 3 -o results.jsonl\n"
       "See docs/fleet.md for a Dask cluster and a Slurm array job.");
-  sub->add_option("logs", a->logs, "flight logs");
-  sub->add_option("--list", a->list, "file with one log path per line ('-' = stdin; '#' comments)");
-  sub->add_option("-o,--out", a->out, "write the JSON Lines here (atomically, at the end) instead of stdout");
-  sub->add_option("--threads", a->threads, "worker threads; 0 = one per core")->capture_default_str();
-  sub->add_flag("-q,--quiet", a->quiet, "no progress and no comparison of the flights on stderr");
-  sub->add_option("--summary", a->summary,
-                  "write the comparison of the flights here as JSON (atomically): per parameter mean, standard "
-                  "deviation, standard errors; the flights that depart from the others");
-  sub->add_option("--summary-set", a->summary_opt.set,
-                  "the set compared across the flights: recommended (each flight's) or LS, GD, FMLS, FMGD, PC, FMPC")
-      ->capture_default_str();
-  sub->add_option("--outlier-level", a->summary_opt.level,
-                  "the chance that the comparison flags any flight when all are of one vehicle (a flight is flagged "
-                  "on a parameter when its leave-one-out t against the others is beyond the critical value)")
-      ->capture_default_str();
-  for (const auto& spec : command_option_specs("identify")) {
-    const std::string flag = "--" + spec.name;
-    switch (spec.kind) {
-      case OptionKind::Flag: sub->add_flag(flag, a->flags[spec.name], spec.help); break;
-      case OptionKind::List: sub->add_option(flag, a->lists[spec.name], spec.help + " (repeatable)"); break;
-      default:
-        sub->add_option_function<std::string>(
-            flag, [a, name = spec.name](const std::string& v) { a->values[name] = v; }, spec.help);
-    }
-  }
-  sub->callback([a] { run(*a); });
+  auto given = add_table_options(sub, "batch");
+  sub->callback([given] { run(given->read()); });
 }
 
 }  // namespace quadid::cli

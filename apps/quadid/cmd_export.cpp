@@ -2,7 +2,8 @@
 // (take-off, settle, excitation, settle, landing) for an autopilot: setpoint
 // CSV, Crazyflie piecewise polynomial, or MAVSDK-Python offboard script.
 #include "commands.hpp"
-#include "flight_args.hpp"
+#include "options_cli.hpp"
+#include "quadid/pipeline.hpp"
 #include "quadid/io.hpp"
 
 #include <fmt/format.h>
@@ -13,16 +14,17 @@ namespace quadid::cli {
 
 namespace {
 
-struct ExportCmdArgs {
-  std::string trajectory, out;
-  bool json = false;
-  ExportArgs exp;
-};
+void run(const OptionValues& v) {
+  const std::string spec = *v.string("trajectory"), out = *v.string("out");
+  std::shared_ptr<const Trajectory> traj = load_trajectory(spec);
+  const ExportSummary s = export_flight(traj, out, export_options(v), {fmt::format("quadid export of {}", spec)});
+  if (v.flag("json")) fmt::print("{}\n", to_json(s).dump(2));
+  else fmt::print("{}", format_export_summary(s));
+}
 
 }  // namespace
 
 void register_export(CLI::App& app) {
-  auto args = std::make_shared<ExportCmdArgs>();
   auto* sub = app.add_subcommand(
       "export", "a trajectory -> setpoints / Crazyflie polynomial / PX4 MAVSDK script, with take-off and landing");
   sub->footer(
@@ -36,17 +38,8 @@ void register_export(CLI::App& app) {
       "Examples:\n"
       "  quadid export table2 -o flight.csv\n"
       "  quadid export traj.json -o flight.poly.csv --piece 0.5");
-  sub->add_option("trajectory", args->trajectory, "trajectory JSON file, or built-in: table2")->required();
-  sub->add_option("-o,--out", args->out, "file to write (its name chooses the format)")->required();
-  sub->add_flag("--json", args->json, "print the summary as JSON on stdout (files, segments, pieces, fit)");
-  args->exp.add_to(sub);
-  sub->callback([args] {
-    std::shared_ptr<const Trajectory> traj = load_trajectory(args->trajectory);
-    const ExportSummary s =
-        export_flight(traj, args->out, args->exp.opt, {fmt::format("quadid export of {}", args->trajectory)});
-    if (args->json) fmt::print("{}\n", to_json(s).dump(2));
-    else fmt::print("{}", format_export_summary(s));
-  });
+  auto given = add_table_options(sub, "export");
+  sub->callback([given] { run(given->read()); });
 }
 
 }  // namespace quadid::cli

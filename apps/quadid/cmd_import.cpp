@@ -1,6 +1,7 @@
 // quadid import FILE -o log.csv: an autopilot log (PX4 ULog, Crazyflie uSD)
 // -> flight log CSV (docs/import.md).
 #include "commands.hpp"
+#include "options_cli.hpp"
 #include "quadid/logs.hpp"
 #include "quadid/pipeline.hpp"
 
@@ -14,19 +15,27 @@
 namespace quadid::cli {
 namespace {
 
-struct ImportArgs {
-  std::string file;
-  std::string out;
-  std::string on_gap = "longest";
-  logs::ImportOptions opt;
-  bool allow_truncated = false;
-  bool json = false;
-};
-
-void run(ImportArgs a) {
-  if (a.on_gap == "longest") a.opt.on_gap = logs::GapPolicy::Longest;
-  else if (a.on_gap == "refuse") a.opt.on_gap = logs::GapPolicy::Refuse;
-  else throw std::invalid_argument(fmt::format("--on-gap {}: expected longest or refuse", a.on_gap));
+void run(const OptionValues& v) {
+  struct {
+    std::string file, out;
+    logs::ImportOptions opt;
+    bool allow_truncated = false, json = false;
+  } a;
+  a.file = *v.string("log");
+  a.out = *v.string("out");
+  a.opt.rate_hz = *v.number("rate");
+  a.opt.aa_order = *v.integer32("aa-order");
+  a.opt.aa_fraction = *v.number("aa-fraction");
+  a.opt.max_bridge_s = *v.number("max-bridge");
+  a.opt.gap_factor = *v.number("gap-factor");
+  a.opt.on_gap = *v.string("on-gap") == "refuse" ? logs::GapPolicy::Refuse : logs::GapPolicy::Longest;
+  a.opt.position_topic = *v.string("position-topic");
+  a.opt.attitude_topic = *v.string("attitude-topic");
+  a.opt.rates_topic = *v.string("rates-topic");
+  a.opt.motors_topic = *v.string("motors");
+  a.opt.crazyflie_pose = *v.string("pose");
+  a.allow_truncated = v.flag("allow-truncated");
+  a.json = v.flag("json");
   a.opt.validate();
   logs::LoadOptions lo;
   lo.import = a.opt;
@@ -68,35 +77,14 @@ void run(ImportArgs a) {
 }  // namespace
 
 void register_import(CLI::App& app) {
-  auto a = std::make_shared<ImportArgs>();
   auto* sub = app.add_subcommand(
       "import",
       "an autopilot log (PX4 ULog or Crazyflie uSD, recognised by its first bytes) -> flight log CSV:\n"
       "t x y z phi theta psi p q r (SI, z up, body FLU; PX4's NED/FRD converted) and the per-rotor signals under\n"
       "the log's own names (actuator_motors.control[0].., esc_status.esc[0].esc_rpm.., rpm.m1..), on one uniform\n"
       "grid (faster topics low-passed first). Gaps are reported; long ones split the log.");
-  sub->add_option("file", a->file, "ULog (.ulg) or Crazyflie uSD log")->required();
-  sub->add_option("-o,--out", a->out, "flight log CSV to write")->required();
-  sub->add_option("--rate", a->opt.rate_hz, "grid rate, Hz")->capture_default_str();
-  sub->add_option("--aa-order", a->opt.aa_order, "anti-aliasing Butterworth order")->capture_default_str();
-  sub->add_option("--aa-fraction", a->opt.aa_fraction, "anti-aliasing cutoff as a fraction of --rate")
-      ->capture_default_str();
-  sub->add_option("--max-bridge", a->opt.max_bridge_s, "longest gap bridged by interpolation, s")->capture_default_str();
-  sub->add_option("--gap-factor", a->opt.gap_factor, "a gap is longer than this x the topic's median period")
-      ->capture_default_str();
-  sub->add_option("--on-gap", a->on_gap, "a longer gap: longest (keep the longest part) or refuse")
-      ->capture_default_str();
-  sub->add_option("--position-topic", a->opt.position_topic, "PX4 position topic (NED)")->capture_default_str();
-  sub->add_option("--attitude-topic", a->opt.attitude_topic, "PX4 attitude quaternion topic")->capture_default_str();
-  sub->add_option("--rates-topic", a->opt.rates_topic, "PX4 body-rate topic (FRD)")->capture_default_str();
-  sub->add_option("--motors", a->opt.motors_topic,
-                  "PX4 rotor topic: auto (actuator_motors, else esc_status, else actuator_outputs), a topic, or none")
-      ->capture_default_str();
-  sub->add_option("--pose", a->opt.crazyflie_pose, "Crazyflie pose: auto (mocap when logged), mocap or estimate")
-      ->capture_default_str();
-  sub->add_flag("--allow-truncated", a->allow_truncated, "ULog: accept a last message cut short");
-  sub->add_flag("--json", a->json, "print the import report as JSON on stdout (nothing else there)");
-  sub->callback([a] { run(*a); });
+  auto given = add_table_options(sub, "import");
+  sub->callback([given] { run(given->read()); });
 }
 
 }  // namespace quadid::cli

@@ -1,5 +1,6 @@
 // quadid log-info FILE: what an autopilot log holds (docs/log-info.md).
 #include "commands.hpp"
+#include "options_cli.hpp"
 #include "quadid/logs.hpp"
 
 #include <fmt/format.h>
@@ -10,14 +11,15 @@
 namespace quadid::cli {
 namespace {
 
-struct LogInfoArgs {
-  std::string file;
-  bool verbose = false;
-  bool allow_truncated = false;
-  bool json = false;
-};
-
-void run(const LogInfoArgs& a) {
+void run(const OptionValues& v) {
+  struct {
+    std::string file;
+    bool verbose = false, allow_truncated = false, json = false;
+  } a;
+  a.file = *v.string("log");
+  a.verbose = v.flag("verbose");
+  a.allow_truncated = v.flag("allow-truncated");
+  a.json = v.flag("json");
   const auto kind = logs::detect_log_kind(a.file);
   if (kind == logs::LogKind::Ulog) {
     logs::ULogReadOptions opt;
@@ -39,18 +41,13 @@ void run(const LogInfoArgs& a) {
 }  // namespace
 
 void register_log_info(CLI::App& app) {
-  auto a = std::make_shared<LogInfoArgs>();
   auto* sub = app.add_subcommand(
       "log-info",
       "what an autopilot log holds: PX4 ULog (topics with multi id, message size and count, info messages,\n"
       "parameters, logged messages, dropouts; pyulog's ulog_info layout) or Crazyflie uSD (events, variables,\n"
       "counts, rates, gaps). The kind is recognised by the first bytes, not the name.");
-  sub->add_option("file", a->file, "ULog (.ulg) or Crazyflie uSD log")->required();
-  sub->add_flag("-v,--verbose", a->verbose, "ULog: also perf_* info messages and the multi-info values");
-  sub->add_flag("--allow-truncated", a->allow_truncated,
-                "ULog: accept a last message cut short (logger stopped by a power loss)");
-  sub->add_flag("--json", a->json, "print JSON on stdout (nothing else there)");
-  sub->callback([a] { run(*a); });
+  auto given = add_table_options(sub, "log-info");
+  sub->callback([given] { run(given->read()); });
 }
 
 }  // namespace quadid::cli

@@ -1,22 +1,29 @@
-// The commands' options as JSON objects keyed by the command line's long option
-// names, so that the Python module (python/), `quadid batch` and any
-// configuration file fill the library's Options structs through ONE
-// implementation, with the CLI's names, defaults and checks (docs/python.md).
+// The application pipeline. The commands' options, given on the command line
+// or as JSON objects keyed by the long option names (the Python module, `quadid
+// batch`), are read against ONE table per command (quadid/pipeline/options.hpp)
+// into the library's requests below, so names, defaults and checks are one
+// (docs/python.md). Each request has a reader from OptionValues (the command
+// line's path) and one from JSON.
 //
 // Keys: the long option without "--" ("cutoff", "window", "gd-init"); '_' is
 // accepted for '-' and a trailing '_' is dropped, so that Python's lambda_=30
 // and gd_init="nominal" read as --lambda and --gd-init. Values: JSON numbers or
 // numeric strings for numeric options, strings as typed on the command line
 // (e.g. "10:50", "butter", "qball2-nominal"), booleans for flags, a string or a
-// list of strings for repeatable options (map, params). A null value means
-// "the default". Angles keep the command line's units (design's --tilt-max is
-// in degrees). An unknown key, a wrong type or an out-of-range value throws
-// std::invalid_argument naming the key with its command-line spelling.
+// list of strings for repeatable options (map, params), a window as "T0:T1" or
+// [T0, T1]. A null value means "the default". Angles keep the command line's
+// units (design's --tilt-max-deg is in degrees). An unknown key, a wrong type or
+// an out-of-range value throws std::invalid_argument naming the key with its
+// command-line spelling; an old spelling (an alias) is accepted.
 #pragma once
 
 #include "quadid/design.hpp"
+#include "quadid/export.hpp"
 #include "quadid/identification.hpp"
 #include "quadid/logs.hpp"
+#include "quadid/montecarlo.hpp"
+#include "quadid/pipeline/options.hpp"
+#include "quadid/precision.hpp"
 #include "quadid/vehicle.hpp"
 #include "quadid/simulation.hpp"
 #include "quadid/identification/timing.hpp"
@@ -32,24 +39,6 @@
 #include <vector>
 
 namespace quadid {
-
-/// What an option's value is (for the CLI's registration and the error messages).
-enum class OptionKind { Number, Integer, String, Flag, List };
-
-/// One option of a command: its long name (without "--"), kind and help.
-struct OptionSpec {
-  std::string name;
-  OptionKind kind = OptionKind::Number;
-  std::string help;
-};
-
-/// The options the JSON functions below accept, per command ("identify",
-/// "simulate", "design", "check-trajectory", "validate"); throws
-/// std::invalid_argument for an unknown command.
-const std::vector<OptionSpec>& command_option_specs(std::string_view command);
-
-/// "gd_init" -> "gd-init", "lambda_" -> "lambda".
-std::string normalize_option_key(std::string_view key);
 
 /// The real-flight choices of `quadid identify` as given (unset = default).
 struct RealFlightArgs {
@@ -84,11 +73,9 @@ struct IdentifyRequest {
   /// --motor-time-constant S: the rotors' lag as given (not estimated).
   std::optional<double> motor_time_constant;
 };
-/// Options of `quadid identify` (and `quadid batch`): window, error-window,
-/// sigma, gd-discretization, gd-init, nominal, allow-rank-deficient,
-/// evolution-interval, and the processing group filter, cutoff, order, taps,
-/// lambda, derivative-filter, g, period-tolerance, keep-edges, map.
-/// Defaults: those of `quadid identify --help`. Validated.
+/// Options of `quadid identify` (and `quadid batch`): option_table("identify")'s
+/// OptionScope::Both options. Defaults: the table's. Validated.
+IdentifyRequest identify_request(const OptionValues& v);
 IdentifyRequest identify_options_from_json(const nlohmann::json& j);
 
 /// Applies them to `req`, with the defaults of docs/real-flights.md: with a
@@ -163,12 +150,53 @@ struct SimulateRequest {
   std::shared_ptr<const Trajectory> trajectory;
   SimulationOptions options;
 };
+SimulateRequest simulate_request(const OptionValues& v);
 SimulateRequest simulate_options_from_json(const nlohmann::json& j);
 
-/// `quadid design` options (wf in deg/s, psi-max/tilt-max/psidot-max in degrees as on the CLI).
+/// The predicted precision of design and check-trajectory (--vehicle,
+/// --flight-duration, --window, --sigma-*, --closed-loop-flights, --regression,
+/// --no-precision).
+struct PrecisionRequest {
+  PrecisionOptions options;
+  bool predict = true;          // false: --no-precision
+  std::string vehicle;          // --vehicle as given (empty: the paper's virtual QBall 2)
+  std::string flown;            // "the paper's flight (...)" or "vehicle NAME"
+};
+
+/// `quadid design` (wf in deg/s, the angle limits in degrees, as the option
+/// names say). With --vehicle: its limits ([limits], every rotor's thrust
+/// within --thrust-margin/--thrust-min), w_f from its bandwidth and its
+/// [nominal] as the scaling set unless given.
+struct DesignRequest {
+  DesignOptions options;
+  PrecisionRequest precision;
+  std::string vehicle_note;    // "limits of vehicle ...": what design says on stderr (empty: no vehicle)
+  std::string row_noise_note;  // criterion precision: the rows' noise found (empty: another criterion)
+};
+DesignRequest design_request(const OptionValues& v);
 DesignOptions design_options_from_json(const nlohmann::json& j);
-/// `quadid check-trajectory` options (the trajectory itself is not an option here).
+
+/// `quadid check-trajectory` of `trajectory` (a designed file's own limits,
+/// those given in place of its values; empty: the defaults of section III-B).
+struct CheckRequest {
+  CheckOptions options;
+  PrecisionRequest precision;
+  std::string limits_from;     // "defaults of section III-B", the file, "..., with the limits of vehicle V"
+  bool limits_given = false;   // some limit option was given
+};
+CheckRequest check_request(const OptionValues& v, const std::string& trajectory);
 CheckOptions check_options_from_json(const nlohmann::json& j);
+
+/// `quadid montecarlo` (notes: what it says on stderr, e.g. the window fitted to a short flight).
+struct MonteCarloRequest {
+  MonteCarloOptions options;
+  std::vector<std::string> notes;
+};
+MonteCarloRequest montecarlo_request(const OptionValues& v);
+
+/// The export group (--export-rate, --export-format, --settle, --cycles,
+/// --ground-z, --climb-speed, --piece) of export and design --export.
+ExportOptions export_options(const OptionValues& v);
 
 /// `quadid validate` options besides the log and the sets.
 struct ValidateRequest {
@@ -194,6 +222,7 @@ struct ValidateRequest {
   SimulationComparisonOptions simulation;
   CsvReadOptions csv;
 };
+ValidateRequest validate_request(const OptionValues& v);
 ValidateRequest validate_options_from_json(const nlohmann::json& j);
 
 /// The log of a validation: any format (load_any_log); with req.vehicle, the

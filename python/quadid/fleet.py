@@ -16,9 +16,9 @@ Records come back in the order of `paths`.
 from __future__ import annotations
 
 import concurrent.futures as _cf
-import functools
-import os
-from typing import Any, Iterable
+import functools as _functools
+import os as _os
+from typing import Any as _Any, Iterable as _Iterable
 
 __all__ = ["identify_one", "identify_many", "summarize"]
 
@@ -27,7 +27,7 @@ def identify_one(path, options: dict | None = None, keep_evolution: bool = False
     """One log -> one record; never raises for a bad log (the record says why)."""
     import quadid  # imported here so that a worker process needs only `quadid` on its path
 
-    path = os.fspath(path)
+    path = _os.fspath(path)
     try:
         res = quadid.identify(path, **(options or {}))
     except Exception as e:  # noqa: BLE001 - every failure of one log is that log's record
@@ -40,12 +40,12 @@ def identify_one(path, options: dict | None = None, keep_evolution: bool = False
 
 
 def _failure(path, e: BaseException) -> dict:
-    return {"path": os.fspath(path), "ok": False, "error": f"{type(e).__name__}: {e}"}
+    return {"path": _os.fspath(path), "ok": False, "error": f"{type(e).__name__}: {e}"}
 
 
 def identify_many(
-    paths: Iterable,
-    client: Any = None,
+    paths: _Iterable,
+    client: _Any = None,
     *,
     max_workers: int | None = None,
     keep_evolution: bool = False,
@@ -63,9 +63,9 @@ def identify_many(
     """
     import quadid
 
-    paths = [os.fspath(p) for p in paths]
+    paths = [_os.fspath(p) for p in paths]
     quadid._quadid.check_identify_options(quadid._options("identify", options))
-    task = functools.partial(identify_one, options=options, keep_evolution=keep_evolution)
+    task = _functools.partial(identify_one, options=options, keep_evolution=keep_evolution)
     if not paths:
         return []
     if client is not None:
@@ -78,7 +78,7 @@ def identify_many(
             except Exception as e:  # noqa: BLE001 - a lost worker, a cancelled task
                 out.append(_failure(p, e))
         return out
-    workers = max_workers or os.cpu_count() or 1
+    workers = max_workers or _os.cpu_count() or 1
     with _cf.ProcessPoolExecutor(max_workers=min(workers, len(paths))) as ex:
         futures = [ex.submit(task, p) for p in paths]
         out = []
@@ -90,7 +90,7 @@ def identify_many(
         return out
 
 
-def summarize(records: Iterable[dict], set: str = "recommended", level: float = 0.01) -> dict:
+def summarize(records: _Iterable[dict], set: str = "recommended", level: float = 0.01) -> dict:
     """Compare the flights of `records` (identify_many's, or `quadid batch`'s lines read back).
 
     The dict `quadid batch --summary FILE` writes: per parameter the mean and
@@ -106,4 +106,17 @@ def summarize(records: Iterable[dict], set: str = "recommended", level: float = 
 
     keys = ("path", "ok", "estimates", "uncertainty", "recommended")  # what the comparison reads
     kept = [{k: r[k] for k in keys if k in r} for r in records]
-    return quadid._quadid.summarize_fleet(json.dumps(kept), set, float(level))
+    def plain(o):  # numpy arrays (the results' arrays of numbers) -> JSON lists, NaN -> null
+        import numpy as np
+
+        if isinstance(o, np.ndarray):
+            return [plain(x) for x in o.tolist()] if o.ndim else plain(o.item())
+        if isinstance(o, float) and o != o:
+            return None
+        if isinstance(o, dict):
+            return {k: plain(v) for k, v in o.items()}
+        if isinstance(o, list):
+            return [plain(x) for x in o]
+        return o
+
+    return quadid._quadid.summarize_fleet(json.dumps(plain(kept)), set, float(level))

@@ -10,6 +10,7 @@
 #include "quadid/identification.hpp"
 #include "quadid/io.hpp"
 #include "quadid/pipeline.hpp"
+#include "quadid/precision.hpp"
 #include "quadid/simulation.hpp"
 
 #include <fmt/format.h>
@@ -17,7 +18,9 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <string>
@@ -29,6 +32,33 @@ using nlohmann::json;
 namespace {
 
 // --- JSON <-> Python -------------------------------------------------------------
+
+bool is_num(const json& e) { return (e.is_number() && !e.is_boolean()) || e.is_null(); }
+
+/// A non-empty JSON array of numbers (null read as NaN: the JSON's non-finite
+/// numbers), or of equally long such arrays, as a float64 numpy array (1-D or
+/// 2-D); nullopt for anything else (strings, objects, mixed, all null).
+std::optional<py::object> numeric_array(const json& j) {
+  if (j.empty()) return std::nullopt;
+  auto value = [](const json& e) { return e.is_null() ? std::numeric_limits<double>::quiet_NaN() : e.get<double>(); };
+  bool any_number = false;
+  if (std::all_of(j.begin(), j.end(), [&](const json& e) { any_number |= e.is_number(); return is_num(e); })) {
+    if (!any_number) return std::nullopt;
+    py::array_t<double> a(static_cast<py::ssize_t>(j.size()));
+    auto m = a.mutable_unchecked<1>();
+    for (std::size_t i = 0; i < j.size(); ++i) m(static_cast<py::ssize_t>(i)) = value(j[i]);
+    return py::object(std::move(a));
+  }
+  const std::size_t cols = j[0].is_array() ? j[0].size() : 0;
+  if (cols == 0) return std::nullopt;
+  for (const auto& row : j)
+    if (!row.is_array() || row.size() != cols || !std::all_of(row.begin(), row.end(), is_num)) return std::nullopt;
+  py::array_t<double> a({static_cast<py::ssize_t>(j.size()), static_cast<py::ssize_t>(cols)});
+  auto m = a.mutable_unchecked<2>();
+  for (std::size_t r = 0; r < j.size(); ++r)
+    for (std::size_t c = 0; c < cols; ++c) m(static_cast<py::ssize_t>(r), static_cast<py::ssize_t>(c)) = value(j[r][c]);
+  return py::object(std::move(a));
+}
 
 py::object to_py(const json& j) {
   switch (j.type()) {
@@ -43,6 +73,7 @@ py::object to_py(const json& j) {
     }
     case json::value_t::string: return py::str(j.get_ref<const std::string&>());
     case json::value_t::array: {
+      if (auto a = numeric_array(j)) return *a;  // numbers (and null = NaN): a numpy array
       py::list l;
       for (const auto& e : j) l.append(to_py(e));
       return l;
@@ -64,6 +95,7 @@ json from_py(const py::handle& o, const std::string& where) {
   if (py::isinstance<py::int_>(o) || (py::hasattr(o, "__index__") && !py::isinstance<py::float_>(o)))
     return py::int_(py::reinterpret_borrow<py::object>(o)).cast<long long>();
   if (py::isinstance<py::float_>(o) || py::hasattr(o, "__float__")) return py::float_(py::reinterpret_borrow<py::object>(o)).cast<double>();
+  if (py::hasattr(o, "tolist") && py::hasattr(o, "ndim")) return from_py(o.attr("tolist")(), where);  // numpy
   if (py::isinstance<py::list>(o) || py::isinstance<py::tuple>(o)) {
     json a = json::array();
     for (const auto& e : o) a.push_back(from_py(e, where));
@@ -203,7 +235,8 @@ py::dict simulate(const py::dict& opts, bool truth, const std::string& out, cons
 }
 
 py::dict design(const py::dict& opts, const std::string& out) {
-  const quadid::DesignOptions opt = quadid::design_options_from_json(options_json(opts));
+  const quadid::DesignRequest req = quadid::design_request(quadid::OptionValues(options_json(opts), "design"));
+  const quadid::DesignOptions& opt = req.options;
   json j;
   {
     py::gil_scoped_release nogil;
@@ -211,39 +244,38 @@ py::dict design(const py::dict& opts, const std::string& out) {
     if (!res.check.all_hold())  // the message of `quadid design`
       throw std::runtime_error(quadid::infeasible_design_message(res, opt));
     j = quadid::design_to_json(res, opt);
+    if (req.precision.predict) {  // as `quadid design`
+      try {
+        j["predicted_precision"] = quadid::to_json(quadid::predict_precision(res.trajectory, req.precision.options));
+        j["predicted_precision"]["flown_by"] = req.precision.flown;
+      } catch (const quadid::InputError& e) {
+        j["predicted_precision"] = {{"error", e.what()}};
+      }
+    }
     if (!out.empty()) quadid::write_file_atomic(out, j.dump(2) + "\n");
   }
   return to_py(j).cast<py::dict>();
 }
 
-// True when `opts` gives any of the limits of section III-B (--x-max ... --z0).
-bool has_limit_option(const py::dict& opts) {
-  static const char* kLimits[] = {"x-max",    "y-max",    "z-min",    "z-max",      "psi-max",   "tilt-max",
-                                  "xdot-max", "ydot-max", "zdot-max", "psidot-max", "zddot-min", "z0"};
-  for (const auto& item : opts) {
-    const std::string k = quadid::normalize_option_key(py::str(item.first).cast<std::string>());
-    for (const char* l : kLimits)
-      if (k == l) return true;
-  }
-  return false;
-}
-
 py::dict check_trajectory(const std::string& trajectory, const py::dict& opts) {
-  quadid::CheckOptions opt = quadid::check_options_from_json(options_json(opts));
-  // As the command line: a designed file's own limits, unless limits are given here.
-  std::string limits_from = "defaults of section III-B";
-  if (const auto saved = quadid::saved_trajectory_limits(trajectory); saved && !has_limit_option(opts)) {
-    opt.limits = *saved;
-    limits_from = trajectory;
-  }
+  // As the command line: a designed file's own limits, those given here in place of its values.
+  const quadid::CheckRequest req =
+      quadid::check_request(quadid::OptionValues(options_json(opts), "check-trajectory"), trajectory);
   json j;
   {
     py::gil_scoped_release nogil;
     const auto traj = quadid::load_trajectory(trajectory);
-    j = quadid::to_json(quadid::check_trajectory(*traj, opt));
+    j = quadid::to_json(quadid::check_trajectory(*traj, req.options));
+    if (req.precision.predict) {
+      try {
+        j["predicted_precision"] = quadid::to_json(quadid::predict_precision(*traj, req.precision.options));
+      } catch (const quadid::InputError& e) {
+        j["predicted_precision"] = {{"error", e.what()}};
+      }
+    }
     j["source"] = trajectory;
-    j["limits"] = quadid::to_json(opt.limits);
-    j["limits_from"] = limits_from;
+    j["limits"] = quadid::to_json(req.options.limits);
+    j["limits_from"] = req.limits_from;
   }
   return to_py(j).cast<py::dict>();
 }
@@ -263,16 +295,28 @@ py::dict validate(const std::string& log, const py::dict& opts, py::object warn)
 
 py::list option_specs(const std::string& command) {
   py::list l;
-  for (const auto& s : quadid::command_option_specs(command)) {
-    const char* kind = "number";
-    switch (s.kind) {
+  for (const auto& d : quadid::option_table(command).options) {
+    const char* kind = "string";
+    switch (d.kind) {
       case quadid::OptionKind::Number: kind = "number"; break;
       case quadid::OptionKind::Integer: kind = "integer"; break;
       case quadid::OptionKind::String: kind = "string"; break;
+      case quadid::OptionKind::Window: kind = "window"; break;
       case quadid::OptionKind::Flag: kind = "flag"; break;
       case quadid::OptionKind::List: kind = "list"; break;
     }
-    l.append(py::make_tuple(s.name, kind, s.help));
+    py::dict e;
+    e["name"] = d.name;
+    e["kind"] = kind;
+    e["help"] = d.full_help();
+    e["default"] = d.default_value.empty() ? py::object(py::none()) : py::object(py::str(d.default_value));
+    e["default_text"] = d.default_text.empty() ? d.default_value : d.default_text;
+    e["unit"] = d.unit;
+    e["choices"] = d.choices;
+    e["aliases"] = d.aliases;
+    e["range"] = d.range_text();
+    e["cli_only"] = d.scope == quadid::OptionScope::Cli;
+    l.append(e);
   }
   return l;
 }

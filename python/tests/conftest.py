@@ -41,7 +41,20 @@ def logs(tmp_path_factory) -> list[Path]:
 
 
 def assert_same(a, b, rel=1e-9, where="result"):
-    """Recursive equality with a relative tolerance on floats."""
+    """Recursive equality with a relative tolerance on floats (a numpy array of the
+    Python module against the JSON's list, null = NaN)."""
+    import numpy as np
+
+    if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
+        x = np.asarray(a if isinstance(a, np.ndarray) else [np.nan if v is None else v for v in np.ravel(a).tolist()]
+                       if not isinstance(a, list) or not a or not isinstance(a[0], list) else
+                       [[np.nan if v is None else v for v in row] for row in a], dtype=float)
+        y = np.asarray(b if isinstance(b, np.ndarray) else
+                       [[np.nan if v is None else v for v in row] for row in b] if b and isinstance(b[0], list) else
+                       [np.nan if v is None else v for v in b], dtype=float)
+        assert x.shape == y.shape, f"{where}: shapes {x.shape} != {y.shape}"
+        np.testing.assert_allclose(x, y, rtol=rel, atol=0.0, equal_nan=True, err_msg=where)
+        return
     if isinstance(a, dict) and isinstance(b, dict):
         assert sorted(a) == sorted(b), f"{where}: keys {sorted(a)} != {sorted(b)}"
         for k in a:

@@ -13,10 +13,12 @@ def test_simulate_equals_the_command_lines_log(tmp_path):
     sim = quadid.simulate("circle1", duration=5, seed=7, out=tmp_path / "py.csv", truth=True)
     assert (tmp_path / "py.csv").read_bytes() == p.read_bytes()  # same options -> same bytes
     ref = quadid.read_log(p)
-    assert list(sim["log"]) == list(ref)
+    assert list(sim["columns"]) == list(ref)
     for k in ref:
-        np.testing.assert_array_equal(sim["log"][k], ref[k])
-    assert sim["truth"] is not None and "u_dot" in sim["truth"]
+        np.testing.assert_array_equal(sim["columns"][k], ref[k])
+    assert sim["truth_columns"] is not None and "u_dot" in sim["truth_columns"]
+    with pytest.warns(DeprecationWarning, match=r"simulate\(\)\['log'\] is now \['columns'\]"):
+        assert sim["log"] is sim["columns"]
     assert sim["summary"]["samples"] == len(ref["t"])
 
 
@@ -29,8 +31,11 @@ def test_simulate_divergence_and_bad_options():
 
 def test_check_trajectory_equals_the_command_line():
     # --no-precision: the Python API does not predict the precision (docs/fly-it.md) yet.
-    cli = cli_json("check-trajectory", "table2", "--tilt-max", "6", "--no-precision")
-    assert_same(quadid.check_trajectory("table2", tilt_max=6), cli, 1e-12)
+    cli = cli_json("check-trajectory", "table2", "--tilt-max-deg", "6", "--no-precision")
+    assert_same(quadid.check_trajectory("table2", tilt_max_deg=6, no_precision=True), cli, 1e-12)
+    with pytest.warns(DeprecationWarning, match="tilt_max= is now tilt_max_deg="):
+        old = quadid.check_trajectory("table2", tilt_max=6, no_precision=True)
+    assert_same(old, cli, 1e-12)
 
 
 def design_cli_args(args: dict) -> list:
@@ -50,7 +55,7 @@ def test_design_equals_the_command_line():
     # feasible in ~1 s: one 60-evaluation start meets every limit for 39 of seeds 1-40 (seed 1 is the exception)
     args = dict(starts=1, max_evals=60, seed=2, harmonics=3)
     cli = cli_json("design", *design_cli_args(args), "--quiet", "--no-precision")
-    assert_same(drop_times(quadid.design(**args)), drop_times(cli), 1e-9)
+    assert_same(drop_times(quadid.design(**args, no_precision=True)), drop_times(cli), 1e-9)
 
 
 def test_design_without_a_feasible_start_raises_as_the_command_line():
@@ -78,7 +83,7 @@ def test_vehicle_by_name_in_simulate_and_identify(tmp_path):
     run_cli("simulate", *args, "-o", str(p))
     sim = quadid.simulate("table2", vehicle="crazyflie21", speedup=1.5, duration=20, seed=3, out=tmp_path / "py.csv")
     assert (tmp_path / "py.csv").read_bytes() == p.read_bytes()
-    assert "rpm.m1" in sim["log"]
+    assert "rpm.m1" in sim["columns"]
     cli = cli_json("identify", str(p), "--vehicle", "crazyflie21", "--known-mass", "0.0347")
     res = quadid.identify(str(p), vehicle="crazyflie21", known_mass=0.0347)
     for s in ("LS", "FMLS"):

@@ -183,7 +183,9 @@ def test_bad_options_raise_value_error_naming_the_option(logs):
     with pytest.raises(ValueError, match="gd-discretization"):
         quadid.identify(logs[0], gd_discretization="fast")
     with pytest.raises(quadid.InputError, match="nope.json"):
-        quadid.identify(logs[0], nominal="nope.json")
+        quadid.identify(logs[0], reference="nope.json")
+    with pytest.raises(ValueError, match=r"'order' \(--order\): 9 is out of range"):
+        quadid.identify(logs[0], order=9)
 
 
 def test_option_names_are_the_command_lines(logs):
@@ -191,6 +193,61 @@ def test_option_names_are_the_command_lines(logs):
     for name, kind, _ in quadid.option_names("identify"):
         flag = "--" + name.rstrip("_").replace("_", "-")
         assert flag in help_text, flag
+    # One table: every command's keyword arguments are its options that are not the command line's only.
+    for command in ("identify", "simulate", "design", "check_trajectory", "validate"):
+        specs = quadid.option_specs(command)
+        help_text = run_cli(command.replace("_", "-"), "--help").stdout
+        for d in specs:
+            assert "--" + d["name"] in help_text, (command, d["name"])
+        assert {n for n, _, _ in quadid.option_names(command)} == {d["keyword"] for d in specs if not d["cli_only"]}
+
+
+def test_old_spellings_work_with_a_deprecation_warning(logs):
+    new = quadid.identify(logs[0], window=WINDOW, reference="qball2-virtual")
+    with pytest.warns(DeprecationWarning, match="nominal= is now reference="):
+        old = quadid.identify(logs[0], window=WINDOW, nominal="qball2-virtual")
+    assert_same(without(old, "evolution"), without(new, "evolution"), 0.0)
+    with pytest.warns(DeprecationWarning, match=r"read_log\(path=...\) is now read_log\(log=...\)"):
+        log = quadid.read_log(path=logs[0])
+    np.testing.assert_array_equal(log["t"], quadid.read_log(log=logs[0])["t"])
+
+
+def test_window_as_a_tuple_or_list(logs):
+    ref = quadid.identify(logs[0], window="2:18")
+    for w in ((2, 18), [2, 18], (2.0, 18.0)):
+        assert_same(without(quadid.identify(logs[0], window=w), "evolution"), without(ref, "evolution"), 0.0)
+    assert quadid.identify(logs[0], window=(2, None))["window"]["t0"] == 2
+    with pytest.raises(ValueError, match="window"):
+        quadid.identify(logs[0], window=(18, 2))
+
+
+def test_numpy_estimates_theta_order_tensor_and_covariance(logs):
+    res = quadid.identify(logs[0], window=WINDOW)
+    assert isinstance(res, quadid.IdentifyResult) and isinstance(res, dict)
+    for s in ("LS", "FMLS"):
+        order = res.theta_order(s)
+        assert order == ["m", "Ixx", "Ixy", "Ixz", "Iyy", "Iyz", "Izz"]  # Theta of eq. (12)
+        theta, inertia, cov = res.theta(s), res.inertia_tensor(s), res.covariance(s)
+        assert theta.shape == (7,) and inertia.shape == (3, 3) and cov.shape == (7, 7)
+        assert all(isinstance(a, np.ndarray) and a.dtype == np.float64 for a in (theta, inertia, cov))
+        np.testing.assert_array_equal(cov, cov.T)  # symmetric
+        np.testing.assert_array_equal(inertia, inertia.T)
+        est = res["estimates"][s]
+        np.testing.assert_allclose(theta, [est[k] for k in order], rtol=1e-12)
+        errors = [res["uncertainty"][s][k]["std_error"] for k in order]
+        np.testing.assert_allclose(np.diag(cov), np.square(errors), rtol=1e-12)
+        np.testing.assert_allclose(np.diag(inertia), [est["Ixx"], est["Iyy"], est["Izz"]], rtol=1e-12)
+        assert inertia[0, 1] == pytest.approx(est["Ixy"], rel=1e-12) and inertia[1, 2] == pytest.approx(est["Iyz"], rel=1e-12)
+    with pytest.raises(KeyError, match="XY"):
+        res.covariance("XY")
+
+
+def test_the_module_exports_its_api_only():
+    for name in ("Any", "Mapping", "os", "Iterable"):
+        assert not hasattr(quadid, name), name
+        assert not hasattr(quadid.fleet, name), name
+    assert set(quadid.__all__) <= set(dir(quadid))
+    assert "check_trajectory" in quadid.__all__  # the command's name
 
 
 def test_threads_identify_in_parallel_with_the_same_results(logs):

@@ -1,9 +1,11 @@
-// Commands' options from JSON objects keyed by the CLI's long option names
-// (include/quadid/pipeline.hpp). The defaults below are those of the
-// command line (apps/quadid/cmd_*.cpp); tests/test_options_json.cpp checks them.
+// Commands' options read against the option tables (include/quadid/pipeline/options.hpp)
+// into the library's requests (include/quadid/pipeline.hpp): the command line
+// (apps/quadid/), the JSON options of batch and the Python module all come
+// through these readers, so names, defaults and checks are one.
 #include "quadid/pipeline.hpp"
 
 #include "quadid/logs.hpp"
+#include "quadid/io.hpp"
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
@@ -21,323 +23,26 @@ namespace quadid {
 namespace {
 
 using json = nlohmann::json;
-using K = OptionKind;
 
-// --- The option tables (names, kinds, help) -------------------------------------
-
-const std::vector<OptionSpec>& processing_specs() {
-  static const std::vector<OptionSpec> s = {
-      {"filter", K::String, "zero-phase pre-filter: butter or fir (default butter)"},
-      {"cutoff", K::Number, "pre-filter cutoff, Hz (default 4)"},
-      {"order", K::Integer, "Butterworth order 1-8 (default 4)"},
-      {"taps", K::Integer, "FIR length, odd (default 31)"},
-      {"lambda", K::Number, "bandwidth of f_D, g_D of the filtered model (eqs. 35-36), rad/s (default 30)"},
-      {"derivative-filter", K::String, "g_D: consistent or printed (eq. 36) (default consistent)"},
-      {"g", K::Number, "gravity, m/s^2 (default 9.81)"},
-      {"period-tolerance", K::Number, "relative tolerance on a uniform sample period (default 0.01)"},
-      {"time-unit", K::String, "unit of the log's column t: s, ms, us or ns (default s)"},
-      {"keep-edges", K::Flag, "use the windows literally, including the filters' settling at the log's ends"},
-      {"keep-held-samples", K::Flag, "use the pose as logged even where it repeats each sample until the next"},
-      {"map", K::List, "column name mapping CANONICAL=NAME, e.g. tau_phi=tau_x"},
-  };
-  return s;
+/// An error of the options as a whole: "identify: MSG" from JSON, "MSG" on the
+/// command line (which prints "quadid identify: error: MSG").
+[[noreturn]] void fail(const OptionValues& r, const std::string& msg) {
+  if (r.source() == OptionSource::Json) throw std::invalid_argument(fmt::format("{}: {}", r.command(), msg));
+  throw std::invalid_argument(msg);
 }
 
-const std::vector<OptionSpec>& limit_specs() {
-  static const std::vector<OptionSpec> s = {
-      {"x-max", K::Number, "|x| limit, m"},         {"y-max", K::Number, "|y| limit, m"},
-      {"z-min", K::Number, "lower z limit, m"},     {"z-max", K::Number, "upper z limit, m"},
-      {"psi-max", K::Number, "|psi| limit, deg"},   {"tilt-max", K::Number, "|phi|, |theta| limit of eqs. (26)-(27), deg"},
-      {"xdot-max", K::Number, "|x_dot| limit, m/s"}, {"ydot-max", K::Number, "|y_dot| limit, m/s"},
-      {"zdot-max", K::Number, "|z_dot| limit, m/s"}, {"psidot-max", K::Number, "|psi_dot| limit, deg/s"},
-      {"zddot-min", K::Number, "lower z_ddot limit, m/s^2"}, {"z0", K::Number, "start/end height, m"},
-  };
-  return s;
+/// Validation messages name the struct's field or the flag; from JSON the
+/// command is prefixed, so that a Python user knows where it came from.
+template <class F>
+void validate_as(const OptionValues& r, F&& f) {
+  try {
+    f();
+  } catch (const std::invalid_argument& e) {
+    fail(r, e.what());
+  }
 }
 
-std::vector<OptionSpec> concat(std::vector<OptionSpec> a, const std::vector<OptionSpec>& b) {
-  a.insert(a.end(), b.begin(), b.end());
-  return a;
-}
-
-const std::vector<OptionSpec>& identify_specs() {
-  static const std::vector<OptionSpec> s = concat(
-      {
-          {"window", K::String,
-           "estimation window T0:T1, seconds from the log's start (default 10:50; on a shorter log 10 s to its end, "
-           "all of it under 20 s; with a vehicle the whole log; either kept to the part in the air when the log has "
-           "the vehicle on the ground at an end)"},
-          {"error-window", K::String,
-           "window of the prediction-error tables (default: the whole log, or its part in the air)"},
-          {"sigma", K::Number, "gradient-descent gain of eq. (41) with gd-gain paper (default 30)"},
-          {"gd-gain", K::String, "auto (normalized with a vehicle, else paper), paper (sigma) or normalized (gd-rate)"},
-          {"gd-rate", K::Number, "normalized gradient descent: rate of a fully excited direction, 1/s (default 0.5)"},
-          {"gd-discretization", K::String, "exact or literal (eq. 42) (default exact)"},
-          {"gd-init", K::String, "GD initial guess: nominal, a preset or a params JSON (default nominal)"},
-          {"nominal", K::String, "reference set: qball2-nominal, qball2-virtual or a params JSON"},
-          {"allow-rank-deficient", K::Flag, "warn instead of failing when the data do not determine some parameters"},
-          {"evolution-interval", K::Number, "seconds between evolution rows, 0 = every sample (default 0.01)"},
-          {"vehicle", K::String, "vehicle file or built-in name: the wrench from the rotor columns (docs/vehicles.md)"},
-          {"known-mass", K::Number, "weighed mass, kg: estimate the thrust scale with the inertia"},
-          {"terms", K::String, "auto, paper, real, or a list of offsets,flapping,damping,rotor-inertia,drag,wind,weighting"},
-          {"cutoffs", K::String, "auto (with a vehicle the moment rows at twice the cutoff), held-out, or fixed"},
-          {"cutoff-force", K::Number, "pre-filter cutoff of the force row, Hz"},
-          {"cutoff-moment", K::Number, "pre-filter cutoff of the moment rows, Hz"},
-          {"motor-time-constant", K::String, "auto (the rotor model's; estimated when it takes commands and gives none) or seconds"},
-          {"time-offsets", K::String, "estimate (gyro and rotor groups against the pose, with a rotor model) or none"},
-          {"rotor-inertia", K::String, "auto (the vehicle file's when given, else estimated), estimate, or kg m^2"},
-          {"moment-highpass", K::String, "auto (with a vehicle chosen from the data, else off), off, or Hz"},
-          {"term-signs", K::String, "enforce (damping, drag, rotor inertia, flapping >= 0 in PC and FMPC) or free"},
-          {"jackknife-blocks", K::Integer, "time blocks of the jackknife under the HAC errors, 0 = off (default 8)"},
-      },
-      processing_specs());
-  return s;
-}
-
-const std::vector<OptionSpec>& simulate_specs() {
-  static const std::vector<OptionSpec> s = {
-      {"trajectory", K::String, "table2, circle1..3, circle (with radius/altitude) or a trajectory JSON file (required)"},
-      {"radius", K::Number, "circle radius, m (trajectory circle; default 0.5)"},
-      {"altitude", K::Number, "circle altitude, m (trajectory circle; default 1)"},
-      {"duration", K::Number, "flight length, s (default 50)"},
-      {"plant", K::String, "the simulated vehicle: qball2-virtual, qball2-nominal or a params JSON"},
-      {"controller-params", K::String, "the controller's model (default qball2-nominal)"},
-      {"torque-map", K::String, "WT or WinvT (eq. 31) (default WT)"},
-      {"derivative", K::String, "tustin or backward-euler (default tustin)"},
-      {"fz-max", K::Number, "thrust saturation, N (default 34.4)"},
-      {"tau-max", K::Number, "torque saturation, N m (default 1.72)"},
-      {"noise", K::String, "sensor noise profile: default or none"},
-      {"sigma-position", K::Number, "mocap position noise std, m"},
-      {"sigma-yaw", K::Number, "mocap yaw noise std, rad"},
-      {"sigma-attitude", K::Number, "IMU roll/pitch noise std, rad"},
-      {"sigma-gyro", K::Number, "gyro noise std, rad/s"},
-      {"sigma-velocity", K::Number, "velocity noise std, m/s (velocity-source truth)"},
-      {"sigma-yaw-rate", K::Number, "yaw-rate noise std, rad/s (velocity-source truth)"},
-      {"velocity-source", K::String, "mocap-difference or truth"},
-      {"seed", K::Integer, "noise seed (default 1)"},
-      {"dt", K::Number, "plant RK4 step, s (default 0.001)"},
-      {"rate", K::Number, "controller (and log) rate, Hz (default 500)"},
-      {"mocap-rate", K::Number, "motion-capture rate, Hz (default 30)"},
-      {"imu-rate", K::Number, "IMU rate, Hz (default 500)"},
-      {"actuator-tau", K::Number, "actuator lag time constant, s (default 0)"},
-      {"g", K::Number, "gravity, m/s^2 (default 9.81)"},
-      {"summary-from", K::Number, "start of the window of the RMS tracking errors, s (default 0)"},
-      {"vehicle", K::String, "fly a vehicle file or built-in with rotor-level actuation (docs/vehicles.md)"},
-      {"speedup", K::Number, "play a Fourier trajectory this many times faster (default 1)"},
-      {"sigma-rotor", K::Number, "with vehicle: noise std on the logged rotor speeds, rad/s or rpm"},
-  };
-  return s;
-}
-
-const std::vector<OptionSpec>& design_specs() {
-  static const std::vector<OptionSpec> s = concat(
-      {
-          {"seed", K::Integer, "seed of the random starts (default 1)"},
-          {"starts", K::Integer, "number of random starts (default 8)"},
-          {"threads", K::Integer, "worker threads, 0 = one per core"},
-          {"criterion", K::String, "cond, cond-scaled or dopt (default cond)"},
-          {"reference", K::String, "parameter set scaling cond-scaled and dopt (default qball2-nominal)"},
-          {"harmonics", K::Integer, "number of harmonics N of eq. (18) (default 5)"},
-          {"wf", K::Number, "fundamental frequency, deg/s (default 36)"},
-          {"max-evals", K::Integer, "SLSQP evaluations per round of one start (default 300)"},
-          {"check-dt", K::Number, "grid of the limits, s (default 0.001)"},
-          {"cond-dt", K::Number, "sampling period T of W (eq. 20), s (default 0.002)"},
-      },
-      limit_specs());
-  return s;
-}
-
-const std::vector<OptionSpec>& check_specs() {
-  static const std::vector<OptionSpec> s = concat(
-      {
-          {"duration", K::Number, "seconds checked, 0 = one period"},
-          {"check-dt", K::Number, "grid of the limit check, s (default 0.001)"},
-          {"cond-dt", K::Number, "sampling period T of W (eq. 20), s (default 0.002)"},
-          {"endpoint-tol", K::Number, "tolerance of the start/end conditions, SI units (default 1e-3)"},
-      },
-      limit_specs());
-  return s;
-}
-
-const std::vector<OptionSpec>& validate_specs() {
-  static const std::vector<OptionSpec> s = concat(
-      {
-          {"params", K::List, "parameter sets to judge: presets, params JSON or identify result JSON files"},
-          {"reference", K::String,
-           "the set improvements are measured against (default qball2-nominal; with a vehicle its [nominal])"},
-          {"vehicle", K::String,
-           "vehicle file or built-in name: the wrench from the rotor columns (docs/vehicles.md); no simulation "
-           "comparison"},
-          {"trajectory", K::String, "reference to re-fly (default: the one the log records)"},
-          {"window", K::String, "window of the simulation comparison (default 10:50)"},
-          {"error-window", K::String,
-           "window of the prediction error (default: the whole log, or its part in the air when the vehicle sits on "
-           "the ground at an end)"},
-          {"no-simulation", K::Flag, "skip the simulation comparison"},
-          {"with-noise", K::Flag, "re-fly with the log's sensor noise and seed"},
-          {"ignore-input-errors", K::Flag,
-           "with a vehicle: a rotor-mapping mismatch is a warning, not an error"},
-      },
-      processing_specs());
-  return s;
-}
-
-std::string kind_name(OptionKind k) {
-  switch (k) {
-    case K::Number: return "a number";
-    case K::Integer: return "an integer";
-    case K::String: return "a string";
-    case K::Flag: return "true or false";
-    case K::List: return "a string or a list of strings";
-  }
-  return "?";
-}
-
-// --- Reading a JSON object against a table ----------------------------------------
-
-/// Reads the keys of one command's JSON object; every key must be read or finish() throws.
-class Reader {
- public:
-  Reader(const json& j, std::string command, const std::vector<OptionSpec>& specs)
-      : command_(std::move(command)), specs_(specs) {
-    if (j.is_null()) return;
-    if (!j.is_object())
-      throw std::invalid_argument(fmt::format("{} options: expected a JSON object of option: value", command_));
-    for (const auto& [k, v] : j.items()) {
-      const std::string name = normalize_option_key(k);
-      if (given_.count(name))
-        throw std::invalid_argument(fmt::format("{}: option --{} is given twice ({} and {})", command_, name,
-                                                given_[name], k));
-      if (!spec(name)) {
-        std::vector<std::string> known;
-        for (const auto& s : specs_) known.push_back(s.name);
-        throw std::invalid_argument(fmt::format("{}: unknown option '{}' (known: {})", command_, k,
-                                                fmt::join(known, ", ")));
-      }
-      given_[name] = k;
-      if (!v.is_null()) values_[name] = v;
-    }
-  }
-
-  std::optional<double> number(const std::string& name) {
-    const json* v = get(name, K::Number);
-    if (!v) return std::nullopt;
-    if (v->is_number()) return v->get<double>();
-    if (v->is_string()) {
-      const std::string s = v->get<std::string>();
-      double x = 0.0;
-      const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), x);
-      if (ec == std::errc() && end == s.data() + s.size() && !s.empty()) return x;
-    }
-    bad(name, *v);
-  }
-
-  std::optional<long long> integer(const std::string& name) {
-    const json* v = get(name, K::Integer);
-    if (!v) return std::nullopt;
-    if (v->is_number_integer()) return v->get<long long>();
-    if (v->is_number_float()) {
-      const double x = v->get<double>();
-      if (std::isfinite(x) && x == std::trunc(x) && std::abs(x) < 9e15) return static_cast<long long>(x);
-    }
-    if (v->is_string()) {
-      const std::string s = v->get<std::string>();
-      long long x = 0;
-      const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), x);
-      if (ec == std::errc() && end == s.data() + s.size() && !s.empty()) return x;
-    }
-    bad(name, *v);
-  }
-
-  std::optional<int> integer32(const std::string& name) {
-    const auto v = integer(name);
-    if (!v) return std::nullopt;
-    if (*v < std::numeric_limits<int>::min() || *v > std::numeric_limits<int>::max())
-      throw std::invalid_argument(fmt::format("{}: option {}: {} is out of range", command_, spelled(name), *v));
-    return static_cast<int>(*v);
-  }
-
-  std::optional<std::string> string(const std::string& name) {
-    const json* v = get(name, K::String);
-    if (!v) return std::nullopt;
-    if (!v->is_string()) bad(name, *v);
-    return v->get<std::string>();
-  }
-
-  bool flag(const std::string& name) {
-    const json* v = get(name, K::Flag);
-    if (!v) return false;
-    if (!v->is_boolean()) bad(name, *v);
-    return v->get<bool>();
-  }
-
-  std::vector<std::string> list(const std::string& name) {
-    const json* v = get(name, K::List);
-    if (!v) return {};
-    if (v->is_string()) return {v->get<std::string>()};
-    if (!v->is_array()) bad(name, *v);
-    std::vector<std::string> out;
-    for (const auto& e : *v) {
-      if (!e.is_string()) bad(name, *v);
-      out.push_back(e.get<std::string>());
-    }
-    return out;
-  }
-
-  /// Runs f, prefixing an std::invalid_argument's message with the option's spelling.
-  template <class F>
-  auto with_option(const std::string& name, F&& f) -> decltype(f()) {
-    try {
-      return f();
-    } catch (const std::invalid_argument& e) {
-      throw std::invalid_argument(fmt::format("{}: option {}: {}", command_, spelled(name), e.what()));
-    }
-  }
-
-  const std::string& command() const { return command_; }
-
-  /// Every given option must have been read: a declared option the code forgets
-  /// would otherwise be silently ignored (tests give each option once).
-  void finish() const {
-    for (const auto& [name, as_given] : given_)
-      if (!read_.count(name))
-        throw std::logic_error(fmt::format("{}: option --{} is declared but not read", command_, name));
-  }
-
- private:
-  const OptionSpec* spec(const std::string& name) const {
-    for (const auto& s : specs_)
-      if (s.name == name) return &s;
-    return nullptr;
-  }
-  const json* get(const std::string& name, OptionKind kind) {
-    const OptionSpec* s = spec(name);
-    // A programming error: the reading code and the table disagree (tests read every option).
-    if (!s || s->kind != kind)
-      throw std::logic_error(fmt::format("{}: option --{} is read as {} but declared otherwise", command_, name,
-                                         kind_name(kind)));
-    read_.insert(name);
-    const auto it = values_.find(name);
-    return it == values_.end() ? nullptr : &it->second;
-  }
-  std::string spelled(const std::string& name) const {
-    const auto it = given_.find(name);
-    if (it == given_.end() || it->second == name) return fmt::format("'{}' (--{})", name, name);
-    return fmt::format("'{}' (--{})", it->second, name);
-  }
-  [[noreturn]] void bad(const std::string& name, const json& v) const {
-    throw std::invalid_argument(fmt::format("{}: option {}: expected {}, got {}", command_, spelled(name),
-                                            kind_name(spec(name)->kind), v.dump()));
-  }
-
-  std::string command_;
-  const std::vector<OptionSpec>& specs_;
-  std::map<std::string, json> values_;
-  std::map<std::string, std::string> given_;  // normalized name -> key as given
-  std::set<std::string> read_;
-};
-
-/// The processing group (ProcessingArgs of the CLI).
+/// The processing group (--filter ... --map).
 struct Processing {
   ProcessingOptions processing;
   double lambda = 30.0;
@@ -345,131 +50,135 @@ struct Processing {
   CsvReadOptions csv;
 };
 
-Processing read_processing(Reader& r) {
-  // Defaults: the option structs' own (one set, shared with the library's
-  // callers; a copy here once let `batch` refuse a 0.2 % clock jitter that
-  // `identify` accepts).
+Processing read_processing(const OptionValues& r) {
   Processing p;
   auto& lp = p.processing.lowpass;
-  const std::string filter = r.string("filter").value_or("butter");
-  if (filter == "butter") lp.kind = signal::LowpassOptions::Kind::Butterworth;
-  else if (filter == "fir") lp.kind = signal::LowpassOptions::Kind::FirBlackmanHarris;
-  else throw std::invalid_argument(fmt::format("{}: option 'filter' (--filter): {}: expected butter or fir",
-                                               r.command(), filter));
-  lp.cutoff_hz = r.number("cutoff").value_or(lp.cutoff_hz);
-  lp.order = r.integer32("order").value_or(lp.order);
-  lp.taps = r.integer32("taps").value_or(lp.taps);
-  p.lambda = r.number("lambda").value_or(IdentificationOptions{}.lambda);
-  const std::string df = r.string("derivative-filter").value_or("consistent");
-  if (df == "consistent") p.gd_variant = signal::GdVariant::Consistent;
-  else if (df == "printed") p.gd_variant = signal::GdVariant::Printed;
-  else throw std::invalid_argument(fmt::format(
-      "{}: option 'derivative-filter' (--derivative-filter): {}: expected consistent or printed", r.command(), df));
-  p.processing.g = r.number("g").value_or(p.processing.g);
-  p.processing.period_tolerance = r.number("period-tolerance").value_or(p.processing.period_tolerance);
+  lp.kind = *r.string("filter") == "fir" ? signal::LowpassOptions::Kind::FirBlackmanHarris
+                                         : signal::LowpassOptions::Kind::Butterworth;
+  lp.cutoff_hz = *r.number("cutoff");
+  lp.order = *r.integer32("order");
+  lp.taps = *r.integer32("taps");
+  p.lambda = *r.number("lambda");
+  p.gd_variant = *r.string("derivative-filter") == "printed" ? signal::GdVariant::Printed : signal::GdVariant::Consistent;
+  p.processing.g = *r.number("g");
+  p.processing.period_tolerance = *r.number("period-tolerance");
   p.processing.exclude_edges = !r.flag("keep-edges");
   p.processing.interpolate_held = !r.flag("keep-held-samples");
   const auto map = r.list("map");
   p.csv.map = r.with_option("map", [&] { return parse_column_map(map); });
   p.csv.period_tolerance = p.processing.period_tolerance;
-  p.csv.time_units_per_second =
-      r.with_option("time-unit", [&] { return parse_time_unit(r.string("time-unit").value_or("s")); });
+  p.csv.time_units_per_second = r.with_option("time-unit", [&] { return parse_time_unit(*r.string("time-unit")); });
   return p;
 }
 
-Constraints read_limits(Reader& r) {
-  Constraints c;
-  c.x_max = r.number("x-max").value_or(c.x_max);
-  c.y_max = r.number("y-max").value_or(c.y_max);
-  c.z_min = r.number("z-min").value_or(c.z_min);
-  c.z_max = r.number("z-max").value_or(c.z_max);
-  c.psi_max = r.number("psi-max").value_or(180.0) * kDeg;
-  c.tilt_max = r.number("tilt-max").value_or(5.73) * kDeg;
-  c.xdot_max = r.number("xdot-max").value_or(c.xdot_max);
-  c.ydot_max = r.number("ydot-max").value_or(c.ydot_max);
-  c.zdot_max = r.number("zdot-max").value_or(c.zdot_max);
-  c.psidot_max = r.number("psidot-max").value_or(28.65) * kDeg;
-  c.zddot_min = r.number("zddot-min").value_or(c.zddot_min);
-  c.z0 = r.number("z0").value_or(c.z0);
+/// The limits of section III-B: `base` with the limits given in place of its
+/// values (angles given in degrees).
+Constraints read_limits(const OptionValues& r, Constraints c) {
+  struct L {
+    const char* name;
+    double Constraints::*field;
+    double scale;
+  };
+  static const L limits[] = {{"x-max", &Constraints::x_max, 1.0},          {"y-max", &Constraints::y_max, 1.0},
+                             {"z-min", &Constraints::z_min, 1.0},          {"z-max", &Constraints::z_max, 1.0},
+                             {"psi-max-deg", &Constraints::psi_max, kDeg}, {"tilt-max-deg", &Constraints::tilt_max, kDeg},
+                             {"xdot-max", &Constraints::xdot_max, 1.0},    {"ydot-max", &Constraints::ydot_max, 1.0},
+                             {"zdot-max", &Constraints::zdot_max, 1.0},    {"psidot-max-deg", &Constraints::psidot_max, kDeg},
+                             {"zddot-min", &Constraints::zddot_min, 1.0},  {"rate-max-deg", &Constraints::rate_max, kDeg},
+                             {"z0", &Constraints::z0, 1.0}};
+  for (const L& l : limits) {
+    const auto v = r.number(l.name);  // read whether given or not: every declared option is read
+    if (r.given(l.name)) c.*l.field = *v * l.scale;
+  }
   return c;
 }
 
-/// Validation messages name the struct's field; prefix the command so that a
-/// Python user knows where it came from.
-template <class F>
-void validate_as(const std::string& command, F&& f) {
-  try {
-    f();
-  } catch (const std::invalid_argument& e) {
-    throw std::invalid_argument(fmt::format("{}: {}", command, e.what()));
+bool any_limit_given(const OptionValues& r) {
+  for (const char* n : {"x-max", "y-max", "z-min", "z-max", "psi-max-deg", "tilt-max-deg", "xdot-max", "ydot-max",
+                        "zdot-max", "psidot-max-deg", "zddot-min", "rate-max-deg", "z0"})
+    if (r.given(n)) return true;
+  return false;
+}
+
+/// The precision group of design and check-trajectory (--vehicle, --flight-duration, --window, --sigma-*,
+/// --closed-loop-flights, --regression, --no-precision).
+PrecisionRequest read_precision(const OptionValues& r) {
+  PrecisionRequest p;
+  const auto vehicle = r.string("vehicle");
+  p.vehicle = vehicle.value_or("");
+  p.predict = !r.flag("no-precision");
+  p.flown = vehicle ? "vehicle " + *vehicle : "the paper's flight (virtual QBall 2, 500 Hz log, default noise)";
+  SimulationOptions sim;
+  if (vehicle) configure_for_vehicle(sim, load_vehicle(*vehicle));
+  sim.duration = *r.number("flight-duration");
+  NoiseSigmas& n = sim.sensors.noise;
+  n.position = r.number("sigma-position").value_or(n.position);
+  n.yaw = r.number("sigma-yaw").value_or(n.yaw);
+  n.attitude = r.number("sigma-attitude").value_or(n.attitude);
+  n.gyro = r.number("sigma-gyro").value_or(n.gyro);
+  if (const auto s = r.number("sigma-rotor")) {
+    if (!vehicle) fail(r, "--sigma-rotor needs --vehicle (a rotor model)");
+    sim.rotor_noise = *s;
   }
+  IdentificationOptions id;
+  id.window = r.with_option("window", [&] { return TimeWindow::parse(*r.window("window")); });
+  const std::string regression = *r.string("regression");
+  if (regression == "real" || (regression == "auto" && vehicle)) {
+    // identify --vehicle's defaults (apply_real_flight): weighted rows, moment rows at twice --cutoff.
+    id.terms.weight_rows = true;
+    id.moment_cutoff_hz = 2.0 * id.processing.lowpass.cutoff_hz;
+  }
+  p.options = PrecisionOptions::from(sim, id);
+  p.options.closed_loop_flights = *r.integer32("closed-loop-flights");
+  return p;
 }
 
 }  // namespace
 
-std::string normalize_option_key(std::string_view key) {
-  std::string s(key);
-  while (!s.empty() && s.front() == '-') s.erase(s.begin());
-  while (!s.empty() && s.back() == '_') s.pop_back();
-  std::replace(s.begin(), s.end(), '_', '-');
-  return s;
-}
-
-const std::vector<OptionSpec>& command_option_specs(std::string_view command) {
-  if (command == "identify") return identify_specs();
-  if (command == "simulate") return simulate_specs();
-  if (command == "design") return design_specs();
-  if (command == "check-trajectory") return check_specs();
-  if (command == "validate") return validate_specs();
-  throw std::invalid_argument(fmt::format("no options table for command '{}'", command));
-}
-
-IdentifyRequest identify_options_from_json(const nlohmann::json& j) {
-  Reader r(j, "identify", identify_specs());
+IdentifyRequest identify_request(const OptionValues& r) {
   IdentifyRequest req;
   IdentificationOptions& opt = req.options;
-  opt.window = r.with_option("window", [&] { return TimeWindow::parse(r.string("window").value_or("10:50")); });
-  if (const auto ew = r.string("error-window"))
-    opt.error_window = r.with_option("error-window", [&] { return TimeWindow::parse(*ew); });
-  opt.gd.sigma = r.number("sigma").value_or(30.0);
-  opt.gd.rate = r.number("gd-rate").value_or(opt.gd.rate);
-  const std::string disc = r.string("gd-discretization").value_or("exact");
-  if (disc == "exact") opt.gd.discretization = GdDiscretization::Exact;
-  else if (disc == "literal") opt.gd.discretization = GdDiscretization::ForwardEuler;
-  else throw std::invalid_argument(fmt::format(
-      "identify: option 'gd-discretization' (--gd-discretization): {}: expected exact or literal", disc));
-  const std::string nominal = r.string("nominal").value_or("qball2-nominal");
-  opt.reference = NamedParams{"nom", load_params(nominal)};
-  const std::string init = r.string("gd-init").value_or("nominal");
+  opt.window = TimeWindow::parse(*r.window("window"));
+  if (const auto ew = r.window("error-window")) opt.error_window = TimeWindow::parse(*ew);
+  opt.gd.sigma = *r.number("sigma");
+  opt.gd.rate = *r.number("gd-rate");
+  opt.gd.discretization = *r.string("gd-discretization") == "literal" ? GdDiscretization::ForwardEuler : GdDiscretization::Exact;
+  const std::string reference = *r.string("reference");
+  opt.reference = NamedParams{param_set_name(reference), load_params(reference)};
+  const std::string init = *r.string("gd-init");
   if (init != "nominal") opt.gd_initial = load_params(init);
   opt.allow_rank_deficient = r.flag("allow-rank-deficient");
-  opt.evolution_interval = r.number("evolution-interval").value_or(0.01);
-  opt.uncertainty.jackknife_blocks = r.integer32("jackknife-blocks").value_or(opt.uncertainty.jackknife_blocks);
+  opt.ignore_input_errors = r.flag("ignore-input-errors");
+  opt.evolution_interval = *r.number("evolution-interval");
+  opt.uncertainty.jackknife_blocks = *r.integer32("jackknife-blocks");
   Processing p = read_processing(r);
   opt.processing = p.processing;
   opt.lambda = p.lambda;
   opt.gd_variant = p.gd_variant;
   req.csv = std::move(p.csv);
-  req.csv.keep_extra_columns = false;  // identification uses the 14 standard columns only
+  req.csv.keep_extra_columns = false;  // identification uses the 14 standard columns (and the rotor columns) only
   RealFlightArgs rf;
   rf.vehicle = r.string("vehicle").value_or("");
   rf.known_mass = r.number("known-mass");
-  rf.terms = r.string("terms").value_or("auto");
-  rf.cutoffs = r.string("cutoffs").value_or("auto");
-  rf.gd_gain = r.string("gd-gain").value_or("auto");
+  rf.terms = *r.string("terms");
+  rf.cutoffs = *r.string("cutoffs");
+  rf.gd_gain = *r.string("gd-gain");
   rf.cutoff_force = r.number("cutoff-force");
   rf.cutoff_moment = r.number("cutoff-moment");
-  rf.motor_time_constant = r.string("motor-time-constant").value_or("auto");
-  rf.time_offsets = r.string("time-offsets").value_or("estimate");
-  rf.rotor_inertia = r.string("rotor-inertia").value_or("auto");
-  rf.moment_highpass = r.string("moment-highpass").value_or("auto");
-  rf.term_signs = r.string("term-signs").value_or("enforce");
-  rf.window_given = j.contains("window");
-  rf.nominal_given = j.contains("nominal");
-  r.finish();
-  validate_as("identify", [&] { apply_real_flight(req, rf); });
-  validate_as("identify", [&] { opt.validate(); });
+  rf.motor_time_constant = *r.string("motor-time-constant");
+  rf.time_offsets = *r.string("time-offsets");
+  rf.rotor_inertia = *r.string("rotor-inertia");
+  rf.moment_highpass = *r.string("moment-highpass");
+  rf.term_signs = *r.string("term-signs");
+  rf.window_given = r.given("window");
+  rf.nominal_given = r.given("reference");
+  validate_as(r, [&] { apply_real_flight(req, rf); });
+  validate_as(r, [&] { opt.validate(); });
   return req;
+}
+
+IdentifyRequest identify_options_from_json(const nlohmann::json& j) {
+  return identify_request(OptionValues(j, "identify"));
 }
 
 namespace {
@@ -850,60 +559,60 @@ std::string format_input(const IdentificationInput& in) {
   return s;
 }
 
-SimulateRequest simulate_options_from_json(const nlohmann::json& j) {
-  Reader r(j, "simulate", simulate_specs());
+SimulateRequest simulate_request(const OptionValues& r) {
   SimulateRequest req;
   SimulationOptions& o = req.options;
   const auto spec = r.string("trajectory");
-  if (!spec) throw std::invalid_argument("simulate: option 'trajectory' (--trajectory) is required");
+  if (!spec) fail(r, "option 'trajectory' (--trajectory) is required");
   const auto radius = r.number("radius");
   const auto altitude = r.number("altitude");
   if (*spec == "circle") {
+    // Defaults: circular path experiment 1 (section IV-C).
     req.trajectory = std::make_shared<CircleTrajectory>(radius.value_or(0.5), altitude.value_or(1.0));
   } else {
-    if (radius || altitude)
-      throw std::invalid_argument("simulate: options radius and altitude only apply to trajectory circle");
+    if (radius || altitude) fail(r, "--radius and --altitude only apply to --trajectory circle");
     req.trajectory = load_trajectory(*spec);
   }
   // In the command line's order: rates, models, noise profile, then the
   // vehicle (which overrides those it defines unless given here), then noise levels.
-  o.duration = r.number("duration").value_or(o.duration);
-  o.g = r.number("g").value_or(o.g);
+  o.duration = *r.number("duration");
+  o.g = *r.number("g");
   const auto rate = r.number("rate");
   if (rate) o.set_rate(*rate);  // sensors at most at the log rate, RK4 step ~1 ms dividing the period
   const auto mocap_rate = r.number("mocap-rate"), imu_rate = r.number("imu-rate"), dt = r.number("dt");
   if (mocap_rate) o.sensors.mocap_rate = *mocap_rate;
   if (imu_rate) o.sensors.imu_rate = *imu_rate;
   if (dt) o.dt = *dt;
-  const auto plant = r.string("plant"), cparams = r.string("controller-params");
-  o.plant = load_params(plant.value_or("qball2-virtual"));
-  o.controller.params = load_params(cparams.value_or("qball2-nominal"));
-  o.controller.torque_map = r.with_option("torque-map", [&] { return torque_map_from_string(r.string("torque-map").value_or("WT")); });
-  o.controller.derivative_discretization = r.with_option("derivative", [&] {
-    return derivative_discretization_from_string(r.string("derivative").value_or("tustin"));
-  });
-  const auto fz_max = r.number("fz-max"), tau_max = r.number("tau-max");
-  if (fz_max) o.controller.Fz_max = *fz_max;
-  if (tau_max) o.controller.tau_max = *tau_max;
-  o.controller.g = o.g;  // as the CLI: one gravity for plant and controller
+  o.plant = load_params(*r.string("plant"));
+  o.controller.params = load_params(*r.string("controller-params"));
+  o.controller.torque_map = r.with_option("torque-map", [&] { return torque_map_from_string(*r.string("torque-map")); });
+  o.controller.derivative_discretization = r.with_option(
+      "derivative", [&] { return derivative_discretization_from_string(*r.string("derivative")); });
+  o.controller.Fz_max = *r.number("fz-max");
+  o.controller.tau_max = *r.number("tau-max");
+  o.controller.g = o.g;  // one gravity for plant and controller
   NoiseSigmas& n = o.sensors.noise;
-  n = r.with_option("noise", [&] { return NoiseSigmas::preset(r.string("noise").value_or("default")); });
-  o.actuator_tau = r.number("actuator-tau").value_or(o.actuator_tau);
+  n = r.with_option("noise", [&] { return NoiseSigmas::preset(*r.string("noise")); });
+  o.actuator_tau = *r.number("actuator-tau");
+  o.sensors.seed = *r.seed("seed");
+  o.summary_from = *r.number("summary-from");
   if (const auto v = r.string("vehicle")) {
+    // Rotor-level actuation, the vehicle's nominal parameters, scaled gains, its
+    // [controller]/[sensors] tables; options given here still win.
     const SimulationOptions before = o;
     r.with_option("vehicle", [&] {
       configure_for_vehicle(o, load_vehicle(*v));
       return 0;
     });
-    if (plant) o.plant = before.plant;
-    if (cparams) o.controller.params = before.controller.params;
-    if (fz_max) o.controller.Fz_max = before.controller.Fz_max;
-    if (tau_max) o.controller.tau_max = before.controller.tau_max;
+    if (r.given("plant")) o.plant = before.plant;
+    if (r.given("controller-params")) o.controller.params = before.controller.params;
+    if (r.given("fz-max")) o.controller.Fz_max = before.controller.Fz_max;
+    if (r.given("tau-max")) o.controller.tau_max = before.controller.tau_max;
     if (rate) o.controller.rate = before.controller.rate;
     if (mocap_rate) o.sensors.mocap_rate = before.sensors.mocap_rate;
     if (imu_rate) o.sensors.imu_rate = before.sensors.imu_rate;
     if (before.actuator_tau > 0.0)
-      throw std::invalid_argument("simulate: option 'actuator-tau' cannot be used with 'vehicle' (the vehicle's rotors.time_constant is the lag)");
+      fail(r, "--actuator-tau cannot be used with --vehicle (the vehicle's rotors.time_constant is the lag)");
   }
   if (const auto sr = r.number("sigma-rotor")) o.rotor_noise = *sr;
   n.position = r.number("sigma-position").value_or(n.position);
@@ -912,66 +621,113 @@ SimulateRequest simulate_options_from_json(const nlohmann::json& j) {
   n.gyro = r.number("sigma-gyro").value_or(n.gyro);
   n.velocity = r.number("sigma-velocity").value_or(n.velocity);
   n.yaw_rate = r.number("sigma-yaw-rate").value_or(n.yaw_rate);
-  o.sensors.velocity_source = r.with_option("velocity-source", [&] {
-    return velocity_source_from_string(r.string("velocity-source").value_or("mocap-difference"));
-  });
-  const auto seed = r.integer("seed");
-  if (seed && *seed < 0) throw std::invalid_argument(fmt::format("simulate: option 'seed' (--seed): {} < 0", *seed));
-  o.sensors.seed = seed ? static_cast<std::uint64_t>(*seed) : o.sensors.seed;
-  o.summary_from = r.number("summary-from").value_or(o.summary_from);
-  if (const auto sp = r.number("speedup"); sp && *sp != 1.0)
-    req.trajectory = r.with_option("speedup", [&] { return std::shared_ptr<const Trajectory>(time_scaled(*req.trajectory, *sp)); });
+  o.sensors.velocity_source = r.with_option(
+      "velocity-source", [&] { return velocity_source_from_string(*r.string("velocity-source")); });
+  if (const double sp = *r.number("speedup"); sp != 1.0 && *spec != "circle")
+    req.trajectory = r.with_option("speedup", [&] { return std::shared_ptr<const Trajectory>(time_scaled(*req.trajectory, sp)); });
   o.record_truth = false;
-  r.finish();
-  validate_as("simulate", [&] { o.validate(); });
+  validate_as(r, [&] { o.validate(); });
   return req;
 }
 
-DesignOptions design_options_from_json(const nlohmann::json& j) {
-  Reader r(j, "design", design_specs());
-  DesignOptions o;
-  const auto seed = r.integer("seed");
-  if (seed && *seed < 0) throw std::invalid_argument(fmt::format("design: option 'seed' (--seed): {} < 0", *seed));
-  o.seed = seed ? static_cast<std::uint64_t>(*seed) : o.seed;
-  o.starts = r.integer32("starts").value_or(o.starts);
-  o.threads = r.integer32("threads").value_or(o.threads);
-  o.criterion = r.with_option("criterion", [&] { return parse_criterion(r.string("criterion").value_or("cond")); });
-  o.reference = load_params(r.string("reference").value_or("qball2-nominal"));
-  o.harmonics = r.integer32("harmonics").value_or(o.harmonics);
-  o.wf = r.number("wf").value_or(36.0) * kDeg;
-  o.max_evals = r.integer32("max-evals").value_or(o.max_evals);
-  o.check_dt = r.number("check-dt").value_or(o.check_dt);
-  o.cond_dt = r.number("cond-dt").value_or(o.cond_dt);
-  o.limits = read_limits(r);
-  r.finish();
-  validate_as("design", [&] { o.validate(); });
-  return o;
+SimulateRequest simulate_options_from_json(const nlohmann::json& j) {
+  return simulate_request(OptionValues(j, "simulate"));
+}
+
+DesignRequest design_request(const OptionValues& r) {
+  DesignRequest req;
+  DesignOptions& opt = req.options;
+  opt.seed = *r.seed("seed");
+  opt.starts = *r.integer32("starts");
+  opt.threads = *r.integer32("threads");
+  opt.criterion = r.with_option("criterion", [&] { return parse_criterion(*r.string("criterion")); });
+  opt.reference = load_params(*r.string("scaling-set"));
+  opt.harmonics = *r.integer32("harmonics");
+  opt.wf = *r.number("wf-deg") * kDeg;
+  opt.max_evals = *r.integer32("max-evals");
+  opt.check_dt = *r.number("check-dt");
+  opt.cond_dt = *r.number("cond-dt");
+  opt.limits = read_limits(r, Constraints{});
+  req.precision = read_precision(r);
+  const auto margin = r.number("thrust-margin"), thrust_min = r.number("thrust-min");
+  if (!req.precision.vehicle.empty()) {
+    // The vehicle's limits (its [limits] table and rotors) in place of the defaults, the options over them.
+    const Vehicle v = load_vehicle(req.precision.vehicle);
+    opt.limits = read_limits(r, vehicle_constraints(v, Constraints{}));
+    if (margin) opt.limits.thrust_high = 1.0 - *margin;
+    if (thrust_min) opt.limits.thrust_low = *thrust_min;
+    if (!r.given("wf-deg")) opt.wf = vehicle_excitation_frequency(v) / opt.harmonics;
+    if (!r.given("scaling-set")) opt.reference = v.nominal;
+    req.vehicle_note = fmt::format(
+        "limits of vehicle {}: every rotor within [{:g}, {:g}] of its largest thrust, tilt {:g} deg{}; highest "
+        "harmonic {:.3g} rad/s{}",
+        v.name, opt.limits.thrust_low, opt.limits.thrust_high, opt.limits.tilt_max / kDeg,
+        std::isfinite(opt.limits.rate_max) ? fmt::format(", body rates {:g} deg/s", opt.limits.rate_max / kDeg) : "",
+        opt.harmonics * opt.wf, r.given("wf-deg") ? "" : " (from its bandwidth)");
+  } else if (margin || thrust_min) {
+    fail(r, "--thrust-margin and --thrust-min need --vehicle (a rotor model)");
+  }
+  if (opt.criterion == Criterion::Precision) {
+    // Rows weighted by their noise on this vehicle with these sensors (a simulated hover, processed as identify does).
+    const PrecisionOptions& po = req.precision.options;
+    if (!r.given("scaling-set")) opt.reference = po.params;
+    opt.row_noise.sigma = regression_row_noise(po, opt.limits.z0 > 0.0 ? opt.limits.z0 : 1.0);
+    const TimeWindow w = po.window;
+    opt.row_noise.samples = std::max(1.0, (std::min(w.t1, po.duration) - w.t0) * po.rate);
+    req.row_noise_note = fmt::format(
+        "row noise of the regression (hover, {:g} s simulated): Fz {:.3g} N, tau {:.3g} {:.3g} {:.3g} N m; {:g} "
+        "samples",
+        kRowNoiseSeconds, opt.row_noise.sigma(0), opt.row_noise.sigma(1), opt.row_noise.sigma(2),
+        opt.row_noise.sigma(3), opt.row_noise.samples);
+  }
+  validate_as(r, [&] { opt.validate(); });
+  return req;
+}
+
+DesignOptions design_options_from_json(const nlohmann::json& j) { return design_request(OptionValues(j, "design")).options; }
+
+CheckRequest check_request(const OptionValues& r, const std::string& trajectory) {
+  CheckRequest req;
+  CheckOptions& o = req.options;
+  o.duration = *r.number("check-span");
+  o.constraint_dt = *r.number("check-dt");
+  o.cond_dt = *r.number("cond-dt");
+  o.endpoint_tol = *r.number("endpoint-tol");
+  req.precision = read_precision(r);
+  // A designed trajectory file records the limits it was designed for: check
+  // against those, with any limit given here in place of the file's.
+  Constraints base;
+  req.limits_from = "defaults of section III-B";
+  if (!trajectory.empty())
+    if (const auto saved = saved_trajectory_limits(trajectory)) {
+      base = *saved;
+      req.limits_from = trajectory;
+    }
+  // With --vehicle, the limits for flying it (its [limits] and rotors) unless the file records a vehicle's.
+  if (!req.precision.vehicle.empty() && base.rotor_mixer.rows() == 0) {
+    base = vehicle_constraints(load_vehicle(req.precision.vehicle), base);
+    req.limits_from += ", with the limits of vehicle " + req.precision.vehicle;
+  }
+  o.limits = read_limits(r, base);
+  req.limits_given = any_limit_given(r);
+  validate_as(r, [&] { o.validate(); });
+  return req;
 }
 
 CheckOptions check_options_from_json(const nlohmann::json& j) {
-  Reader r(j, "check-trajectory", check_specs());
-  CheckOptions o;
-  o.duration = r.number("duration").value_or(o.duration);
-  o.constraint_dt = r.number("check-dt").value_or(o.constraint_dt);
-  o.cond_dt = r.number("cond-dt").value_or(o.cond_dt);
-  o.endpoint_tol = r.number("endpoint-tol").value_or(o.endpoint_tol);
-  o.limits = read_limits(r);
-  r.finish();
-  validate_as("check-trajectory", [&] { o.validate(); });
-  return o;
+  return check_request(OptionValues(j, "check-trajectory"), "").options;
 }
 
-ValidateRequest validate_options_from_json(const nlohmann::json& j) {
-  Reader r(j, "validate", validate_specs());
+ValidateRequest validate_request(const OptionValues& r) {
   ValidateRequest req;
   req.params = r.list("params");
-  req.reference = r.string("reference").value_or("");
+  const auto reference = r.string("reference");  // read always; the default depends on --vehicle
+  req.reference = r.given("reference") ? *reference : "";
   if (const auto v = r.string("vehicle")) req.vehicle = r.with_option("vehicle", [&] { return load_vehicle(*v); });
   req.trajectory = r.string("trajectory").value_or("");
-  req.simulation.window =
-      r.with_option("window", [&] { return TimeWindow::parse(r.string("window").value_or("10:50")); });
-  if (const auto ew = r.string("error-window")) {
-    req.prediction.window = r.with_option("error-window", [&] { return TimeWindow::parse(*ew); });
+  req.simulation.window = TimeWindow::parse(*r.window("window"));
+  if (const auto ew = r.window("error-window")) {
+    req.prediction.window = TimeWindow::parse(*ew);
     req.error_window_given = true;
   }
   req.no_simulation = r.flag("no-simulation");
@@ -982,12 +738,69 @@ ValidateRequest validate_options_from_json(const nlohmann::json& j) {
   req.prediction.lambda = p.lambda;
   req.prediction.gd_variant = p.gd_variant;
   req.csv = std::move(p.csv);
-  r.finish();
-  validate_as("validate", [&] {
+  validate_as(r, [&] {
     req.prediction.validate();
     req.simulation.validate();
   });
   return req;
+}
+
+ValidateRequest validate_options_from_json(const nlohmann::json& j) {
+  return validate_request(OptionValues(j, "validate"));
+}
+
+MonteCarloRequest montecarlo_request(const OptionValues& r) {
+  MonteCarloRequest req;
+  MonteCarloOptions& o = req.options;
+  o.runs = *r.integer32("runs");
+  o.threads = *r.integer32("threads");
+  o.seed = *r.seed("seed");
+  o.trajectory = *r.string("trajectory");
+  o.simulation.duration = *r.number("duration");
+  const std::string plant = *r.string("plant"), noise = *r.string("noise");
+  o.simulation.plant = load_params(plant);
+  o.simulation.sensors.noise = NoiseSigmas::preset(noise);
+  IdentificationOptions& id = o.identification;
+  id.reference = NamedParams{"nom", load_params(*r.string("reference"))};
+  const auto rotor_noise = r.number("sigma-rotor");
+  if (const auto vehicle = r.string("vehicle")) {
+    // The vehicle flies with its rotors (plant, gains, sensors of its file); every run's
+    // wrench is computed from the logged, noisy rotor columns as identify --vehicle does.
+    const Vehicle v = load_vehicle(*vehicle);
+    configure_for_vehicle(o.simulation, v);
+    if (noise == "none") o.simulation.sensors.noise = NoiseSigmas::none();
+    if (r.given("plant")) o.simulation.plant = load_params(plant);
+    if (!r.given("reference")) id.reference = NamedParams{"nom", v.nominal};
+    id.gd.gain = GdGain::Normalized;  // identify's auto gain with a vehicle
+  } else if (rotor_noise) {
+    fail(r, "--sigma-rotor needs --vehicle (a rotor model)");
+  }
+  if (rotor_noise) o.simulation.rotor_noise = *rotor_noise;
+  id.window = TimeWindow::parse(*r.window("window"));
+  if (!r.given("window")) {  // the paper's 10-50 s, fitted to shorter flights as identify does
+    std::string note;
+    id.window = fit_paper_window(id.window, o.simulation.duration, 0.0, &note);
+    if (!note.empty()) req.notes.push_back(note);
+  }
+  const Processing p = read_processing(r);
+  id.processing = p.processing;
+  id.lambda = p.lambda;
+  id.gd_variant = p.gd_variant;
+  id.allow_rank_deficient = true;  // a run that lacks excitation is counted, not fatal
+  validate_as(r, [&] { o.validate(); });
+  return req;
+}
+
+ExportOptions export_options(const OptionValues& r) {
+  ExportOptions e;
+  e.rate = *r.number("export-rate");
+  e.format = r.string("export-format").value_or("");
+  e.plan.settle = *r.number("settle");
+  e.plan.cycles = *r.integer32("cycles");
+  e.plan.ground_z = *r.number("ground-z");
+  e.plan.climb_speed = *r.number("climb-speed");
+  e.piece = *r.number("piece");
+  return e;
 }
 
 }  // namespace quadid
