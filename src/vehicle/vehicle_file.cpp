@@ -272,10 +272,9 @@ VehicleFlightLimits read_limits(const Reader& r, const toml::table& t) {
 // Typical sizes: typical_multirotor_arm (model.hpp).
 constexpr double kArmSpread = 4.0;  // accepted factor around the typical arm
 
-double typical_arm(double m) { return typical_multirotor_arm(m); }
 bool plausible_body(double m, double Izz, double arm) {
   if (!(m > 0.0) || !(arm > 0.0) || !(Izz > 0.0)) return true;  // nothing to compare
-  const double a0 = typical_arm(m), g = std::sqrt(Izz / m) / arm;
+  const double a0 = typical_multirotor_arm(m), g = std::sqrt(Izz / m) / arm;
   return arm >= a0 / kArmSpread && arm <= a0 * kArmSpread && g >= kGyrationPerArmMin && g <= kGyrationPerArmMax;
 }
 
@@ -291,7 +290,7 @@ void check_body_units(const Reader& r, const toml::table& root, const Vehicle& v
   if (plausible_body(m, Izz, arm)) return;
   const std::string facts = fmt::format("a {:g} kg vehicle with rotors {:.3g} m from its centre and sqrt(Izz/m) = "
                                         "{:.3g} m (multirotors: arms ~{:.2g} m at this mass, sqrt(Izz/m) 0.6-0.75 of the arm)",
-                                        m, arm, std::sqrt(Izz / m), typical_arm(m));
+                                        m, arm, std::sqrt(Izz / m), typical_multirotor_arm(m));
   const toml::node* pos = node_at(root, "rotors", "positions");
   const toml::node* mass = node_at(root, "nominal", "m");
   if (plausible_body(m, Izz, arm / 1000.0))
