@@ -123,3 +123,15 @@ TEST_F(CliSimulate, HelpTeachesUnitsAndDefaults) {
                         "circle1", "WinvT", "tustin"})
     EXPECT_NE(r.out.find(s), std::string::npos) << "help lacks '" << s << "'";
 }
+
+TEST_F(CliSimulate, SummaryPrintsTheTorquesOfALightVehicle) {
+  // A 30 g vehicle's torques are ~1e-4 N m: fixed three decimals printed
+  // "max |tau| [0.000 0.000 0.000]". Three significant digits instead.
+  const CliRun r = run("--vehicle crazyflie21 --trajectory table2 --duration 5 -q -o " + path("cf.csv"));
+  ASSERT_EQ(r.rc, 0) << r.err;
+  const auto at = r.out.find("max |tau| [");
+  ASSERT_NE(at, std::string::npos) << r.out;
+  const std::string line = r.out.substr(at, r.out.find('\n', at) - at);
+  EXPECT_EQ(line.find("0.000"), std::string::npos) << line;
+  EXPECT_NE(line.find("e-0"), std::string::npos) << line;  // e.g. 7.1e-05
+}

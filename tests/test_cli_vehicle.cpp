@@ -250,6 +250,49 @@ TEST_F(CliVehicle, RotorModelThatDoesNotMatchTheLogIsAnInputError) {
   EXPECT_EQ(p.err.find("columns ="), std::string::npos) << p.err;
 }
 
+TEST_F(CliVehicle, RotorColumnOfTheWrongSignAndSwappedColumnsAreNamedWithAFixThatWorks) {
+  // Two more rotor-column mistakes on a good crazyflie21 log: one column
+  // negated (a logger's signed speed of a clockwise rotor), and two adjacent
+  // rotors' columns swapped (w1 <-> w2). Each refusal names the cause; the
+  // printed fix, applied, identifies the vehicle.
+  const quadid::FlightLog rotors = crazyflie_rotor_log();
+  quadid::FlightLog neg = rotors;
+  neg.data.col(neg.find("rpm.m3")) *= -1.0;
+  quadid::write_flight_log(neg, path("neg.csv"));
+  const CliRun n = run("identify " + path("neg.csv") + " --vehicle crazyflie21 --window 5:30");
+  EXPECT_NE(n.rc, 0);
+  EXPECT_NE(n.err.find("rotor column 'rpm.m3'"), std::string::npos) << n.err;
+  EXPECT_NE(n.err.find("wrong sign"), std::string::npos) << n.err;
+  EXPECT_NE(n.err.find("negate the column"), std::string::npos) << n.err;
+  // The fix: the column's magnitude (the good log) identifies without the finding.
+  quadid::FlightLog fixed = neg;
+  fixed.data.col(fixed.find("rpm.m3")) = neg.column("rpm.m3").cwiseAbs();
+  quadid::write_flight_log(fixed, path("abs.csv"));
+  const CliRun a = run("identify " + path("abs.csv") + " --vehicle crazyflie21 --window 5:30");
+  EXPECT_EQ(a.rc, 0) << a.err;
+  EXPECT_EQ(a.err.find("rotor speeds"), std::string::npos) << a.err;
+
+  quadid::FlightLog swapped = rotors;
+  swapped.data.col(swapped.find("rpm.m1")) = rotors.column("rpm.m2");
+  swapped.data.col(swapped.find("rpm.m2")) = rotors.column("rpm.m1");
+  quadid::write_flight_log(swapped, path("swapped.csv"));
+  const CliRun s = run("identify " + path("swapped.csv") + " --vehicle crazyflie21 --window 5:30");
+  EXPECT_NE(s.rc, 0);
+  const std::string fix = R"(columns = ["rpm.m2", "rpm.m1", "rpm.m3", "rpm.m4"])";
+  ASSERT_NE(s.err.find(fix), std::string::npos) << s.err;
+  std::string text;
+  for (const auto& b : quadid::detail::builtin_vehicles())
+    if (b.name == "crazyflie21") text = std::string(b.text);
+  const std::string cols = R"(columns = ["rpm.m1", "rpm.m2", "rpm.m3", "rpm.m4"])";
+  const size_t at = text.find(cols);
+  ASSERT_NE(at, std::string::npos) << "the builtin's columns changed: update the test";
+  text.replace(at, cols.size(), fix);
+  write("fixed.toml", text);
+  const CliRun f = run("identify " + path("swapped.csv") + " --vehicle " + path("fixed.toml") + " --window 5:30");
+  EXPECT_EQ(f.rc, 0) << f.err;
+  EXPECT_EQ(f.err.find("rotor-mapping"), std::string::npos) << f.err;
+}
+
 TEST_F(CliVehicle, TorqueOfTheWrongSignIsAnInputError) {
   // The paper's path (the log's own torque columns): tau_psi negated, as a
   // z-down log converted without its torques would be. Izz comes out

@@ -510,6 +510,7 @@ TEST(Vehicle, SignedRotorSpeedsNoiseAroundZeroIsNoFinding) {
   in.col(2) = -in.col(2);  // a column of the wrong sign
   const auto f = r.speed_findings(in);
   ASSERT_EQ(f.size(), 1u);
-  EXPECT_NE(f[0].find("'" + r.columns[2] + "'"), std::string::npos) << f[0];
-  EXPECT_NE(f[0].find("wrong sign"), std::string::npos) << f[0];
+  EXPECT_NE(f[0].text.find("'" + r.columns[2] + "'"), std::string::npos) << f[0].text;
+  EXPECT_NE(f[0].text.find("wrong sign"), std::string::npos) << f[0].text;
+  EXPECT_TRUE(f[0].mostly_negative);  // 90 % of the flight below 0: a sign convention
 }

@@ -99,7 +99,7 @@ void run(const OptionValues& v) {
              1e3 * s.rms_position_error(2), 1e3 * s.rms_position_error_norm, 1e3 * s.max_position_error_norm);
   fmt::print("RMS attitude error vs eqs. (26)-(27): phi {:.3f} deg, theta {:.3f} deg, psi {:.3f} deg\n",
              deg * s.rms_attitude_error(0), deg * s.rms_attitude_error(1), deg * s.rms_attitude_error(2));
-  fmt::print("applied Fz {:.2f}..{:.2f} N, max |tau| [{:.3f} {:.3f} {:.3f}] N m; saturated ticks: Fz low {}, "
+  fmt::print("applied Fz {:.4g}..{:.4g} N, max |tau| [{:.3g} {:.3g} {:.3g}] N m; saturated ticks: Fz low {}, "
              "Fz high {}, tau [{} {} {}]\n",
              s.Fz_min, s.Fz_max, s.tau_abs_max(0), s.tau_abs_max(1), s.tau_abs_max(2), s.Fz_saturated_low,
              s.Fz_saturated_high, s.tau_saturated[0], s.tau_saturated[1], s.tau_saturated[2]);

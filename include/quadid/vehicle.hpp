@@ -114,7 +114,11 @@ struct RotorModel {
   /// (5 x the robust sample-to-sample noise, MAD of the differences): a column
   /// of the wrong sign, or a rotor that reverses. One sentence per rotor; none
   /// for noise around 0 near idle, which thrust()'s sign handles.
-  std::vector<std::string> speed_findings(const Eigen::MatrixXd& inputs) const;
+  struct SpeedFinding {
+    std::string text;       ///< the sentence, naming the column
+    bool mostly_negative;   ///< below 0 beyond noise in more than half the samples: a sign convention, not a reversal
+  };
+  std::vector<SpeedFinding> speed_findings(const Eigen::MatrixXd& inputs) const;
   /// Per-sample wrench from rotor speeds (samples x N).
   WrenchSeries wrench_from_speeds(const Eigen::MatrixXd& speeds) const;
 };

@@ -495,14 +495,27 @@ IdentificationInput prepare_identification(const std::string& path, const Identi
     }
     // The rotor columns against the file's arrangement of the rotors: a wrong
     // order or layout gives confident, wrong moments (the same rule).
+    // Speeds below 0 beyond their noise (a column of the wrong sign or a
+    // reversing rotor; noise around 0 at idle is not reported) come first:
+    // they are the likely cause of a mapping mismatch.
+    std::vector<std::string> speed;
+    for (const auto& f : rotors.speed_findings(rotor_inputs(raw, rotors))) {
+      if (f.mostly_negative && !in.options.ignore_input_errors)
+        throw InputError(fmt::format("the log fails the input checks: rotor speeds: {}; if the log is right, ignore "
+                                     "the checks (--ignore-input-errors)",
+                                     f.text));
+      speed.push_back(fmt::format("{}rotor speeds: {}{}", f.mostly_negative ? "input check " : "", f.text,
+                                  f.mostly_negative ? " (ignored)" : ""));
+    }
     const double moment_cutoff = in.options.moment_cutoff_hz.value_or(in.options.processing.lowpass.cutoff_hz);
     if (const RotorMappingCheck rm = check_rotor_mapping(raw, rotors, moment_cutoff); rm.mismatch) {
       if (!in.options.ignore_input_errors)
-        throw InputError(fmt::format("the log fails the input checks: rotor-mapping: {}; if the log and the vehicle "
+        throw InputError(fmt::format("the log fails the input checks: {}rotor-mapping: {}; if the log and the vehicle "
                                      "file are right, ignore the checks (--ignore-input-errors)",
-                                     rm.describe()));
+                                     speed.empty() ? "" : fmt::format("{}; ", fmt::join(speed, "; ")), rm.describe()));
       in.warnings.push_back("input check rotor-mapping: " + rm.describe() + " (ignored)");
     }
+    in.warnings.insert(in.warnings.end(), speed.begin(), speed.end());
     TimingOptions topt = req.timing;
     topt.estimate_time_constant = !req.motor_time_constant && rotors.input_leads_rotor() &&
                                   rotors.time_constant == 0.0;

@@ -170,8 +170,8 @@ Eigen::MatrixXd RotorModel::thrusts(const Eigen::MatrixXd& w) const {
   return thrust_coefficient() * w.cwiseProduct(w.cwiseAbs());  // T_i = k w_i |w_i|
 }
 
-std::vector<std::string> RotorModel::speed_findings(const Eigen::MatrixXd& in) const {
-  std::vector<std::string> out;
+std::vector<RotorModel::SpeedFinding> RotorModel::speed_findings(const Eigen::MatrixXd& in) const {
+  std::vector<SpeedFinding> out;
   if (input == RotorInput::kCommand || in.rows() < 3) return out;
   const auto median = [](std::vector<double> v) {
     std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
@@ -190,10 +190,16 @@ std::vector<std::string> RotorModel::speed_findings(const Eigen::MatrixXd& in) c
     for (Eigen::Index k = 0; k < v.size(); ++k) below += v(k) < -floor ? 1 : 0;
     if (below == 0) continue;
     const char* unit = input == RotorInput::kRpm ? "rpm" : "rad/s";
-    out.push_back(fmt::format(
-        "rotor column '{}': {} of {} samples below 0 by more than 5x its noise ({:.3g} {}), down to {:.4g} {}: a "
-        "column of the wrong sign or a rotor that reverses; its thrust is taken as kf w|w|",
-        columns[static_cast<size_t>(i)], below, v.size(), noise, unit, v.minCoeff(), unit));
+    const bool mostly = 2 * below > v.size();
+    out.push_back({fmt::format("rotor column '{}': {} of {} samples below 0 by more than 5x its noise ({:.3g} {}), down "
+                               "to {:.4g} {}: {}",
+                               columns[static_cast<size_t>(i)], below, v.size(), noise, unit, v.minCoeff(), unit,
+                               mostly ? "a column of the wrong sign (a logger that signs the speeds of clockwise "
+                                        "rotors?): its thrust kf w|w| would push the vehicle down for most of the "
+                                        "flight; log or give the speeds' magnitude (negate the column)"
+                                      : "a column of the wrong sign or a rotor that reverses; its thrust is taken as "
+                                        "kf w|w|"),
+                   mostly});
   }
   return out;
 }
