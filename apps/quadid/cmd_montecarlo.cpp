@@ -1,6 +1,5 @@
 // quadid montecarlo: many simulated identification flights (docs/montecarlo.md).
 #include "commands.hpp"
-#include "quadid/io.hpp"
 #include "options_cli.hpp"
 #include "quadid/io.hpp"
 #include "quadid/montecarlo.hpp"
@@ -17,6 +16,8 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+
+#include <unistd.h>  // isatty
 
 namespace quadid::cli {
 namespace {
@@ -42,11 +43,18 @@ void run(const OptionValues& v) {
     fmt::print(stderr, "quadid montecarlo: note: {}\n", note);
 
   std::mutex mu;
+  // A counter rewritten in place on a terminal; in a file or a pipe, where
+  // '\r' would pile up as one long line, a line at every tenth of the runs.
+  const bool terminal = isatty(fileno(stderr)) != 0;
   const auto progress = [&](int done, int total) {
     if (a.quiet || a.json) return;
     const std::lock_guard<std::mutex> lock(mu);
-    fmt::print(stderr, "\rquadid montecarlo: {}/{} runs", done, total);
-    if (done == total) fmt::print(stderr, "\n");
+    if (terminal) {
+      fmt::print(stderr, "\rquadid montecarlo: {}/{} runs", done, total);
+      if (done == total) fmt::print(stderr, "\n");
+    } else if (done == total || (10 * done) / total != (10 * (done - 1)) / total) {
+      fmt::print(stderr, "quadid montecarlo: {}/{} runs\n", done, total);
+    }
   };
   const MonteCarloResult r = run_montecarlo(o, progress);
 

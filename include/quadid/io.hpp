@@ -49,6 +49,10 @@ struct CsvReadOptions {
   std::map<std::string, std::string> map;
   /// Columns that must be present (default: the standard ones).
   std::vector<std::string> required = standard_log_columns();
+  /// s, the gyro stream's lag behind the others (`--gyro-delay`): p, q, r are
+  /// read at t + gyro_delay (linear interpolation; the last values held at the
+  /// end). 0: as logged. The "timing" input check measures it (docs/input-checks.md).
+  double gyro_delay = 0.0;
   /// Relative tolerance of each time step against the median step
   /// (signal::check_sample_period; 1 % by default, see docs/file-formats.md).
   double period_tolerance = signal::kDefaultPeriodTolerance;
@@ -77,6 +81,10 @@ double parse_time_unit(std::string_view name);
 /// problem (missing column, NaN or text in a number, non-increasing or
 /// non-uniform time, too few rows).
 FlightLog read_flight_log(const std::filesystem::path& path, const CsvReadOptions& opt = {});
+/// Columns `names` of `log` read at t + delay (s; linear interpolation in t,
+/// clamped at the log's ends): the one shift of a late stream (--gyro-delay).
+void read_columns_later(FlightLog& log, const std::vector<std::string>& names, double delay);
+
 /// Parses "canonical=name" pairs of --map; throws std::invalid_argument on a malformed item.
 std::map<std::string, std::string> parse_column_map(const std::vector<std::string>& items);
 

@@ -1,6 +1,7 @@
 // Plausibility checks of a flight log before any estimate (docs/input-checks.md):
 // angle/rate units, z direction, thrust units, aliasing, saturation, time gaps.
 #include "quadid/checks.hpp"
+#include "axes.hpp"
 #include "quadid/signal/median_step.hpp"
 
 #include <fmt/format.h>
@@ -87,7 +88,11 @@ class InputChecks {
 
   std::vector<InputFinding> run() {
     if (!has_columns() || !long_enough() || !time_gaps() || !filtered()) return std::move(out_);
+    const size_t before = out_.size();
     angle_units();
+    if (std::none_of(out_.begin() + static_cast<std::ptrdiff_t>(before), out_.end(),
+                     [](const InputFinding& f) { return f.severity == Severity::Error; }))
+      axes();
     vertical_signals();
     const bool no_thrust = thrust_present();
     const double zsign = z_direction();
@@ -160,9 +165,9 @@ class InputChecks {
   bool filtered() {
     signal::LowpassOptions lp = opt_.lowpass;
     lp.cutoff_hz = std::min(lp.cutoff_hz, 0.2 * fs_);
-    raw_.resize(n_, 9);
-    const char* names[9] = {"z", "phi", "theta", "psi", "p", "q", "r", "Fz", "tau_phi"};
-    for (int c = 0; c < 9; ++c) raw_.col(c) = log_.column(names[c]);
+    const char* names[13] = {"z", "phi", "theta", "psi", "p", "q", "r", "Fz", "tau_phi", "tau_theta", "tau_psi", "x", "y"};
+    raw_.resize(n_, 13);
+    for (int c = 0; c < 13; ++c) raw_.col(c) = log_.column(names[c]);
     signal::unwrap(raw_.col(3).data(), n_);
     try {
       f_ = signal::zero_phase_lowpass(raw_, fs_, lp);
@@ -225,6 +230,30 @@ class InputChecks {
       add("angle-units", Severity::Warning, saw,
           "the gyro and the Euler angles disagree in shape: check the axis order and signs of p, q, r (body FLU) "
           "and that the angles are ZYX Euler angles in radians");
+  }
+
+  // Gyro, torques and horizontal acceleration against the attitude (axes.hpp):
+  // an Error with the --map that makes them agree replaces the shape warning.
+  void axes() {
+    detail::AxisSignals s;
+    const Eigen::MatrixXd d = signal::central_difference(Eigen::MatrixXd(f_.middleCols(1, 6)), T_);
+    const Eigen::MatrixXd xy = f_.middleCols(11, 2);
+    const Eigen::MatrixXd dd = signal::central_difference(signal::central_difference(xy, T_), T_);
+    s.eta = f_.block(e0_, 1, m_, 3);
+    s.eta_dot = d.block(e0_, 0, m_, 3);
+    s.gyro = f_.block(e0_, 4, m_, 3);
+    s.alpha = d.block(e0_, 3, m_, 3);
+    s.tau = f_.block(e0_, 8, m_, 3);
+    s.acc = dd.block(e0_, 0, m_, 2);
+    s.fz = f_.block(e0_, 7, m_, 1);
+    if (auto f = detail::check_axes(s, opt_)) {
+      std::erase_if(out_, [](const InputFinding& x) {
+        return x.check == "angle-units" && x.severity == Severity::Warning;
+      });
+      out_.push_back(std::move(*f));
+    } else if (auto d = detail::check_gyro_delay(s, T_, opt_)) {
+      out_.push_back(std::move(*d));
+    }
   }
 
   // z'' and Fz cos(phi) cos(theta) over the interior, for the z and thrust checks.
@@ -377,7 +406,7 @@ class InputChecks {
   Eigen::Index n_ = 0;
   Eigen::VectorXd t_;
   double T_ = 0.0, fs_ = 0.0;  // s, the median time step; Hz, its rate
-  Eigen::MatrixXd raw_, f_;    // z phi theta psi p q r Fz tau_phi, as logged (psi unwrapped) and low-passed
+  Eigen::MatrixXd raw_, f_;    // z phi theta psi p q r Fz tau_phi tau_theta tau_psi x y, as logged (psi unwrapped) and low-passed
   Eigen::Index e0_ = 0, e1_ = 0, m_ = 0;  // the interior rows [e0, e1), m of them
   Eigen::VectorXd a_, u_;      // z'' and Fz cos(phi) cos(theta) over the interior
 };

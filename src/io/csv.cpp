@@ -49,13 +49,33 @@ Eigen::VectorXd FlightLog::column(std::string_view name) const {
   return data.col(i);
 }
 
+void read_columns_later(FlightLog& log, const std::vector<std::string>& names, double delay) {
+  if (delay == 0.0 || log.rows() < 2) return;
+  const Eigen::VectorXd t = log.column("t");
+  const Eigen::Index n = t.size();
+  for (const auto& name : names) {
+    const int c = log.find(name);
+    if (c < 0) continue;
+    const Eigen::VectorXd x = log.data.col(c);
+    Eigen::Index j = 0;  // t(j) <= t_k + delay < t(j + 1), advancing with k
+    for (Eigen::Index k = 0; k < n; ++k) {
+      const double tk = t(k) + delay;
+      if (tk <= t(0)) { log.data(k, c) = x(0); continue; }
+      if (tk >= t(n - 1)) { log.data(k, c) = x(n - 1); continue; }
+      while (t(j + 1) <= tk) ++j;
+      const double a = (tk - t(j)) / (t(j + 1) - t(j));
+      log.data(k, c) = (1.0 - a) * x(j) + a * x(j + 1);
+    }
+  }
+}
+
 std::map<std::string, std::string> parse_column_map(const std::vector<std::string>& items) {
   std::map<std::string, std::string> m;
   for (const auto& it : items) {
     const auto eq = it.find('=');
     if (eq == std::string::npos || eq == 0 || eq + 1 == it.size())
       throw std::invalid_argument(
-          fmt::format("--map '{}': expected CANONICAL=NAME, e.g. tau_phi=tau_x", it));
+          fmt::format("--map '{}': expected CANONICAL=NAME or CANONICAL=-NAME (negated), e.g. tau_phi=tau_x", it));
     const std::string canon = it.substr(0, eq);
     if (m.count(canon))
       throw std::invalid_argument(fmt::format("--map '{}': '{}' is mapped twice", it, canon));
@@ -410,6 +430,9 @@ void validate_read_options(const CsvReadOptions& opt) {
   if (!(opt.time_units_per_second > 0.0) || !std::isfinite(opt.time_units_per_second))
     throw std::invalid_argument(fmt::format("CsvReadOptions: time_units_per_second={} must be positive (--time-unit)",
                                             opt.time_units_per_second));
+  if (!(std::abs(opt.gyro_delay) <= 1.0))
+    throw std::invalid_argument(fmt::format("CsvReadOptions: gyro_delay={} s must be within [-1, 1] (--gyro-delay)",
+                                            opt.gyro_delay));
 }
 
 // A block of text split into lines: the data lines are kept (blank and comment
@@ -458,10 +481,13 @@ class CsvRead {
     if (nrow < 2)
       throw InputError(fmt::format("{}: only {} data row(s); a flight log needs many samples", file_, nrow));
     log_.data = store_.take();
+    for (const auto& c : negated_)
+      if (const int k = log_.find(c); k >= 0) log_.data.col(k) = -log_.data.col(k);
     if (from_quaternion_) attitude_from_quaternion(log_, [&](Eigen::Index k) {
         return fmt::format("{}:{}", file_, row_lines_.line_of(static_cast<size_t>(k)));
       });
     check_time();
+    read_columns_later(log_, {"p", "q", "r"}, opt_.gyro_delay);
     return std::move(log_);
   }
 
@@ -519,11 +545,17 @@ class CsvRead {
 
   // --map canonical=name: rename the file's column to the canonical one. All
   // renames are checked against the original header, so they cannot chain.
+  // canonical=-name takes the column negated (a sign convention: FRD's q, r).
   void apply_map() {
     std::vector<std::string> renamed = header_;
     std::vector<std::string> sources;  // file columns renamed away by the map
-    for (const auto& kv : opt_.map) sources.push_back(kv.second);
-    for (const auto& [canon, name] : opt_.map) {
+    for (const auto& kv : opt_.map)
+      sources.push_back(kv.second.size() > 1 && kv.second[0] == '-' && find_in(kv.second) < 0 ? kv.second.substr(1)
+                                                                                              : kv.second);
+    for (const auto& [canon, mapped] : opt_.map) {
+      const bool negate = mapped.size() > 1 && mapped[0] == '-' && find_in(mapped) < 0;
+      const std::string name = negate ? mapped.substr(1) : mapped;
+      if (negate) negated_.push_back(canon);
       const int i = find_in(name);
       if (i < 0)
         throw InputError(fmt::format("{}:{}: --map {}={}: the file has no column '{}' (it has: {})", file_,
@@ -718,6 +750,7 @@ class CsvRead {
   size_t header_line_ = 0;
   std::vector<std::string> required_;  // opt.required, with qw qx qy qz for phi theta psi from a quaternion
   bool from_quaternion_ = false;
+  std::vector<std::string> negated_;  // canonical columns mapped from -name
   size_t nfile_ = 0;       // columns in the file
   std::vector<int> slot_;  // each file column's column in the log, or -1 (not stored)
   ColumnStore store_{0};

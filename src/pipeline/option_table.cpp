@@ -99,7 +99,11 @@ Defs processing_group() {
         "use the pose (x y z psi) as logged even where it repeats each sample until the next (by default a held "
         "pose, e.g. 30 Hz motion capture in a 500 Hz log, is put back on its sample instants: a hold delays it by "
         "half its period)"),
-      B("map", K::List, "column name mapping CANONICAL=NAME, e.g. --map tau_phi=tau_x (repeatable)").text("none"),
+      B("gyro-delay", K::Number,
+        "the gyro's lag behind the pose and the torques: each p, q, r row is taken as measured this much before "
+        "its time stamp (the input check 'timing' measures the lag; docs/input-checks.md)")
+          .def(0.0).unit("s").range(-1, 1),
+      B("map", K::List, "column name mapping CANONICAL=NAME, e.g. --map tau_phi=tau_x, or CANONICAL=-NAME for the column negated, e.g. --map q=-q (repeatable)").text("none"),
   };
 }
 

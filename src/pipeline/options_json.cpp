@@ -67,6 +67,7 @@ Processing read_processing(const OptionValues& r) {
   const auto map = r.list("map");
   p.csv.map = r.with_option("map", [&] { return parse_column_map(map); });
   p.csv.period_tolerance = p.processing.period_tolerance;
+  p.csv.gyro_delay = *r.number("gyro-delay");
   p.csv.time_units_per_second = r.with_option("time-unit", [&] { return parse_time_unit(*r.string("time-unit")); });
   return p;
 }
