@@ -78,9 +78,16 @@ TEST(InputChecks, ZDownIsAnError) {
   const auto f = findings(check_input(log, options()), "z-down", Severity::Error);
   ASSERT_EQ(f.size(), 1u) << dump(check_input(log, options()));
   EXPECT_NE(f[0].action.find("point down"), std::string::npos);
-  // And a thrust logged along body -z (FRD) too.
+  // The advice, followed (--map z=-z reads the column negated), passes.
+  ASSERT_NE(f[0].action.find("--map z=-z"), std::string::npos) << f[0].action;
+  FlightLog fixed = log;
+  scale_column(fixed, "z", -1.0);
+  EXPECT_TRUE(findings(check_input(fixed, options()), "z-down").empty()) << dump(check_input(fixed, options()));
+  // And a thrust logged along body -z (FRD) too, named as such and not as
+  // a slip of the horizontal axes (which a negative thrust also flips).
   scale_column(log, "Fz", -1.0);
   EXPECT_GE(findings(check_input(log, options()), "z-down", Severity::Error).size(), 1u);
+  EXPECT_TRUE(findings(check_input(log, options()), "axes").empty()) << dump(check_input(log, options()));
 }
 
 TEST(InputChecks, ThrustInKgfIsNamed) {

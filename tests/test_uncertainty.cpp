@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <limits>
 #include <random>
 
 using namespace quadid;
@@ -328,6 +329,55 @@ TEST(Uncertainty, AttachReplacesTheStandardErrorsAndJudgesPoorParameters) {
 
 Theta make_theta(double m, double Ixx, double Ixy, double Ixz, double Iyy, double Iyz, double Izz) {
   return (Theta() << m, Ixx, Ixy, Ixz, Iyy, Iyz, Izz).finished();
+}
+
+// Closed form: I = diag(a, b, c) with c > a + b and independent entries of
+// standard deviation s_j. The binding margin is lambda_min(tr(I)/2 - I) =
+// (a + b - c)/2, whose gradient is 1/2 on Ixx, Iyy and -1/2 on Izz, so
+// z = (a + b - c) / sqrt(s_xx^2 + s_yy^2 + s_zz^2).
+TEST(PhysicalConsistency, MarginInStandardErrorsHasItsClosedForm) {
+  const Theta th = make_theta(1.8, 0.012, 0, 0, 0.0154, 0, 0.083);
+  Theta sd;
+  sd << 3e-5, 4e-6, 3.6e-6, 1.2e-5, 2.6e-6, 1.3e-5, 9e-6;
+  const Mat7 cov = sd.array().square().matrix().asDiagonal();
+  const double want = (0.012 + 0.0154 - 0.083) / std::sqrt(4e-6 * 4e-6 + 2.6e-6 * 2.6e-6 + 9e-6 * 9e-6);
+  EXPECT_NEAR(consistency_margin_sigmas(th, cov), want, 1e-9 * std::abs(want));
+  // A consistent body is on the positive side; a known mass (no variance)
+  // counts by its sign alone.
+  EXPECT_GT(consistency_margin_sigmas(Params::qball2_nominal().theta(), cov), 0.0);
+  Mat7 known = cov;
+  known(0, 0) = 0.0;
+  EXPECT_NEAR(consistency_margin_sigmas(th, known), want, 1e-9 * std::abs(want));
+  EXPECT_TRUE(std::isinf(consistency_margin_sigmas(make_theta(-1, 0.01, 0, 0, 0.01, 0, 0.015), known)));
+}
+
+// The eigenvalue derivative against central differences on a full tensor
+// with products of inertia (step 1e-7 of entries ~1e-2: truncation ~1e-14,
+// rounding ~1e-10 relative; tolerance 1e-6).
+TEST(PhysicalConsistency, MarginGradientMatchesFiniteDifferences) {
+  const Theta th = make_theta(0.6, 0.004, 0.0012, -0.0009, 0.005, 0.0007, 0.0105);
+  std::mt19937 rng(7);
+  std::normal_distribution<double> nd;
+  Eigen::Matrix<double, 7, 7> A;
+  for (int i = 0; i < 49; ++i) A(i) = 1e-5 * nd(rng);
+  const Mat7 cov = A * A.transpose();
+  const auto margins = [](const Theta& t) {
+    Eigen::Matrix3d I;
+    I << t(1), t(2), t(3), t(2), t(4), t(5), t(3), t(5), t(6);
+    const Eigen::Matrix3d S = 0.5 * I.trace() * Eigen::Matrix3d::Identity() - I;
+    return Eigen::Vector3d(t(0), Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(I).eigenvalues()(0),
+                           Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(S).eigenvalues()(0));
+  };
+  Eigen::Matrix<double, 3, 7> J;
+  for (int j = 0; j < 7; ++j) {
+    Theta d = Theta::Zero();
+    d(j) = 1e-7;
+    J.col(j) = (margins(th + d) - margins(th - d)) / 2e-7;
+  }
+  const Eigen::Vector3d g = margins(th);
+  double want = std::numeric_limits<double>::infinity();
+  for (int i = 0; i < 3; ++i) want = std::min(want, g(i) / std::sqrt(J.row(i).dot(cov * J.row(i).transpose())));
+  EXPECT_NEAR(consistency_margin_sigmas(th, cov), want, 1e-6 * std::abs(want));
 }
 
 TEST(PhysicalConsistency, ChecksNameTheViolation) {

@@ -283,6 +283,22 @@ struct PhysicalConsistency {
 /// Ixx + Iyy >= Izz). `tolerance` relative to tr(I) for the triangle inequalities.
 PhysicalConsistency check_physical_consistency(const Theta& theta, double tolerance = 1e-9);
 
+/// Where a true plant is shown beside estimates: "" for a physical body, else
+/// a sentence that it is not one (the first violation) and that no physically
+/// consistent set (PC, FMPC) can reach it (the built-in virtual QBall 2 is
+/// the paper's Table 3 set, whose Izz > Ixx + Iyy).
+std::string unreachable_truth_note(const Theta& truth);
+
+/// How far `theta` is from the physically consistent sets, in standard errors
+/// of its covariance `cov` (Theta order): the smallest of g / sd(g) over the
+/// margins g = m, lambda_min(I) and lambda_min(tr(I)/2 1 - I) (>= 0 exactly
+/// when the triangle inequalities hold), sd(g) = sqrt(dg^T cov dg) to first
+/// order (dg: the eigenvalue's derivative v^T (dM/dtheta) v). Negative when
+/// theta is not consistent: -5 means five standard errors outside, which
+/// noise does not explain. A margin without variance (a known mass) counts by
+/// its sign alone (-inf when violated); NaN when theta or cov is not finite.
+double consistency_margin_sigmas(const Theta& theta, const Mat7& cov);
+
 struct PhysicalProjectionOptions {
   /// Lower bound of the mass, as a fraction of the reference scale (m > 0 strictly).
   double min_mass_fraction = 1e-6;

@@ -147,10 +147,21 @@ struct IdentificationResult {
 /// the one with the smaller standard errors (relative to each parameter's
 /// scale; both are consistent estimators of the same parameters, so the more
 /// precise is the better), replaced by its physically consistent projection
-/// (PC, FMPC) when it is not consistent. GD and FMGD are the paper's
+/// (PC, FMPC) when it is not consistent; when it is kContradicts standard
+/// errors or more outside (rigid_body_contradiction), the reason says that the
+/// data contradict a rigid body and the projection is no correction of noise.
+/// GD and FMGD are the paper's
 /// comparison and converge toward LS at best: never recommended. The reason
 /// names the figures behind the choice and what the data determine poorly.
 Recommendation recommend_set(const IdentificationResult& r);
+
+/// Standard errors beyond which an inconsistent least-squares set says the
+/// data are not a rigid body's (noise puts a set a few outside at most).
+inline constexpr double kContradicts = 5.0;
+
+/// consistency_margin_sigmas of a least-squares set with its HAC covariance
+/// (NaN without one): below -kContradicts the data contradict a rigid body.
+double rigid_body_contradiction(const LeastSquaresSolution& sol, const Theta& theta);
 
 /// A set's physical consistency: its rigid body (check_physical_consistency),
 /// then, when `term_signs`, the signs of its real-flight terms

@@ -226,6 +226,9 @@ std::string maps_of(const std::vector<Slip>& slips) {
 }  // namespace
 
 std::optional<InputFinding> check_axes(const AxisSignals& s, const InputCheckOptions& opt) {
+  // A thrust of the wrong sign flips every horizontal identity at once; the
+  // z-down check names it (negative mean thrust), not a slip of x and y.
+  if (!(s.fz.mean() > 0.0)) return std::nullopt;
   const AxisCheck check(s, opt);
   const Score now = check.score(Mapping{});
   if (!(now.worst() < AxisCheck::kBad)) return std::nullopt;

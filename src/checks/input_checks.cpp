@@ -112,7 +112,7 @@ class InputChecks {
     for (const auto& c : standard_log_columns())
       if (!log_.has(c)) {
         add("columns", Severity::Info, fmt::format("no column '{}': checks skipped", c),
-            "provide the standard columns (DESIGN.md)");
+            "provide the standard columns (docs/file-formats.md)");
         return false;
       }
     return true;
@@ -298,8 +298,8 @@ class InputChecks {
           fmt::format("the vertical acceleration z'' falls when the thrust's vertical part Fz cos(phi) cos(theta) "
                       "rises (correlation {:.2f}; z mean {:.3g} m)",
                       corr, raw_.col(0).mean()),
-          "z appears to point down (NED): convert positions to z up (x, -y, -z for NED -> FLU-aligned ENU-like "
-          "frames, DESIGN.md)");
+          "z appears to point down (NED): read it with --map z=-z (a whole NED log also needs its y, and the "
+          "attitude's theta and psi, negated, which the axes check names; docs/file-formats.md)");
       return -1.0;
     }
     if (corr < 0.3)

@@ -14,8 +14,10 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <nlopt.hpp>
 #include <stdexcept>
+#include <utility>
 
 namespace quadid {
 namespace {
@@ -153,6 +155,54 @@ PhysicalConsistency check_physical_consistency(const Theta& th, double tolerance
   c.physical = true;
   c.why = "m > 0, I positive definite, triangle inequalities hold";
   return c;
+}
+
+std::string unreachable_truth_note(const Theta& truth) {
+  const PhysicalConsistency c = check_physical_consistency(truth);
+  if (c.physical) return "";
+  return fmt::format("The true plant is not a physical body ({}): no physically consistent set (PC, FMPC) can reach "
+                     "it, and the unconstrained sets (LS, FMLS) are the ones that can.",
+                     c.why);
+}
+
+namespace {
+
+// d lambda / d theta for the smallest eigenvalue of M = a tr(I) 1 + b I (unit
+// eigenvector v): v^T dM v, with dI/dIxy = e1 e2^T + e2 e1^T and so on.
+Theta smallest_eigenvalue_gradient(const Mat3& M, double a, double b, double* lambda) {
+  const Eigen::SelfAdjointEigenSolver<Mat3> es(M);
+  *lambda = es.eigenvalues()(0);
+  const Eigen::Vector3d v = es.eigenvectors().col(0);
+  Theta g = Theta::Zero();
+  g(1) = a + b * v(0) * v(0);  // Ixx
+  g(2) = 2.0 * b * v(0) * v(1);  // Ixy
+  g(3) = 2.0 * b * v(0) * v(2);  // Ixz
+  g(4) = a + b * v(1) * v(1);  // Iyy
+  g(5) = 2.0 * b * v(1) * v(2);  // Iyz
+  g(6) = a + b * v(2) * v(2);  // Izz
+  return g;
+}
+
+}  // namespace
+
+double consistency_margin_sigmas(const Theta& th, const Mat7& cov) {
+  constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+  if (!th.allFinite() || !cov.allFinite()) return kNaN;
+  const Mat3 I = inertia_of(th);
+  double lam_i = 0.0, lam_s = 0.0;
+  const Theta gi = smallest_eigenvalue_gradient(I, 0.0, 1.0, &lam_i);
+  const Theta gs = smallest_eigenvalue_gradient(0.5 * I.trace() * Mat3::Identity() - I, 0.5, -1.0, &lam_s);
+  Theta gm = Theta::Zero();
+  gm(0) = 1.0;
+  double worst = std::numeric_limits<double>::infinity();
+  for (const auto& [g, grad] : {std::pair{th(0), gm}, std::pair{lam_i, gi}, std::pair{lam_s, gs}}) {
+    const double var = grad.dot(cov * grad);
+    if (!(var >= 0.0)) return kNaN;
+    // A margin held fixed (a known mass: no variance) counts only by its sign.
+    if (var == 0.0) worst = g > 0.0 ? worst : -std::numeric_limits<double>::infinity();
+    else worst = std::min(worst, g / std::sqrt(var));
+  }
+  return worst;
 }
 
 void PhysicalProjectionOptions::validate() const {

@@ -6,6 +6,7 @@
 #include <fmt/format.h>
 
 #include <cmath>
+#include <limits>
 #include <vector>
 
 namespace quadid {
@@ -31,6 +32,11 @@ double relative_precision(const LeastSquaresSolution& sol, const Theta& theta, b
 }
 
 }  // namespace
+
+double rigid_body_contradiction(const LeastSquaresSolution& sol, const Theta& theta) {
+  if (!sol.uncertainty.computed) return std::numeric_limits<double>::quiet_NaN();
+  return consistency_margin_sigmas(theta, sol.uncertainty.rigid_body_covariance());
+}
 
 Recommendation recommend_set(const IdentificationResult& r) {
   const bool mass_known = r.options.terms.known_mass.has_value();
@@ -77,11 +83,19 @@ Recommendation recommend_set(const IdentificationResult& r) {
 
   const PhysicalConsistency pcheck = check_set_consistency(*best->set, r.options.physical.term_signs);
   rec.set = best->set->name;
+  const double z = rigid_body_contradiction(*best->sol, best->set->theta);
   if (!pcheck.physical) {
     if (best->physical && best->physical->valid) {
       rec.set = best->physical->name;
       why += fmt::format("; it is not physically consistent ({}), so its closest consistent set {} is recommended",
                          pcheck.why, best->physical->name);
+      // Far outside by its own uncertainty, the projection is the consistent
+      // body nearest to data that no body explains, not a correction of noise.
+      if (z <= -kContradicts)
+        why += fmt::format(". But {} is {:.0f} standard errors outside the consistent sets, which noise does not "
+                           "explain: the data contradict a rigid body (see the warning), and {} is the nearest body, "
+                           "not necessarily near the truth",
+                           best->set->name, -z, best->physical->name);
     } else {
       why += fmt::format("; it is not physically consistent ({}) and no consistent set could be found: treat it with care",
                          pcheck.why);

@@ -215,6 +215,7 @@ std::string format_montecarlo(const MonteCarloResult& r) {
                  o.identification.lambda);
   const Theta scale = relative_error_scale(r.truth);
   fmt::format_to(it, "Relative to the truth (m, Ixx, Iyy, Izz) or to the mean moment (products), in %.\n");
+  if (const std::string note = unreachable_truth_note(r.truth); !note.empty()) fmt::format_to(it, "{}\n", note);
   auto table = [&](const char* title, auto value) {
     fmt::format_to(it, "\n{}\n{:<6}", title, "Set");
     for (const char* n : kThetaNames) fmt::format_to(it, "{:>10}", n);

@@ -120,6 +120,7 @@ Table table3(const Reproduction& r) {
     row.push_back(param_cell(nom(j), j));
     t.rows.push_back(row);
   }
+  t.note = unreachable_truth_note(truth);
   return t;
 }
 
@@ -399,6 +400,14 @@ std::string conclusions_html(const Reproduction& r) {
                         : fmt::format(" The set closest to the truth is {} (mass {} %, moments within {:.2f} %).",
                                       report::html_escape(closest->name), signed_pct(closest->mass_err),
                                       closest->moment_err));
+    // identify chooses from the identification flight alone; say why the
+    // held-out flights may disagree rather than print two answers.
+    const std::string& rec = r.identification.recommended.set;
+    if (!rec.empty() && rec != best->name)
+      h += fmt::format("<p>identify, from the identification flight alone, recommends {} ({}).</p>\n",
+                       report::html_escape(rec), report::html_escape(r.identification.recommended.reason));
+    if (const std::string note = unreachable_truth_note(r.options.plant.theta()); !note.empty())
+      h += "<p>" + report::html_escape(note) + "</p>\n";
   }
   h += "<table><thead><tr><th>set</th><th>mass error</th><th>moments, max |error|</th>"
        "<th>products, max |error| (10⁻³ kg m²)</th><th>re-flight (Table 4), mean P_imp%</th>"
