@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <utility>
 
 using namespace quadid;
 
@@ -88,6 +89,26 @@ TEST(InputChecks, ZDownIsAnError) {
   scale_column(log, "Fz", -1.0);
   EXPECT_GE(findings(check_input(log, options()), "z-down", Severity::Error).size(), 1u);
   EXPECT_TRUE(findings(check_input(log, options()), "axes").empty()) << dump(check_input(log, options()));
+}
+
+// Positions in mm, cm or ft scale the mass by 1/1000, 1/100, 1/3.28 (the
+// force row divides by the vertical acceleration) and the fit shows nothing.
+// Gravity is the yardstick: p'' = b Fz R e3 - c g e3 gives c = 1/unit
+// without the mass. The advice (divide by the factor) passes the check.
+TEST(InputChecks, PositionsInMillimetresCentimetresOrFeetAreNamed) {
+  EXPECT_TRUE(findings(check_input(clean_log(), options()), "position-units").empty());
+  for (const auto& [factor, name] : {std::pair{1000.0, "millimetres"}, std::pair{100.0, "centimetres"},
+                                     std::pair{1.0 / 0.3048, "feet"}}) {
+    FlightLog log = clean_log();
+    for (const char* c : {"x", "y", "z"}) scale_column(log, c, factor);
+    const auto f = findings(check_input(log, options()), "position-units", Severity::Error);
+    ASSERT_EQ(f.size(), 1u) << name << "\n" << dump(check_input(log, options()));
+    EXPECT_NE(f[0].action.find(name), std::string::npos) << f[0].action;
+    // No other unit is blamed for what the positions explain.
+    EXPECT_TRUE(findings(check_input(log, options()), "thrust-units").empty()) << dump(check_input(log, options()));
+    for (const char* c : {"x", "y", "z"}) scale_column(log, c, 1.0 / factor);
+    EXPECT_TRUE(findings(check_input(log, options()), "position-units").empty()) << name;
+  }
 }
 
 TEST(InputChecks, ThrustInKgfIsNamed) {

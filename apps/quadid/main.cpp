@@ -3,6 +3,7 @@
 #include "commands.hpp"
 #include "process_memory.hpp"
 #include "quadid/io.hpp"
+#include "quadid/pipeline/options.hpp"
 
 #include <fmt/format.h>
 
@@ -127,7 +128,7 @@ int main(int argc, char** argv) {
     const auto subs = app.get_subcommands();
     const std::string who = subs.empty() ? "quadid" : "quadid " + subs.front()->get_name();
     std::fflush(stdout);
-    fmt::print(stderr, "{}: error: {}\n", who, e.what());
+    fmt::print(stderr, "{}: error: {}\n", who, quadid::with_option_names(e.what(), quadid::OptionSource::Cli));
     return 1;
   }
   return 0;

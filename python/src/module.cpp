@@ -330,6 +330,16 @@ PYBIND11_MODULE(_quadid, m) {
   py::register_exception<quadid::InputError>(m, "InputError", PyExc_ValueError);
   // A simulated flight that left the safe region.
   py::register_exception<quadid::SimulationDiverged>(m, "SimulationDiverged", PyExc_RuntimeError);
+  // A library Options field in an error reads as the keyword that sets it
+  // ("cutoff=300", not "LowpassOptions: cutoff_hz=300" or "--cutoff").
+  py::register_exception_translator([](std::exception_ptr p) {
+    try {
+      if (p) std::rethrow_exception(p);
+    } catch (const std::invalid_argument& e) {
+      const std::string msg = quadid::with_option_names(e.what(), quadid::OptionSource::Json);
+      PyErr_SetString(PyExc_ValueError, msg.c_str());
+    }
+  });
   m.def("read_log", &read_log, py::arg("path"), py::arg("map"), py::arg("period_tolerance"), py::arg("time_unit"));
   m.def("identify", &identify, py::arg("log"), py::arg("options"));
   m.def("simulate", &simulate, py::arg("options"), py::arg("truth"), py::arg("out"), py::arg("truth_out"));

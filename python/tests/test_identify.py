@@ -258,3 +258,15 @@ def test_threads_identify_in_parallel_with_the_same_results(logs):
     with ThreadPoolExecutor(3) as ex:
         par = list(ex.map(lambda p: quadid.identify(p, window=WINDOW)["estimates"], logs))
     assert par == seq
+
+
+def test_a_library_error_names_the_keyword_not_the_struct_field_or_the_flag(logs):
+    # The pre-filter's check (LowpassOptions: cutoff_hz) reads as the keyword
+    # that set it; the command line names its own flag for the same error.
+    with pytest.raises(ValueError) as e:
+        quadid.identify(str(logs[0]), cutoff=300)
+    msg = str(e.value)
+    assert "cutoff=300" in msg and "Nyquist" in msg, msg
+    assert "LowpassOptions" not in msg and "--cutoff" not in msg, msg
+    r = run_cli("identify", str(logs[0]), "--cutoff", "300", check=False)
+    assert r.returncode != 0 and "--cutoff 300 must be below Nyquist" in r.stderr, r.stderr

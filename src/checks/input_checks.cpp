@@ -6,6 +6,8 @@
 
 #include <fmt/format.h>
 
+#include <Eigen/QR>
+
 #include <algorithm>
 #include <cmath>
 #include <complex>
@@ -96,7 +98,8 @@ class InputChecks {
     vertical_signals();
     const bool no_thrust = thrust_present();
     const double zsign = z_direction();
-    if (opt_.reference_mass && !no_thrust) thrust_units(zsign);
+    const bool positions_ok = no_thrust || zsign < 0.0 || position_units();
+    if (opt_.reference_mass && !no_thrust && positions_ok) thrust_units(zsign);
     aliasing();
     saturation();
     return std::move(out_);
@@ -340,6 +343,61 @@ class InputChecks {
       add("thrust-units", Severity::Warning, saw,
           "the thrust and the reference mass disagree: check the thrust model (kf, thrust scale) and the reference "
           "set (--nominal)");
+  }
+
+  // The positions' unit, mass-free (issue 37): eq. (1) divided by m reads
+  // p'' = (Fz/m) R(eta) e3 - g e3. Positions logged in a unit u metres give
+  // p''/u, so p'' = b Fz R e3 - c g e3 with b = 1/(m u), c = 1/u: two unknowns
+  // that the horizontal rows (b alone) and the vertical row (b and c) fix.
+  // c is 1 for metres, 1000 for millimetres; gravity is the yardstick. A
+  // wrong c scales the mass (the force row) and nothing else shows it.
+  // Returns false when the positions are not in metres.
+  bool position_units() {
+    const Eigen::MatrixXd xy = f_.middleCols(11, 2);
+    const Eigen::MatrixXd dd = signal::central_difference(signal::central_difference(xy, T_), T_);
+    Eigen::MatrixXd A(3 * m_, 2);
+    Eigen::VectorXd y(3 * m_);
+    for (Eigen::Index k = e0_; k < e1_; ++k) {
+      const Eigen::Index i = k - e0_;
+      const double cf = std::cos(f_(k, 1)), sf = std::sin(f_(k, 1)), ct = std::cos(f_(k, 2)), st = std::sin(f_(k, 2));
+      const double cp = std::cos(f_(k, 3)), sp = std::sin(f_(k, 3)), fz = f_(k, 7);
+      A.row(3 * i) << fz * (cf * st * cp + sf * sp), 0.0;  // R(eta) e3, ZYX
+      A.row(3 * i + 1) << fz * (cf * st * sp - sf * cp), 0.0;
+      A.row(3 * i + 2) << fz * cf * ct, -opt_.g;
+      y.segment(3 * i, 3) << dd(k, 0), dd(k, 1), a_(i);
+    }
+    const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(A);
+    if (qr.rank() < 2) return true;
+    const Eigen::Vector2d x = qr.solve(y);
+    const Eigen::VectorXd e = y - A * x;
+    // Standard error of c from the residual, inflated for the residuals'
+    // correlation over the pre-filter's memory; the unit is judged only when
+    // the flight pins it to 10 %.
+    const Eigen::Matrix2d cov = (A.transpose() * A).inverse() * (e.squaredNorm() / double(A.rows() - 2)) *
+                                std::max(1.0, fs_ / opt_.lowpass.cutoff_hz);
+    const double c = x(1), se = std::sqrt(std::max(0.0, cov(1, 1)));
+    if (!std::isfinite(c) || !(c > 0.0) || !(se < 0.1 * c)) return true;
+    const double tol = opt_.ratio_tolerance;
+    const std::string saw = fmt::format(
+        "the positions' second derivative against gravity and the thrust's direction (p'' = b Fz R(eta) e3 - c g e3, "
+        "least squares) gives c = {:.4g} +- {:.2g}, where positions in metres give 1",
+        c, se);
+    const auto unit = [&](const char* name, double per_m) {
+      add("position-units", Severity::Error, saw,
+          fmt::format("x, y, z look like they are in {}: divide them by {:g} (positions in metres; the mass, which "
+                      "divides by the vertical acceleration, would be {:g} times off)",
+                      name, per_m, per_m));
+      return false;
+    };
+    if (near_factor(c, 1000.0, tol)) return unit("millimetres", 1000.0);
+    if (near_factor(c, 100.0, tol)) return unit("centimetres", 100.0);
+    if (near_factor(c, 1.0 / 0.3048, 1.2)) return unit("feet", 1.0 / 0.3048);
+    if (near_factor(c, 1.0, tol)) return true;
+    add("position-units", Severity::Warning, saw,
+        fmt::format("the positions are not in metres, or the thrust's direction (the attitude) is off: positions "
+                    "times {:.3g} would be metres",
+                    1.0 / c));
+    return false;
   }
 
   // Aliasing: power near Nyquist against the identification band.

@@ -277,7 +277,9 @@ class IdentifyRun {
     warn_unphysical();
     warn_implausible_size();
     prediction_tables();
-    res_.warnings.insert(res_.warnings.end(), input_warnings_.begin(), input_warnings_.end());
+    // The input checks' warnings first: they name causes in the log, of which
+    // the estimates' warnings are often consequences (root cause first).
+    res_.warnings.insert(res_.warnings.begin(), input_warnings_.begin(), input_warnings_.end());
     res_.recommended = recommend_set(res_);
     return std::move(res_);
   }
@@ -626,6 +628,10 @@ class IdentifyRun {
   // multirotor of that mass (typical_multirotor_arm: built-ins at 0.47-0.65 of
   // it; accepted 0.15-3, which leaves a 10x-off torque unit outside).
   void warn_implausible_size() {
+    // A thrust or position unit the input checks already named explains a
+    // mass that is off; the radius of gyration would only blame the torques.
+    for (const auto& f : res_.input_findings)
+      if ((f.check == "thrust-units" || f.check == "position-units") && f.severity >= Severity::Warning) return;
     const SetEstimate& e = res_.estimates[0];
     if (!e.valid || !(e.theta(0) > 0.0)) return;
     const Params P = e.params();

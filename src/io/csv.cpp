@@ -428,10 +428,10 @@ void validate_read_options(const CsvReadOptions& opt) {
   if (opt.threads < 0 || opt.threads > 2)
     throw std::invalid_argument(fmt::format("CsvReadOptions: threads={} must be 0 (automatic), 1 or 2", opt.threads));
   if (!(opt.time_units_per_second > 0.0) || !std::isfinite(opt.time_units_per_second))
-    throw std::invalid_argument(fmt::format("CsvReadOptions: time_units_per_second={} must be positive (--time-unit)",
+    throw std::invalid_argument(fmt::format("CsvReadOptions: time_units_per_second={} must be positive",
                                             opt.time_units_per_second));
   if (!(std::abs(opt.gyro_delay) <= 1.0))
-    throw std::invalid_argument(fmt::format("CsvReadOptions: gyro_delay={} s must be within [-1, 1] (--gyro-delay)",
+    throw std::invalid_argument(fmt::format("CsvReadOptions: gyro_delay={} s must be within [-1, 1]",
                                             opt.gyro_delay));
 }
 

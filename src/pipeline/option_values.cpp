@@ -230,4 +230,32 @@ std::vector<std::string> OptionValues::list(const std::string& name) const {
   return out;
 }
 
+namespace {
+
+// The library's Options fields that an option of the tables sets.
+struct FieldOption {
+  std::string_view field;  // "Struct: field", as the library's validate() names it
+  std::string_view option;
+};
+constexpr FieldOption kFieldOptions[] = {
+    {"LowpassOptions: cutoff_hz", "cutoff"},         {"LowpassOptions: taps", "taps"},
+    {"LowpassOptions: order", "order"},              {"LowpassOptions: kind", "filter"},
+    {"CsvReadOptions: period_tolerance", "period-tolerance"}, {"CsvReadOptions: gyro_delay", "gyro-delay"},
+    {"ProcessingOptions: threads", "threads"},       {"CsvReadOptions: threads", "threads"},
+};
+
+}  // namespace
+
+std::string with_option_names(std::string_view message, OptionSource source) {
+  std::string s(message);
+  for (const auto& [field, option] : kFieldOptions) {
+    const std::string from = std::string(field) + "=";
+    std::string to = source == OptionSource::Cli ? "--" + std::string(option) + " " : std::string(option) + "=";
+    if (source != OptionSource::Cli) std::replace(to.begin(), to.end(), '-', '_');
+    for (size_t at = s.find(from); at != std::string::npos; at = s.find(from, at + to.size()))
+      s.replace(at, from.size(), to);
+  }
+  return s;
+}
+
 }  // namespace quadid

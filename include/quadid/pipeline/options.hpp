@@ -87,6 +87,12 @@ std::string normalize_option_key(std::string_view key);
 /// on the command line, 'cutoff' (--cutoff) in JSON and Python).
 enum class OptionSource { Cli, Json };
 
+/// A library error with its Options fields in the giver's spelling: the
+/// library names the field it checks ("LowpassOptions: cutoff_hz=300 must be
+/// below Nyquist"); the command line reads "--cutoff 300 must be below
+/// Nyquist", Python and JSON "cutoff=300 ...". Fields no option sets are kept.
+std::string with_option_names(std::string_view message, OptionSource source);
+
 /// The options given to one command, read against its table: each accessor
 /// returns the given value, else the table's default; kinds, ranges and
 /// choices are checked, and an error (std::invalid_argument) names the option
