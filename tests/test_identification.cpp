@@ -905,3 +905,36 @@ TEST(Identification, APrefilterBelowTheMotionIsNamedBeforeTheTorqueSigns) {
   const IdentificationResult r = identify(perfect_table2(), o);
   for (int j : {1, 4, 6}) EXPECT_NEAR(r.estimate("LS").theta(j), truth.theta()(j), 0.002 * truth.theta()(j));
 }
+
+// Model disagreement (docs/uncertainty.md): |LS - FMLS| enters both sets'
+// standard errors and intervals in quadrature, and nothing else changes.
+// Against the same flight without it: se' = hypot(se, d), half width
+// hypot(h, t d) around the same centre, covariance diagonal + d^2. 1e-12
+// relative: the same doubles through hypot.
+TEST(Identification, ModelDisagreementIsAddedInQuadrature) {
+  SimulationOptions so;
+  so.duration = 30.0;
+  so.record_truth = false;
+  const FlightLog log = simulate(FourierTrajectory::table2(), so).log;
+  IdentificationOptions with;
+  with.window = {5.0, 30.0};
+  IdentificationOptions without = with;
+  without.uncertainty.model_disagreement = false;
+  const IdentificationResult a = identify(log, with), b = identify(log, without);
+  const Theta d = (b.estimate("LS").theta - b.estimate("FMLS").theta).cwiseAbs();
+  for (const char* set : {"LS", "FMLS"}) {
+    const Estimate& ua = a.least_squares_of(set)->uncertainty;
+    const Estimate& ub = b.least_squares_of(set)->uncertainty;
+    EXPECT_EQ(a.estimate(set).theta, b.estimate(set).theta) << set;
+    ASSERT_EQ(ua.model_disagreement.size(), 7) << set;
+    EXPECT_EQ(ub.model_disagreement.size(), 0) << set;
+    for (int j = 0; j < 7; ++j) {
+      EXPECT_NEAR(ua.std_error(j), std::hypot(ub.std_error(j), d(j)), 1e-12 * ua.std_error(j)) << set << j;
+      EXPECT_NEAR(ua.noise_std_error()(j), ub.std_error(j), 1e-9 * ua.std_error(j)) << set << j;
+      const double h = 0.5 * (ub.ci_high(j) - ub.ci_low(j)), w = std::hypot(h, ub.quantile * d(j));
+      EXPECT_NEAR(0.5 * (ua.ci_high(j) - ua.ci_low(j)), w, 1e-12 * w) << set << j;
+      EXPECT_NEAR(ua.ci_low(j) + ua.ci_high(j), ub.ci_low(j) + ub.ci_high(j), 1e-12 * std::abs(ub.ci_high(j)) + 1e-18);
+      EXPECT_NEAR(ua.covariance(j, j), ub.covariance(j, j) + d(j) * d(j), 1e-12 * ua.covariance(j, j)) << set << j;
+    }
+  }
+}

@@ -26,12 +26,17 @@ std::string cli_help(const OptionDef& d) {
   std::string h = d.help;
   if (!d.unit.empty()) h += fmt::format(" [{}]", d.unit);
   if (d.has_range()) h += fmt::format(" (range {})", d.range_text());
+  if (d.positional) h += fmt::format(" ({}also --{} {})", d.required ? "required; " : "", d.name, d.name == "log" ? "FILE" : "VALUE");
   return h;
 }
 
+/// How one spelling of an option is listed in --help.
+enum class Listing { Shown, Alias, Unlisted };
+
 /// Stores a given value under the option's long name.
 void add_one(CLI::App* sub, const std::shared_ptr<GivenOptions>& g, const OptionDef& d, const std::string& names,
-             const std::string& spelled, bool hidden) {
+             const std::string& spelled, Listing listing) {
+  const bool hidden = listing == Listing::Alias;
   const std::string name = d.name;
   const std::string command = g->command;
   // An old spelling: one warning on stderr, then the value goes to the new name.
@@ -66,8 +71,10 @@ void add_one(CLI::App* sub, const std::shared_ptr<GivenOptions>& g, const Option
     const std::string& def = d.default_text.empty() ? d.default_value : d.default_text;
     if (!d.required) o->default_str(def.empty() ? "none" : def);
   }
-  if (hidden) o->group("");
-  else if (d.required) o->required();
+  if (listing != Listing::Shown) o->group("");
+  // A positional input may also be given as --NAME: either satisfies it
+  // (checked once the command line is read, below).
+  else if (d.required && !d.positional) o->required();
 }
 
 }  // namespace
@@ -77,12 +84,25 @@ std::shared_ptr<GivenOptions> add_table_options(CLI::App* sub, const std::string
   g->command = command;
   for (const OptionDef& d : option_table(command).options) {
     std::string names;
-    if (d.positional) names += d.name + ",";
     if (!d.short_name.empty()) names += "-" + d.short_name + ",";
     names += "--" + d.name;
-    add_one(sub, g, d, names, d.name, false);
-    for (const auto& a : d.aliases) add_one(sub, g, d, "--" + a, a, true);
+    if (d.positional) {
+      // Listed once, under Positionals; --NAME works too, unlisted.
+      add_one(sub, g, d, d.name, d.name, Listing::Shown);
+      add_one(sub, g, d, names, d.name, Listing::Unlisted);
+    } else {
+      add_one(sub, g, d, names, d.name, Listing::Shown);
+    }
+    for (const auto& a : d.aliases) add_one(sub, g, d, "--" + a, a, Listing::Alias);
   }
+  std::vector<std::string> required_inputs;
+  for (const OptionDef& d : option_table(command).options)
+    if (d.positional && d.required) required_inputs.push_back(d.name);
+  if (!required_inputs.empty())
+    sub->parse_complete_callback([g, required_inputs] {
+      for (const auto& n : required_inputs)
+        if (!g->values.contains(n)) throw CLI::RequiredError(n + " (or --" + n + ")");
+    });
   return g;
 }
 

@@ -409,6 +409,11 @@ Estimate Estimate::unfilled(std::vector<std::string> names) {
   return e;
 }
 
+Eigen::VectorXd Estimate::noise_std_error() const {
+  if (model_disagreement.size() != std_error.size()) return std_error;
+  return (std_error.array().square() - model_disagreement.array().square()).max(0.0).sqrt().matrix();
+}
+
 Eigen::Index Estimate::index_of(std::string_view name) const {
   for (size_t j = 0; j < names.size(); ++j)
     if (names[j] == name) return static_cast<Eigen::Index>(j);

@@ -270,6 +270,7 @@ class IdentifyRun {
     if (estimation_error_) std::rethrow_exception(estimation_error_);
     collect_sets();
     if (opt_.extended()) use_real_flight_regression();
+    widen_for_model_disagreement();
     check_model_fit();
     const std::vector<std::string> deficient = judge_rank();
     warn_poorly_determined(deficient);
@@ -495,6 +496,41 @@ class IdentifyRun {
     res_.projections[i] = std::move(pr);
   }
 
+  // The two regressions' disagreement, |LS - FMLS|, in quadrature in both
+  // sets' standard errors and intervals (UncertaintyOptions::model_disagreement):
+  // processing and model error that the residuals do not show.
+  void widen_for_model_disagreement() {
+    if (!opt_.uncertainty.model_disagreement) return;
+    LeastSquaresSolution* sols[2] = {&res_.ls_standard, &res_.ls_filtered};
+    if (!sols[0]->uncertainty.computed || !sols[1]->uncertainty.computed) return;
+    const Theta d = (res_.estimates[0].theta - res_.estimates[2].theta).cwiseAbs();
+    for (LeastSquaresSolution* sol : sols) {
+      Estimate& u = sol->uncertainty;
+      if (u.size() != 7) continue;
+      u.model_disagreement = Eigen::VectorXd::Zero(7);
+      for (Eigen::Index j = 0; j < 7; ++j) {
+        if (!std::isfinite(d(j)) || !std::isfinite(u.std_error(j))) continue;
+        u.model_disagreement(j) = d(j);
+        const double mid = 0.5 * (u.ci_low(j) + u.ci_high(j)), half = 0.5 * (u.ci_high(j) - u.ci_low(j));
+        const double wider = std::hypot(half, u.quantile * d(j));
+        u.ci_low(j) = mid - wider;
+        u.ci_high(j) = mid + wider;
+        u.std_error(j) = std::hypot(u.std_error(j), d(j));
+        if (u.covariance.rows() > j && u.covariance.cols() > j) u.covariance(j, j) += d(j) * d(j);
+        sol->std_error(j) = u.std_error(j);
+      }
+      // The determinedness rule of the estimators, on the wider errors.
+      const Theta scale = determinedness_scale(sol->theta);
+      for (int j = 0; j < 7; ++j) {
+        const std::string name(kThetaNames[static_cast<size_t>(j)]);
+        auto& poor = sol->poorly_determined;
+        if (u.std_error(j) > opt_.ls.poor_fraction * scale(j) && std::find(poor.begin(), poor.end(), name) == poor.end())
+          poor.push_back(name);
+      }
+      u.poorly_determined = sol->poorly_determined;
+    }
+  }
+
   // The torques must fit the rotations: otherwise the error is the log's or
   // the vehicle file's, and the estimates are not a body's.
   void check_model_fit() {
@@ -561,8 +597,11 @@ class IdentifyRun {
   // processing option fixes it.
   void warn_disagreement() {
     std::vector<std::string> differ;
-    const Theta& sa = res_.ls_standard.std_error;
-    const Theta& sb = res_.ls_filtered.std_error;
+    // Noise alone: the std errors without the disagreement itself.
+    const auto noise = [](const LeastSquaresSolution& s) {
+      return s.uncertainty.computed && s.uncertainty.size() == 7 ? Theta(s.uncertainty.noise_std_error()) : s.std_error;
+    };
+    const Theta sa = noise(res_.ls_standard), sb = noise(res_.ls_filtered);
     for (int j : {0, 1, 4, 6}) {
       const double a = res_.ls_standard.theta(j), b = res_.ls_filtered.theta(j);
       const double se = std::max(std::isfinite(sa(j)) ? sa(j) : 0.0, std::isfinite(sb(j)) ? sb(j) : 0.0);

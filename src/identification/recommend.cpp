@@ -110,8 +110,9 @@ Recommendation recommend_set(const IdentificationResult& r) {
   // uncertainty means the processing or the model does not suit the data.
   if (other) {
     std::vector<std::string> differ;
-    const Theta sa = best->sol->uncertainty.computed ? Theta(best->sol->uncertainty.std_error) : best->sol->std_error;
-    const Theta sb = other->sol->uncertainty.computed ? Theta(other->sol->uncertainty.std_error) : other->sol->std_error;
+    // Their noise alone: the std errors without the disagreement they hold.
+    const Theta sa = best->sol->uncertainty.computed ? Theta(best->sol->uncertainty.noise_std_error()) : best->sol->std_error;
+    const Theta sb = other->sol->uncertainty.computed ? Theta(other->sol->uncertainty.noise_std_error()) : other->sol->std_error;
     for (int j : {0, 1, 4, 6}) {
       if (j == 0 && mass_known) continue;
       const double d = std::abs(best->set->theta(j) - other->set->theta(j));

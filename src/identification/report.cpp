@@ -91,15 +91,18 @@ json ls_json(const LeastSquaresSolution& s) {
   return j;
 }
 
-// uncertainty.<SET>.<param> = {"std_error": ..., "ci95": [lo, hi]} (DESIGN.md).
+// uncertainty.<SET>.<param> = {"std_error": ..., "ci95": [lo, hi], "model_disagreement": ...} (DESIGN.md).
 json uncertainty_json(const LeastSquaresSolution& s) {
   json j = json::object();
   const auto& u = s.uncertainty;
   if (!u.computed) return j;
-  for (int i = 0; i < 7; ++i)
-    j[kThetaNames[static_cast<size_t>(i)]] = {
-        {"std_error", finite_or_null(u.std_error(i))},
-        {"ci95", json::array({finite_or_null(u.ci_low(i)), finite_or_null(u.ci_high(i))})}};
+  for (int i = 0; i < 7; ++i) {
+    json& p = j[kThetaNames[static_cast<size_t>(i)]];
+    p = {{"std_error", finite_or_null(u.std_error(i))},
+         {"ci95", json::array({finite_or_null(u.ci_low(i)), finite_or_null(u.ci_high(i))})}};
+    // The part of std_error from |LS - FMLS| (docs/uncertainty.md, "Model disagreement").
+    if (u.model_disagreement.size() == 7) p["model_disagreement"] = finite_or_null(u.model_disagreement(i));
+  }
   return j;
 }
 
@@ -168,9 +171,10 @@ std::string format_uncertainty_table(const IdentificationResult& r) {
                           2 * u.frequencies, band_hz)
             : fmt::format("periodogram of the influences at the {} lowest frequencies, up to {:.3g} Hz",
                           u.frequencies, band_hz);
-    fmt::format_to(it, "{}: 95% intervals (HAC: {}; correlation time {} samples{}; Student t, {:.0f} dof, quantile {:.3f})\n",
+    fmt::format_to(it, "{}: 95% intervals (HAC: {}; correlation time {} samples{}; Student t, {:.0f} dof, quantile {:.3f}){}\n",
                    name, how, u.correlation_time, u.correlation_time_capped ? " (search capped)" : "", u.dof,
-                   u.quantile);
+                   u.quantile,
+                   u.model_disagreement.size() == 7 ? "\n   with |LS - FMLS| added in quadrature (model disagreement, docs/uncertainty.md)" : "");
     const bool jk = u.jackknife_blocks > 0;
     if (jk)
       fmt::format_to(it,

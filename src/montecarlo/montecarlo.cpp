@@ -315,15 +315,32 @@ std::string format_montecarlo_runs_csv(const MonteCarloResult& r) {
   for (const auto& s : r.sets) names.push_back(s.name);
   for (const auto& n : names)
     for (const char* p : kThetaNames) fmt::format_to(it, ",{}_{}", n, p);
+  // Each run's 95 % interval, for the sets that print one (coverage by parameter and run).
+  std::vector<std::string> with_ci;
+  for (const auto& s : r.sets)
+    if (s.has_intervals) with_ci.push_back(s.name);
+  for (const auto& n : with_ci)
+    for (const char* p : kThetaNames) fmt::format_to(it, ",{0}_{1}_lo,{0}_{1}_hi", n, p);
   fmt::format_to(it, "\n");
+  const auto cell = [&](double v) {
+    if (std::isfinite(v)) fmt::format_to(it, ",{}", v);
+    else fmt::format_to(it, ",nan");
+  };
   for (const auto& run : r.runs) {
     fmt::format_to(it, "{},{},{}", run.index, run.seed, run.ok ? 1 : 0);
+    const auto at = [&](const std::string& n) { return std::find(run.sets.begin(), run.sets.end(), n); };
     for (const auto& n : names) {
-      const auto f = std::find(run.sets.begin(), run.sets.end(), n);
+      const auto f = at(n);
+      for (int j = 0; j < 7; ++j)
+        cell(f == run.sets.end() ? kNaN : run.estimates[static_cast<size_t>(f - run.sets.begin())](j));
+    }
+    for (const auto& n : with_ci) {
+      const auto f = at(n);
+      const auto i = static_cast<size_t>(f - run.sets.begin());
+      const bool has = f != run.sets.end() && i < run.ci_low.size() && i < run.ci_high.size();
       for (int j = 0; j < 7; ++j) {
-        const double v = f == run.sets.end() ? kNaN : run.estimates[static_cast<size_t>(f - run.sets.begin())](j);
-        if (std::isfinite(v)) fmt::format_to(it, ",{}", v);
-        else fmt::format_to(it, ",nan");
+        cell(has ? run.ci_low[i](j) : kNaN);
+        cell(has ? run.ci_high[i](j) : kNaN);
       }
     }
     fmt::format_to(it, "\n");

@@ -446,7 +446,7 @@ Defs validate_options() {
 Defs batch_options() {
   // FleetSummaryOptions{} (batch.hpp; the batch module builds on this one)
   Defs own = {
-      B("log", K::List, "flight logs (repeatable; also without the flag)").positional().cli().text("none"),
+      B("log", K::List, "flight logs (repeatable)").positional().cli().text("none"),
       B("list", K::String, "file with one log path per line ('-' = stdin; '#' comments)").text("none").cli(),
       out_file("write the JSON Lines here (atomically, at the end) instead of stdout"),
       B("threads", K::Integer, "worker threads; 0 = one per core").def("0").at_least(0).cli(),
