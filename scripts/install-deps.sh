@@ -4,7 +4,8 @@ set -euo pipefail
 PKGS=(g++ cmake make libeigen3-dev libnlopt-cxx-dev libnlopt-dev libcli11-dev nlohmann-json3-dev
       libfmt-dev libgtest-dev libgmock-dev libbenchmark-dev libtomlplusplus-dev
       clang libclang-rt-dev
-      pybind11-dev python3-dev python3-numpy python3-pytest python3-distributed)
+      pybind11-dev python3-dev python3-numpy python3-pytest python3-distributed
+      chromium)  # the report test renders pages in a real browser (ReportBrowser)
 missing=()
 for p in "${PKGS[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
