@@ -11,6 +11,7 @@
 #include "cli_fixture.hpp"
 #include "px4_sim_log.hpp"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -363,6 +364,13 @@ TEST_F(Px4Identify, DefaultThrustAndMomentCoefficientsAreWarned) {
   EXPECT_NE(r.err.find("CA_ROTOR*_CT = 6.5 N is PX4's default"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("--known-mass"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("CA_ROTOR*_KM = 0.05 m is PX4's default"), std::string::npos) << r.err;
+  // The advice followed: with the weighed mass, the warning no longer asks
+  // for it; it says the estimated thrust scale corrects CT, and the mass is
+  // the one given.
+  const CliRun k = run(fmt::format("identify {} --known-mass {} --json", f, v.nominal.m));
+  ASSERT_EQ(k.rc, 0) << k.err;
+  EXPECT_NE(k.err.find("the thrust scale estimated with --known-mass corrects the thrust"), std::string::npos) << k.err;
+  EXPECT_EQ(k.err.find("give the weighed mass"), std::string::npos) << k.err;
   // A vehicle's own coefficients are not warned about.
   std::ofstream(path("own.ulg"), std::ios::binary) << px4_sim_ulog(small_vehicle(), o);
   const CliRun own = run("identify " + path("own.ulg"));

@@ -292,7 +292,7 @@ namespace {
 // Gazebo simulation cannot be described by them (InputError), and PX4's
 // default CT and KM, which its allocation uses only relative to each other,
 // leave the mass and moments in unknown units (warnings).
-std::vector<std::string> check_px4_rotor_parameters(const logs::ULog& u, const logs::RotorGeometry& g) {
+std::vector<std::string> check_px4_rotor_parameters(const logs::ULog& u, const logs::RotorGeometry& g, bool mass_known) {
   if (const auto gz = u.parameter("SIM_GZ_EN"); gz && *gz == 1.0)
     throw InputError(
         "the log has no column Fz (nor the torques), and it is a Gazebo simulation (SIM_GZ_EN = 1): its rotors "
@@ -307,7 +307,14 @@ std::vector<std::string> check_px4_rotor_parameters(const logs::ULog& u, const l
   for (double c : g.ct) ct_default = ct_default && std::abs(c - kDefaultCt) < kTol * kDefaultCt;
   for (double k : g.km) km_default = km_default && std::abs(k - kDefaultKm) < kTol * kDefaultKm;
   std::vector<std::string> w;
-  if (ct_default)
+  // With the weighed mass given, the thrust scale estimated beside the
+  // inertia takes CT's error out: say so instead of asking for it again.
+  if (ct_default && mass_known)
+    w.push_back(
+        "CA_ROTOR*_CT = 6.5 N is PX4's default, which its allocation needs only relative to KM: the thrust scale "
+        "estimated with --known-mass corrects the thrust (its value is among the real-flight terms; far from 1 "
+        "means CT was not this vehicle's)");
+  else if (ct_default)
     w.push_back(
         "CA_ROTOR*_CT = 6.5 N is PX4's default, which its allocation needs only relative to KM: unless it was "
         "measured for this vehicle, the thrust, and with it m and the moments, is in error by CT's; give the weighed "
@@ -438,7 +445,7 @@ IdentificationInput prepare_identification(const std::string& path, const Identi
                                        "parameters do not give a rotor model: {}; give a vehicle file with --vehicle",
                                        e.what()));
         }
-        in.warnings = check_px4_rotor_parameters(u, logs::px4_rotor_geometry(u));
+        in.warnings = check_px4_rotor_parameters(u, logs::px4_rotor_geometry(u), req.real.known_mass.has_value());
         from_log = true;
       }
     } catch (const InputError& e) {
