@@ -136,6 +136,13 @@ std::vector<std::string> source_rate_findings(const logs::ImportReport& report, 
                                               const IdentificationOptions& opt);
 /// InputError names the file.
 IdentificationInput prepare_identification(const std::string& path, const IdentifyRequest& req);
+/// The same for a log already in memory (Python's mapping of arrays): with a
+/// vehicle it holds the rotor columns, and gets the wrench, the rotor checks
+/// and the timing exactly as a file does.
+IdentificationInput prepare_identification(const FlightLog& log, const IdentifyRequest& req);
+/// The columns a log must hold for `req`: t x y z phi theta psi p q r and the
+/// vehicle's rotor columns with a vehicle, else the CSV reader's required ones.
+std::vector<std::string> identification_columns(const IdentifyRequest& req);
 /// identify() on a prepared log; the estimated timing joins the LS and FMLS extras.
 IdentificationResult identify_prepared(const IdentificationInput& in);
 /// With a rotor model: adds "wrench_source", "vehicle" ({name, source}), "rotors" and

@@ -197,14 +197,16 @@ py::dict identify(const py::object& log, const py::dict& opts) {
   } else {
     if (!py::hasattr(log, "keys") || !py::hasattr(log, "__getitem__"))
       throw py::type_error("identify: log must be a path or a mapping of column name -> array");
-    const quadid::FlightLog fl = log_from_mapping(log, req.csv);
+    // The columns a file would need (with a vehicle: its rotor columns),
+    // then the same preparation as a file: windows, rotor model, timing.
+    quadid::CsvReadOptions csv = req.csv;
+    csv.required = quadid::identification_columns(req);
+    const quadid::FlightLog fl = log_from_mapping(log, csv);
     py::gil_scoped_release nogil;
-    quadid::IdentificationOptions options = req.options;
-    std::vector<std::string> notes;  // the windows as for a file: the paper's fitted, kept in the air
-    quadid::fit_windows(fl, req, options, notes);
-    quadid::IdentificationResult res = quadid::identify(fl, options);
-    res.warnings.insert(res.warnings.begin(), notes.begin(), notes.end());
+    const quadid::IdentificationInput in = quadid::prepare_identification(fl, req);
+    quadid::IdentificationResult res = quadid::identify_prepared(in);
     j = quadid::to_json(res);
+    quadid::add_input_json(j, in);
     j["log"] = nullptr;  // the command's "log" is the file's name; a mapping has none
     evo = std::move(res.evolution);
   }

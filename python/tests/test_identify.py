@@ -270,3 +270,16 @@ def test_a_library_error_names_the_keyword_not_the_struct_field_or_the_flag(logs
     assert "LowpassOptions" not in msg and "--cutoff" not in msg, msg
     r = run_cli("identify", str(logs[0]), "--cutoff", "300", check=False)
     assert r.returncode != 0 and "--cutoff 300 must be below Nyquist" in r.stderr, r.stderr
+
+
+def test_identify_on_arrays_with_a_vehicle_equals_the_command_line(tmp_path):
+    # The rotor columns of a mapping get the wrench, the rotor checks and the
+    # timing exactly as a file's do (it failed: "the rotor-inertia term needs
+    # the rotor speeds"); the same doubles give the same result to rounding.
+    f = tmp_path / "cf.csv"
+    run_cli("simulate", "--vehicle", "crazyflie21", "--trajectory", "table2", "--duration", "20", "-o", str(f))
+    cli = cli_json("identify", str(f), "--vehicle", "crazyflie21")
+    arrays = {k: np.array(v) for k, v in quadid.read_log(f).items()}
+    res = quadid.identify(arrays, vehicle="crazyflie21")
+    assert res["log"] is None
+    assert_same(without(res, "evolution", "log"), without(cli, "log"), REL)

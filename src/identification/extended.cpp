@@ -180,7 +180,7 @@ RawSignals raw_signals(const FlightLog& log, const ExtendedOptions& opt, double 
     if (!log.has(kRotorMomentumColumn))
       throw InputError(fmt::format(
           "the rotor-inertia term needs the rotor speeds (log column '{}', made from the rotor columns by --vehicle); "
-          "turn it off with --no-rotor-inertia",
+          "leave rotor-inertia out of --terms (e.g. --terms offsets,flapping), or give --vehicle",
           kRotorMomentumColumn));
     omega_r = signal::zero_phase_lowpass(log.column(kRotorMomentumColumn), 1.0 / r.T, pm.lowpass);
   }

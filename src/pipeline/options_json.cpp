@@ -429,6 +429,92 @@ void fit_windows(const FlightLog& log, const IdentifyRequest& req, Identificatio
   keep_to_the_air(airborne_part(log), req.real.window_given, opt, warnings);
 }
 
+std::vector<std::string> identification_columns(const IdentifyRequest& req) {
+  if (!req.vehicle) return req.csv.required;
+  const auto& std_cols = standard_log_columns();  // t x y z phi theta psi p q r, then the wrench
+  std::vector<std::string> c(std_cols.begin(), std_cols.begin() + 10);
+  c.insert(c.end(), req.vehicle->rotors.columns.begin(), req.vehicle->rotors.columns.end());
+  return c;
+}
+
+namespace {
+
+// The wrench from a rotor model, with the checks of the rotor columns and the
+// timing estimated and applied (prepare_identification, for a file or arrays).
+IdentificationInput with_rotor_model(const FlightLog& raw, const logs::ImportReport& report, IdentifyRequest req,
+                                     bool from_log, IdentificationInput in) {
+  in.wrench_source = from_log ? req.vehicle->source : fmt::format("the rotor model of vehicle {}", req.vehicle->source);
+  if (req.motor_time_constant) req.vehicle->rotors.time_constant = *req.motor_time_constant;
+  const RotorModel& rotors = req.vehicle->rotors;
+  // The airborne part, from the rotor model's thrust (a log whose rotor
+  // columns the model refuses fails below, with the model's message).
+  std::optional<AirbornePart> air;
+  std::optional<FlightLog> wrench;
+  try {
+    wrench = with_rotor_wrench(raw, rotors);
+    air = airborne_part(*wrench);
+  } catch (const InputError&) {
+  }
+  if (from_log) {
+    // The reference set from the log itself (rough_nominal: the mean thrust
+    // in the air), then the defaults a --vehicle gets.
+    if (!wrench) wrench = with_rotor_wrench(raw, rotors);
+    req.vehicle->nominal = rough_nominal(air && air->trimmed() ? rows_in(*wrench, air->window) : *wrench, rotors,
+                                         req.options.processing.g);
+    apply_real_flight(req, req.real);
+  }
+  in.options = req.options;
+  keep_to_the_air(air, req.real.window_given, in.options, in.warnings);
+  // An autopilot log's topics at their own rates: one too slow for the
+  // rows' cutoffs is an input error (the checks' rule: --ignore-input-errors
+  // makes it a warning).
+  if (const auto slow = source_rate_findings(report, rotors.columns, in.options); !slow.empty()) {
+    if (!in.options.ignore_input_errors)
+      throw InputError(fmt::format("the log fails the input checks: sample rate: {}; if the log is right, ignore "
+                                   "the checks (--ignore-input-errors)",
+                                   fmt::join(slow, "; ")));
+    for (const auto& s : slow) in.warnings.push_back("input check sample rate: " + s + " (ignored)");
+  }
+  // The rotor columns against the file's arrangement of the rotors: a wrong
+  // order or layout gives confident, wrong moments (the same rule).
+  // Speeds below 0 beyond their noise (a column of the wrong sign or a
+  // reversing rotor; noise around 0 at idle is not reported) come first:
+  // they are the likely cause of a mapping mismatch.
+  std::vector<std::string> speed;
+  for (const auto& f : rotors.speed_findings(rotor_inputs(raw, rotors))) {
+    if (f.mostly_negative && !in.options.ignore_input_errors)
+      throw InputError(fmt::format("the log fails the input checks: rotor speeds: {}; if the log is right, ignore "
+                                   "the checks (--ignore-input-errors)",
+                                   f.text));
+    speed.push_back(fmt::format("{}rotor speeds: {}{}", f.mostly_negative ? "input check " : "", f.text,
+                                f.mostly_negative ? " (ignored)" : ""));
+  }
+  const double moment_cutoff = in.options.moment_cutoff_hz.value_or(in.options.processing.lowpass.cutoff_hz);
+  if (const RotorMappingCheck rm = check_rotor_mapping(raw, rotors, moment_cutoff); rm.mismatch) {
+    if (!in.options.ignore_input_errors)
+      throw InputError(fmt::format("the log fails the input checks: {}rotor-mapping: {}; if the log and the vehicle "
+                                   "file are right, ignore the checks (--ignore-input-errors)",
+                                   speed.empty() ? "" : fmt::format("{}; ", fmt::join(speed, "; ")), rm.describe()));
+    in.warnings.push_back("input check rotor-mapping: " + rm.describe() + " (ignored)");
+  }
+  in.warnings.insert(in.warnings.end(), speed.begin(), speed.end());
+  TimingOptions topt = req.timing;
+  topt.estimate_time_constant = !req.motor_time_constant && rotors.input_leads_rotor() &&
+                                rotors.time_constant == 0.0;
+  TimingEstimate t;
+  t.time_constant = rotors.time_constant;
+  t.lag_applies = rotors.input_leads_rotor();
+  if (topt.estimate_time_constant || topt.estimate_offsets)
+    t = estimate_timing(raw, rotors, extended_options(in.options), topt);
+  in.log = apply_timing(raw, rotors, t);
+  in.vehicle = req.vehicle;
+  in.vehicle->rotors.time_constant = t.time_constant;
+  in.timing = std::move(t);
+  return in;
+}
+
+}  // namespace
+
 IdentificationInput prepare_identification(const std::string& path, const IdentifyRequest& req_in) {
   IdentifyRequest req = req_in;
   IdentificationInput in;
@@ -460,86 +546,28 @@ IdentificationInput prepare_identification(const std::string& path, const Identi
     fit_windows(in.log, req, in.options, in.warnings);
     return in;
   }
-  in.wrench_source = from_log ? req.vehicle->source : fmt::format("the rotor model of vehicle {}", req.vehicle->source);
-  if (req.motor_time_constant) req.vehicle->rotors.time_constant = *req.motor_time_constant;
-  const RotorModel& rotors = req.vehicle->rotors;
   logs::LoadOptions load;
   load.csv = req.csv;
-  const auto& std_cols = standard_log_columns();  // t x y z phi theta psi p q r, then the wrench
-  load.csv.required.assign(std_cols.begin(), std_cols.begin() + 10);
-  load.csv.required.insert(load.csv.required.end(), rotors.columns.begin(), rotors.columns.end());
+  load.csv.required = identification_columns(req);
   load.check_required = false;  // an imported autopilot log has no wrench: the rotor model adds it
   logs::ImportReport report;
   const FlightLog raw = logs::load_any_log(path, load, &report);
   try {
-    // The airborne part, from the rotor model's thrust (a log whose rotor
-    // columns the model refuses fails below, with the model's message).
-    std::optional<AirbornePart> air;
-    std::optional<FlightLog> wrench;
-    try {
-      wrench = with_rotor_wrench(raw, rotors);
-      air = airborne_part(*wrench);
-    } catch (const InputError&) {
-    }
-    if (from_log) {
-      // The reference set from the log itself (rough_nominal: the mean thrust
-      // in the air), then the defaults a --vehicle gets.
-      if (!wrench) wrench = with_rotor_wrench(raw, rotors);
-      req.vehicle->nominal = rough_nominal(air && air->trimmed() ? rows_in(*wrench, air->window) : *wrench, rotors,
-                                           req.options.processing.g);
-      apply_real_flight(req, req.real);
-    }
-    in.options = req.options;
-    keep_to_the_air(air, req.real.window_given, in.options, in.warnings);
-    // An autopilot log's topics at their own rates: one too slow for the
-    // rows' cutoffs is an input error (the checks' rule: --ignore-input-errors
-    // makes it a warning).
-    if (const auto slow = source_rate_findings(report, rotors.columns, in.options); !slow.empty()) {
-      if (!in.options.ignore_input_errors)
-        throw InputError(fmt::format("the log fails the input checks: sample rate: {}; if the log is right, ignore "
-                                     "the checks (--ignore-input-errors)",
-                                     fmt::join(slow, "; ")));
-      for (const auto& s : slow) in.warnings.push_back("input check sample rate: " + s + " (ignored)");
-    }
-    // The rotor columns against the file's arrangement of the rotors: a wrong
-    // order or layout gives confident, wrong moments (the same rule).
-    // Speeds below 0 beyond their noise (a column of the wrong sign or a
-    // reversing rotor; noise around 0 at idle is not reported) come first:
-    // they are the likely cause of a mapping mismatch.
-    std::vector<std::string> speed;
-    for (const auto& f : rotors.speed_findings(rotor_inputs(raw, rotors))) {
-      if (f.mostly_negative && !in.options.ignore_input_errors)
-        throw InputError(fmt::format("the log fails the input checks: rotor speeds: {}; if the log is right, ignore "
-                                     "the checks (--ignore-input-errors)",
-                                     f.text));
-      speed.push_back(fmt::format("{}rotor speeds: {}{}", f.mostly_negative ? "input check " : "", f.text,
-                                  f.mostly_negative ? " (ignored)" : ""));
-    }
-    const double moment_cutoff = in.options.moment_cutoff_hz.value_or(in.options.processing.lowpass.cutoff_hz);
-    if (const RotorMappingCheck rm = check_rotor_mapping(raw, rotors, moment_cutoff); rm.mismatch) {
-      if (!in.options.ignore_input_errors)
-        throw InputError(fmt::format("the log fails the input checks: {}rotor-mapping: {}; if the log and the vehicle "
-                                     "file are right, ignore the checks (--ignore-input-errors)",
-                                     speed.empty() ? "" : fmt::format("{}; ", fmt::join(speed, "; ")), rm.describe()));
-      in.warnings.push_back("input check rotor-mapping: " + rm.describe() + " (ignored)");
-    }
-    in.warnings.insert(in.warnings.end(), speed.begin(), speed.end());
-    TimingOptions topt = req.timing;
-    topt.estimate_time_constant = !req.motor_time_constant && rotors.input_leads_rotor() &&
-                                  rotors.time_constant == 0.0;
-    TimingEstimate t;
-    t.time_constant = rotors.time_constant;
-    t.lag_applies = rotors.input_leads_rotor();
-    if (topt.estimate_time_constant || topt.estimate_offsets)
-      t = estimate_timing(raw, rotors, extended_options(in.options), topt);
-    in.log = apply_timing(raw, rotors, t);
-    in.vehicle = req.vehicle;
-    in.vehicle->rotors.time_constant = t.time_constant;
-    in.timing = std::move(t);
+    return with_rotor_model(raw, report, std::move(req), from_log, std::move(in));
   } catch (const InputError& e) {
     throw InputError(fmt::format("{}: {}", path, e.what()));
   }
-  return in;
+}
+
+IdentificationInput prepare_identification(const FlightLog& log, const IdentifyRequest& req) {
+  IdentificationInput in;
+  if (!req.vehicle) {
+    in.log = log;
+    in.options = req.options;
+    fit_windows(in.log, req, in.options, in.warnings);
+    return in;
+  }
+  return with_rotor_model(log, logs::ImportReport{}, req, false, std::move(in));
 }
 
 IdentificationResult identify_prepared(const IdentificationInput& in) {
