@@ -136,6 +136,22 @@ PrecisionRequest read_precision(const OptionValues& r) {
 
 }  // namespace
 
+
+namespace {
+
+// A parameter-set option (a preset or a params JSON file); a bad one is named
+// by the option that gave it ("--plant: parameters 'x': ...").
+Params params_option(const OptionValues& r, const std::string& name) {
+  const std::string spec = *r.string(name);
+  try {
+    return load_params(spec);
+  } catch (const InputError& e) {
+    throw InputError(r.prefix(name) + e.what());
+  }
+}
+
+}  // namespace
+
 IdentifyRequest identify_request(const OptionValues& r) {
   IdentifyRequest req;
   IdentificationOptions& opt = req.options;
@@ -145,9 +161,9 @@ IdentifyRequest identify_request(const OptionValues& r) {
   opt.gd.rate = *r.number("gd-rate");
   opt.gd.discretization = *r.string("gd-discretization") == "literal" ? GdDiscretization::ForwardEuler : GdDiscretization::Exact;
   const std::string reference = *r.string("reference");
-  opt.reference = NamedParams{param_set_name(reference), load_params(reference)};
+  opt.reference = NamedParams{param_set_name(reference), params_option(r, "reference")};
   const std::string init = *r.string("gd-init");
-  if (init != "nominal") opt.gd_initial = load_params(init);
+  if (init != "nominal") opt.gd_initial = params_option(r, "gd-init");
   opt.allow_rank_deficient = r.flag("allow-rank-deficient");
   opt.ignore_input_errors = r.flag("ignore-input-errors");
   opt.evolution_interval = *r.number("evolution-interval");
@@ -632,8 +648,8 @@ SimulateRequest simulate_request(const OptionValues& r) {
   if (mocap_rate) o.sensors.mocap_rate = *mocap_rate;
   if (imu_rate) o.sensors.imu_rate = *imu_rate;
   if (dt) o.dt = *dt;
-  o.plant = load_params(*r.string("plant"));
-  o.controller.params = load_params(*r.string("controller-params"));
+  o.plant = params_option(r, "plant");
+  o.controller.params = params_option(r, "controller-params");
   o.controller.torque_map = r.with_option("torque-map", [&] { return torque_map_from_string(*r.string("torque-map")); });
   o.controller.derivative_discretization = r.with_option(
       "derivative", [&] { return derivative_discretization_from_string(*r.string("derivative")); });
@@ -690,7 +706,7 @@ DesignRequest design_request(const OptionValues& r) {
   opt.starts = *r.integer32("starts");
   opt.threads = *r.integer32("threads");
   opt.criterion = r.with_option("criterion", [&] { return parse_criterion(*r.string("criterion")); });
-  opt.reference = load_params(*r.string("scaling-set"));
+  opt.reference = params_option(r, "scaling-set");
   opt.harmonics = *r.integer32("harmonics");
   opt.wf = *r.number("wf-deg") * kDeg;
   opt.max_evals = *r.integer32("max-evals");
@@ -806,11 +822,11 @@ MonteCarloRequest montecarlo_request(const OptionValues& r) {
   o.seed = *r.seed("seed");
   o.trajectory = *r.string("trajectory");
   o.simulation.duration = *r.number("duration");
-  const std::string plant = *r.string("plant"), noise = *r.string("noise");
-  o.simulation.plant = load_params(plant);
+  const std::string noise = *r.string("noise");
+  o.simulation.plant = params_option(r, "plant");
   o.simulation.sensors.noise = NoiseSigmas::preset(noise);
   IdentificationOptions& id = o.identification;
-  id.reference = NamedParams{"nom", load_params(*r.string("reference"))};
+  id.reference = NamedParams{"nom", params_option(r, "reference")};
   const auto rotor_noise = r.number("sigma-rotor");
   if (const auto vehicle = r.string("vehicle")) {
     // The vehicle flies with its rotors (plant, gains, sensors of its file); every run's
@@ -818,7 +834,7 @@ MonteCarloRequest montecarlo_request(const OptionValues& r) {
     const Vehicle v = load_vehicle(*vehicle);
     configure_for_vehicle(o.simulation, v);
     if (noise == "none") o.simulation.sensors.noise = NoiseSigmas::none();
-    if (r.given("plant")) o.simulation.plant = load_params(plant);
+    if (r.given("plant")) o.simulation.plant = params_option(r, "plant");
     if (!r.given("reference")) id.reference = NamedParams{"nom", v.nominal};
     id.gd.gain = GdGain::Normalized;  // identify's auto gain with a vehicle
   } else if (rotor_noise) {
