@@ -117,10 +117,7 @@ class AxisCheck {
     for (Eigen::Index k = 0; k < n; ++k) {
       const Vec3 e = eta.row(k).transpose();
       kin.row(k) = (euler_rate_matrix_inverse(e) * etad.row(k).transpose()).transpose();  // eq. (4)
-      const double cf = std::cos(e(0)), sf = std::sin(e(0)), st = std::sin(e(1));
-      const double cp = std::cos(e(2)), sp = std::sin(e(2));
-      u(k, 0) = s_.fz(k) * (cf * st * cp + sf * sp);  // eq. (1): R(eta) e3, ZYX
-      u(k, 1) = s_.fz(k) * (cf * st * sp - sf * cp);
+      u.row(k) = s_.fz(k) * rotation(e).col(2).head<2>().transpose();  // eq. (1): Fz R(eta) e3
     }
     Score sc;
     per_axis<3>(w, kin, o_.min_rate_rms, sc.gyro);

@@ -2,6 +2,7 @@
 // angle/rate units, z direction, thrust units, aliasing, saturation, time gaps.
 #include "quadid/checks.hpp"
 #include "axes.hpp"
+#include "quadid/model.hpp"
 #include "quadid/signal/median_step.hpp"
 
 #include <fmt/format.h>
@@ -240,8 +241,7 @@ class InputChecks {
   void axes() {
     detail::AxisSignals s;
     const Eigen::MatrixXd d = signal::central_difference(Eigen::MatrixXd(f_.middleCols(1, 6)), T_);
-    const Eigen::MatrixXd xy = f_.middleCols(11, 2);
-    const Eigen::MatrixXd dd = signal::central_difference(signal::central_difference(xy, T_), T_);
+    const Eigen::MatrixXd& dd = horizontal_acceleration();
     s.eta = f_.block(e0_, 1, m_, 3);
     s.eta_dot = d.block(e0_, 0, m_, 3);
     s.gyro = f_.block(e0_, 4, m_, 3);
@@ -257,6 +257,14 @@ class InputChecks {
     } else if (auto d = detail::check_gyro_delay(s, T_, opt_)) {
       out_.push_back(std::move(*d));
     }
+  }
+
+  // x'' and y'' of the low-passed positions, every row (the axes and the
+  // position-units checks both need them; computed once).
+  const Eigen::MatrixXd& horizontal_acceleration() {
+    if (xy_acc_.rows() == 0)
+      xy_acc_ = signal::central_difference(signal::central_difference(Eigen::MatrixXd(f_.middleCols(11, 2)), T_), T_);
+    return xy_acc_;
   }
 
   // z'' and Fz cos(phi) cos(theta) over the interior, for the z and thrust checks.
@@ -353,17 +361,14 @@ class InputChecks {
   // wrong c scales the mass (the force row) and nothing else shows it.
   // Returns false when the positions are not in metres.
   bool position_units() {
-    const Eigen::MatrixXd xy = f_.middleCols(11, 2);
-    const Eigen::MatrixXd dd = signal::central_difference(signal::central_difference(xy, T_), T_);
-    Eigen::MatrixXd A(3 * m_, 2);
+    const Eigen::MatrixXd& dd = horizontal_acceleration();
+    Eigen::MatrixXd A = Eigen::MatrixXd::Zero(3 * m_, 2);
     Eigen::VectorXd y(3 * m_);
     for (Eigen::Index k = e0_; k < e1_; ++k) {
       const Eigen::Index i = k - e0_;
-      const double cf = std::cos(f_(k, 1)), sf = std::sin(f_(k, 1)), ct = std::cos(f_(k, 2)), st = std::sin(f_(k, 2));
-      const double cp = std::cos(f_(k, 3)), sp = std::sin(f_(k, 3)), fz = f_(k, 7);
-      A.row(3 * i) << fz * (cf * st * cp + sf * sp), 0.0;  // R(eta) e3, ZYX
-      A.row(3 * i + 1) << fz * (cf * st * sp - sf * cp), 0.0;
-      A.row(3 * i + 2) << fz * cf * ct, -opt_.g;
+      const Vec3 eta = f_.row(k).segment(1, 3).transpose();
+      A.block(3 * i, 0, 3, 1) = f_(k, 7) * rotation(eta).col(2);  // Fz R(eta) e3
+      A(3 * i + 2, 1) = -opt_.g;
       y.segment(3 * i, 3) << dd(k, 0), dd(k, 1), a_(i);
     }
     const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(A);
@@ -467,6 +472,7 @@ class InputChecks {
   Eigen::MatrixXd raw_, f_;    // z phi theta psi p q r Fz tau_phi tau_theta tau_psi x y, as logged (psi unwrapped) and low-passed
   Eigen::Index e0_ = 0, e1_ = 0, m_ = 0;  // the interior rows [e0, e1), m of them
   Eigen::VectorXd a_, u_;      // z'' and Fz cos(phi) cos(theta) over the interior
+  Eigen::MatrixXd xy_acc_;     // x'' y'' (horizontal_acceleration), empty until asked
 };
 
 }  // namespace
