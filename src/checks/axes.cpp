@@ -77,13 +77,42 @@ void apply(const Slip& s, Mapping& m) {
   for (Col c : s.negated) m.sgn[c] = -m.sgn[c];
 }
 
-double corr(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
-  const Eigen::VectorXd ac = a.array() - a.mean(), bc = b.array() - b.mean();
-  const double d = ac.norm() * bc.norm();
-  return d > 0.0 ? ac.dot(bc) / d : std::numeric_limits<double>::quiet_NaN();
+// Columns minus their means, with their norms: every correlation of a score
+// is then one dot product (a score takes 22 of them).
+struct Centered {
+  Eigen::RowVectorXd mean;
+  Eigen::MatrixXd c;
+  Eigen::RowVectorXd norm;
+  explicit Centered(const Eigen::MatrixXd& a)
+      : mean(a.colwise().mean()), c(a.rowwise() - mean), norm(c.colwise().norm()) {}
+  Eigen::Index rows() const { return c.rows(); }
+};
+
+double corr(const Centered& a, Eigen::Index i, const Centered& b, Eigen::Index j) {
+  const double d = a.norm(i) * b.norm(j);
+  return d > 0.0 ? a.c.col(i).dot(b.c.col(j)) / d : std::numeric_limits<double>::quiet_NaN();
 }
 
-double rms(const Eigen::VectorXd& v) { return std::sqrt(v.squaredNorm() / double(std::max<Eigen::Index>(v.size(), 1))); }
+// W(eta)^-1 d(eta)/dt (eq. 4) and the thrust Fz R(eta) e3 (eq. 1), per row,
+// from one sine and cosine of each angle (the formulas of
+// euler_rate_matrix_inverse() and rotation()'s third column).
+void kinematics(const Eigen::MatrixXd& eta, const Eigen::MatrixXd& etad, const Eigen::VectorXd& fz,
+                Eigen::MatrixXd& kin, Eigen::MatrixXd& thrust) {
+  const Eigen::Index n = eta.rows();
+  kin.resize(n, 3), thrust.resize(n, 3);
+  for (Eigen::Index k = 0; k < n; ++k) {
+    const double cf = std::cos(eta(k, 0)), sf = std::sin(eta(k, 0));
+    const double ct = std::cos(eta(k, 1)), st = std::sin(eta(k, 1));
+    const double cp = std::cos(eta(k, 2)), sp = std::sin(eta(k, 2));
+    const double e0 = etad(k, 0), e1 = etad(k, 1), e2 = etad(k, 2);
+    kin(k, 0) = e0 - st * e2;
+    kin(k, 1) = cf * e1 + ct * sf * e2;
+    kin(k, 2) = -sf * e1 + ct * cf * e2;
+    thrust(k, 0) = fz(k) * (st * cp * cf + sp * sf);
+    thrust(k, 1) = fz(k) * (st * sp * cf - cp * sf);
+    thrust(k, 2) = fz(k) * (ct * cf);
+  }
+}
 
 // Per identity, the correlation of each excited axis (NaN: too still to judge).
 struct Score {
@@ -113,23 +142,26 @@ class AxisCheck {
       tau.col(i) = m.sgn[kTauPhi + i] * s_.tau.col(m.src[kTauPhi + i] - kTauPhi);
     }
     for (int i = 0; i < 2; ++i) acc.col(i) = m.sgn[kX + i] * s_.acc.col(m.src[kX + i] - kX);
-    Eigen::MatrixXd kin(n, 3), u(n, 2);
-    for (Eigen::Index k = 0; k < n; ++k) {
-      const Vec3 e = eta.row(k).transpose();
-      kin.row(k) = (euler_rate_matrix_inverse(e) * etad.row(k).transpose()).transpose();  // eq. (4)
-      u.row(k) = s_.fz(k) * rotation(e).col(2).head<2>().transpose();  // eq. (1): Fz R(eta) e3
+    bool eta_as_logged = true;
+    for (int i = kPhi; i <= kPsi; ++i) eta_as_logged = eta_as_logged && m.src[i] == i && m.sgn[i] > 0.0;
+    Eigen::MatrixXd kin, thrust;
+    if (eta_as_logged) {
+      kin = s_.kin, thrust = s_.thrust;
+    } else {
+      kinematics(eta, etad, s_.fz, kin, thrust);
     }
+    const Centered cw(w), ckin(kin), ctau(tau), cwd(wd), cacc(acc), cu(thrust.leftCols(2));
     Score sc;
-    per_axis<3>(w, kin, o_.min_rate_rms, sc.gyro);
-    per_axis<3>(tau, wd, o_.min_rate_rms, sc.torque);
-    per_axis<2>(acc, u, o_.min_accel_rms, sc.horizontal);
+    per_axis<3>(cw, ckin, o_.min_rate_rms, sc.gyro);
+    per_axis<3>(ctau, cwd, o_.min_rate_rms, sc.torque);
+    per_axis<2>(cacc, cu, o_.min_accel_rms, sc.horizontal);
     // An axis that no column follows says nothing about the order (a light
     // vehicle's rotor-model torques against its noisy angular acceleration):
     // it is left out. Signed permutations keep the largest |correlation|, so
     // every mapping leaves out the same axes.
-    informative<3>(tau, wd, sc.torque);
-    informative<2>(acc, u, sc.horizontal);
-    informative<3>(w, kin, sc.gyro);
+    informative<3>(ctau, cwd, sc.torque);
+    informative<2>(cacc, cu, sc.horizontal);
+    informative<3>(cw, ckin, sc.gyro);
     return sc;
   }
 
@@ -168,22 +200,24 @@ class AxisCheck {
   // Correlation of a's and b's columns i where b's (the kinematic side) moves
   // enough: above the floor and above a fifth of the RMS of all its axes.
   template <int N>
-  static void per_axis(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b, double floor, std::array<double, N>& out) {
-    const double all = std::sqrt(b.squaredNorm() / double(std::max<Eigen::Index>(b.rows(), 1)) / N);
+  static void per_axis(const Centered& a, const Centered& b, double floor, std::array<double, N>& out) {
+    // b's RMS about zero over all axes (b itself, not centred), as a fifth of which an axis must move.
+    const double n = double(std::max<Eigen::Index>(b.rows(), 1));
+    const double all = std::sqrt((b.norm.squaredNorm() + n * b.mean.squaredNorm()) / n / N);
     for (int i = 0; i < N; ++i) {
-      const Eigen::VectorXd bi = b.col(i).array() - b.col(i).mean();
-      out[static_cast<size_t>(i)] = rms(bi) > floor && rms(bi) > 0.2 * all ? corr(a.col(i), b.col(i))
-                                                                             : std::numeric_limits<double>::quiet_NaN();
+      const double r = b.norm(i) / std::sqrt(n);  // RMS of the centred axis
+      out[static_cast<size_t>(i)] =
+          r > floor && r > 0.2 * all ? corr(a, i, b, i) : std::numeric_limits<double>::quiet_NaN();
     }
   }
 
   // Leaves out (NaN) each axis i of b that no column of a follows.
   template <int N>
-  static void informative(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b, std::array<double, N>& out) {
+  static void informative(const Centered& a, const Centered& b, std::array<double, N>& out) {
     for (int i = 0; i < N; ++i) {
       double best = 0.0;
       for (int j = 0; j < N; ++j)
-        if (const double c = std::abs(corr(a.col(j), b.col(i))); !std::isnan(c)) best = std::max(best, c);
+        if (const double c = std::abs(corr(a, j, b, i)); !std::isnan(c)) best = std::max(best, c);
       if (best < kGood) out[static_cast<size_t>(i)] = std::numeric_limits<double>::quiet_NaN();
     }
   }
@@ -222,6 +256,8 @@ std::string maps_of(const std::vector<Slip>& slips) {
 
 }  // namespace
 
+void add_kinematics(AxisSignals& s) { kinematics(s.eta, s.eta_dot, s.fz, s.kin, s.thrust); }
+
 std::optional<InputFinding> check_axes(const AxisSignals& s, const InputCheckOptions& opt) {
   // A thrust of the wrong sign flips every horizontal identity at once; the
   // z-down check names it (negative mean thrust), not a slip of x and y.
@@ -248,38 +284,72 @@ namespace {
 // The lag L (samples, sub-sample by a parabola through the peak) maximising
 // the summed correlation of late(k + L) with early(k) over the columns whose
 // peak correlation reaches 0.8; nullopt when none does or the peak is at the
-// search's edge. A coarse grid (about 50 lags) and then every lag around its
-// best keep it a small part of the checks on long, fast logs.
+// search's edge. A coarse grid (about 50 lags, on every step-th sample: the
+// signals are low-passed far below the sample rate) and then every lag around
+// its best, on every sample, keep it a small part of the checks on long, fast logs.
 std::optional<double> lag_of(const Eigen::MatrixXd& late, const Eigen::MatrixXd& early, Eigen::Index max_lag) {
-  const Eigen::Index n = late.rows(), len = n - 2 * max_lag;
+  const Eigen::Index n = late.rows(), len = n - 2 * max_lag, cols = late.cols();
   if (n < 8 * max_lag) return std::nullopt;
   const Eigen::MatrixXd a = late.rowwise() - late.colwise().mean(), b = early.rowwise() - early.colwise().mean();
-  const auto corr_at = [&](Eigen::Index j, Eigen::Index L) {
-    const auto x = a.col(j).segment(max_lag + L, len), y = b.col(j).segment(max_lag, len);
-    const double d = x.norm() * y.norm();
+  const Eigen::Index step = std::max<Eigen::Index>(1, max_lag / 25);
+  const Eigen::Index coarse = 2 * max_lag / step + 1, m = (len + step - 1) / step;
+  // corr(x, y) of x = v.segment(s, len) and the fixed y, given y's norm and
+  // running sums sq of v's squares (the x norm at every lag in O(1)).
+  const auto corr = [](const auto& x, const auto& y, double xx, double yy) {
+    const double d = std::sqrt(std::max(0.0, xx)) * yy;
     return d > 0.0 ? x.dot(y) / d : 0.0;
   };
-  const Eigen::Index step = std::max<Eigen::Index>(1, max_lag / 25);
+  const auto running_squares = [](const Eigen::VectorXd& v) {
+    Eigen::VectorXd sq(v.size() + 1);
+    sq(0) = 0.0;
+    for (Eigen::Index k = 0; k < v.size(); ++k) sq(k + 1) = sq(k) + v(k) * v(k);
+    return sq;
+  };
+  // Coarse: lag -max_lag + i step on every step-th sample; late's samples
+  // i step, (i + 1) step, ... are a_dec(i), a_dec(i + 1), ...
+  Eigen::MatrixXd grid(coarse, cols);
   std::vector<Eigen::Index> used;
-  double best_c = -1e300;
-  Eigen::Index best = 0;
-  for (Eigen::Index j = 0; j < a.cols(); ++j) {
-    double peak = -1.0;
-    for (Eigen::Index L = -max_lag; L <= max_lag; L += step) peak = std::max(peak, corr_at(j, L));
-    if (peak >= 0.8) used.push_back(j);
+  for (Eigen::Index j = 0; j < cols; ++j) {
+    Eigen::VectorXd a_dec((n + step - 1) / step), b_dec(m);
+    for (Eigen::Index k = 0; k < a_dec.size(); ++k) a_dec(k) = a(k * step, j);
+    for (Eigen::Index k = 0; k < m; ++k) b_dec(k) = b(max_lag + k * step, j);
+    const Eigen::VectorXd sq = running_squares(a_dec);
+    const double yy = b_dec.norm();
+    for (Eigen::Index i = 0; i < coarse; ++i) grid(i, j) = corr(a_dec.segment(i, m), b_dec, sq(i + m) - sq(i), yy);
+    if (grid.col(j).maxCoeff() >= 0.8) used.push_back(j);
   }
   if (used.empty()) return std::nullopt;
+  Eigen::Index best = 0;
+  double best_c = -1e300;
+  for (Eigen::Index i = 0; i < coarse; ++i) {
+    double c = 0.0;
+    for (Eigen::Index j : used) c += grid(i, j);
+    if (c > best_c) best_c = c, best = -max_lag + i * step;
+  }
+  // Fine: every lag within a step of the coarse best, every sample.
+  std::vector<Eigen::VectorXd> sq;
+  std::vector<double> yy;
+  for (Eigen::Index j : used) sq.push_back(running_squares(a.col(j))), yy.push_back(b.col(j).segment(max_lag, len).norm());
   const auto summed = [&](Eigen::Index L) {
     double c = 0.0;
-    for (Eigen::Index j : used) c += corr_at(j, L);
+    const Eigen::Index s0 = max_lag + L;
+    for (std::size_t u = 0; u < used.size(); ++u) {
+      const Eigen::Index j = used[u];
+      c += corr(a.col(j).segment(s0, len), b.col(j).segment(max_lag, len), sq[u](s0 + len) - sq[u](s0), yy[u]);
+    }
     return c;
   };
-  for (Eigen::Index L = -max_lag; L <= max_lag; L += step)
-    if (const double c = summed(L); c > best_c) best_c = c, best = L;
-  for (Eigen::Index L = std::max(-max_lag, best - step); L <= std::min(max_lag, best + step); ++L)
-    if (const double c = summed(L); c > best_c) best_c = c, best = L;
+  const Eigen::Index lo = std::max(-max_lag, best - step - 1), hi = std::min(max_lag, best + step + 1);
+  std::vector<double> fine(static_cast<std::size_t>(hi - lo + 1));
+  for (Eigen::Index L = lo; L <= hi; ++L) fine[static_cast<std::size_t>(L - lo)] = summed(L);
+  // The best lag within a step of the coarse one; its neighbours are in `fine`.
+  const auto at = [&](Eigen::Index L) { return fine[static_cast<std::size_t>(L - lo)]; };
+  const Eigen::Index from = std::max(-max_lag, best - step), to = std::min(max_lag, best + step);
+  best = from;
+  for (Eigen::Index L = from; L <= to; ++L)
+    if (at(L) > at(best)) best = L;
   if (best <= -max_lag || best >= max_lag) return std::nullopt;
-  const double ym = summed(best - 1), y0 = best_c, yp = summed(best + 1);
+  const double ym = at(best - 1), y0 = at(best), yp = at(best + 1);
   const double den = ym - 2.0 * y0 + yp;
   return double(best) + (den < 0.0 ? 0.5 * (ym - yp) / den : 0.0);
 }
@@ -288,12 +358,8 @@ std::optional<double> lag_of(const Eigen::MatrixXd& late, const Eigen::MatrixXd&
 
 std::optional<InputFinding> check_gyro_delay(const AxisSignals& s, double T, const InputCheckOptions& opt) {
   (void)opt;
-  const Eigen::Index n = s.gyro.rows();
   const auto max_lag = static_cast<Eigen::Index>(std::ceil(0.25 / T));
-  Eigen::MatrixXd kin(n, 3);
-  for (Eigen::Index k = 0; k < n; ++k)
-    kin.row(k) = (euler_rate_matrix_inverse(Vec3(s.eta.row(k).transpose())) * s.eta_dot.row(k).transpose()).transpose();
-  const auto att = lag_of(s.gyro, kin, max_lag);  // eq. (4)
+  const auto att = lag_of(s.gyro, s.kin, max_lag);  // eq. (4)
   const auto tau = lag_of(s.alpha, s.tau, max_lag);  // eq. (2)
   if (!att || !tau) return std::nullopt;
   const double da = *att * T, dt = *tau * T;

@@ -23,7 +23,13 @@ struct AxisSignals {
   Eigen::MatrixXd tau;           ///< tau_phi tau_theta tau_psi (N m)
   Eigen::MatrixXd acc;           ///< x'' y'' (m/s^2)
   Eigen::VectorXd fz;            ///< Fz (N)
+  // From the above by add_kinematics (the checks share them):
+  Eigen::MatrixXd kin;        ///< W(eta)^-1 d(eta)/dt (eq. 4), rad/s
+  Eigen::MatrixXd thrust;     ///< Fz R(eta) e3 (eq. 1), world frame, N
 };
+
+/// Fills s.kin and s.thrust from s.eta, s.eta_dot and s.fz.
+void add_kinematics(AxisSignals& s);
 
 /// An Error naming the columns that disagree and the --map that makes the
 /// log consistent, when one of the known conventions does; nothing when the

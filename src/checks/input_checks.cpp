@@ -238,8 +238,11 @@ class InputChecks {
 
   // Gyro, torques and horizontal acceleration against the attitude (axes.hpp):
   // an Error with the --map that makes them agree replaces the shape warning.
-  void axes() {
-    detail::AxisSignals s;
+  // The low-passed signals of the interior rows and their kinematics (the
+  // axes, timing and position-units checks share them; computed once).
+  const detail::AxisSignals& axis_signals() {
+    if (axis_.fz.size() == m_ && m_ > 0) return axis_;
+    detail::AxisSignals& s = axis_;
     const Eigen::MatrixXd d = signal::central_difference(Eigen::MatrixXd(f_.middleCols(1, 6)), T_);
     const Eigen::MatrixXd& dd = horizontal_acceleration();
     s.eta = f_.block(e0_, 1, m_, 3);
@@ -249,6 +252,12 @@ class InputChecks {
     s.tau = f_.block(e0_, 8, m_, 3);
     s.acc = dd.block(e0_, 0, m_, 2);
     s.fz = f_.block(e0_, 7, m_, 1);
+    detail::add_kinematics(s);
+    return axis_;
+  }
+
+  void axes() {
+    const detail::AxisSignals& s = axis_signals();
     if (auto f = detail::check_axes(s, opt_)) {
       std::erase_if(out_, [](const InputFinding& x) {
         return x.check == "angle-units" && x.severity == Severity::Warning;
@@ -362,12 +371,12 @@ class InputChecks {
   // Returns false when the positions are not in metres.
   bool position_units() {
     const Eigen::MatrixXd& dd = horizontal_acceleration();
+    const Eigen::MatrixXd& thrust = axis_signals().thrust;  // Fz R(eta) e3 of rows e0..e1
     Eigen::MatrixXd A = Eigen::MatrixXd::Zero(3 * m_, 2);
     Eigen::VectorXd y(3 * m_);
     for (Eigen::Index k = e0_; k < e1_; ++k) {
       const Eigen::Index i = k - e0_;
-      const Vec3 eta = f_.row(k).segment(1, 3).transpose();
-      A.block(3 * i, 0, 3, 1) = f_(k, 7) * rotation(eta).col(2);  // Fz R(eta) e3
+      A.block(3 * i, 0, 3, 1) = thrust.row(i).transpose();
       A(3 * i + 2, 1) = -opt_.g;
       y.segment(3 * i, 3) << dd(k, 0), dd(k, 1), a_(i);
     }
@@ -471,6 +480,7 @@ class InputChecks {
   double T_ = 0.0, fs_ = 0.0;  // s, the median time step; Hz, its rate
   Eigen::MatrixXd raw_, f_;    // z phi theta psi p q r Fz tau_phi tau_theta tau_psi x y, as logged (psi unwrapped) and low-passed
   Eigen::Index e0_ = 0, e1_ = 0, m_ = 0;  // the interior rows [e0, e1), m of them
+  detail::AxisSignals axis_;              // by axis_signals()
   Eigen::VectorXd a_, u_;      // z'' and Fz cos(phi) cos(theta) over the interior
   Eigen::MatrixXd xy_acc_;     // x'' y'' (horizontal_acceleration), empty until asked
 };
