@@ -853,6 +853,36 @@ TEST_F(LogsCli, ImportWarnsOfTopicsTooSlowForIdentify) {
   EXPECT_EQ(slow, 2) << j.at("warnings").dump();  // actuator_motors and vehicle_local_position, 10 Hz
 }
 
+TEST_F(LogsCli, ASlowGridIsRefusedAndBothWaysOutWork) {
+  // A 30 Hz grid keeps ~7.5 Hz of each signal, below the 8 Hz moment rows:
+  // refused, naming the rate that is enough; each advice, followed, gives
+  // inertia inside its own 95 % interval of the simulated vehicle's truth.
+  ASSERT_EQ(run("simulate --vehicle jmavsim-quad --trajectory table2 --duration 20 --ulog " + path("f.ulg")).rc, 0);
+  auto r = run("import " + path("f.ulg") + " --rate 30 -o " + path("a.csv"));
+  EXPECT_EQ(r.rc, 1);
+  EXPECT_NE(r.err.find("give --rate 32 or more"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(path("a.csv")));
+  const auto inside_truth = [&](const std::string& csv, const std::string& extra) {
+    const auto id = run("identify " + csv + " --vehicle jmavsim-quad --json " + extra);
+    ASSERT_EQ(id.rc, 0) << id.err;
+    const auto j = nlohmann::json::parse(id.out);
+    const auto& u = j.at("uncertainty").at("LS");
+    for (const char* p : {"Ixx", "Iyy", "Izz"}) {
+      const double truth = j.at("reference").at("params").at(p).get<double>();  // the vehicle file's, flown
+      EXPECT_LE(u.at(p).at("ci95").at(0).get<double>(), truth) << csv << " " << p;
+      EXPECT_GE(u.at(p).at("ci95").at(1).get<double>(), truth) << csv << " " << p;
+    }
+  };
+  ASSERT_EQ(run("import " + path("f.ulg") + " --rate 32 -o " + path("b.csv")).rc, 0);
+  inside_truth(path("b.csv"), "");
+  ASSERT_EQ(run("import " + path("f.ulg") + " --rate 30 --allow-slow-rate -o " + path("c.csv")).rc, 0);
+  inside_truth(path("c.csv"), "--cutoff-moment 7.5 --cutoff-force 4");
+  // A CSV is not imported: it is identified as it is.
+  r = run("import " + path("b.csv") + " -o " + path("d.csv"));
+  EXPECT_EQ(r.rc, 1);
+  EXPECT_NE(r.err.find("give it to identify as it is"), std::string::npos) << r.err;
+}
+
 TEST_F(LogsCli, LogInfoAndImport) {
   write("f.ulg", px4_flight({}));
   auto r = run("log-info " + path("f.ulg") + " --json");

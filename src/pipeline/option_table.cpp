@@ -528,7 +528,11 @@ Defs import_options() {
   return {
       B("log", K::String, "ULog (.ulg) or Crazyflie uSD log").positional().required().cli(),
       B("out", K::String, "flight log CSV to write").shorthand("o").required().cli(),
-      B("rate", K::Number, "grid rate").def(o.rate_hz).unit("Hz").cli(),
+      B("rate", K::Number, "grid rate; below 4 x identify's default cutoffs (32 Hz with rotor signals, 16 Hz "
+                           "without) it is refused unless --allow-slow-rate")
+          .def(o.rate_hz).unit("Hz").cli(),
+      B("allow-slow-rate", K::Flag, "accept a --rate below 4 x identify's default cutoffs (then identify the CSV with "
+                                    "--cutoff-moment and --cutoff-force at most a quarter of the rate)").cli(),
       B("aa-order", K::Integer, "anti-aliasing Butterworth order").def(num(o.aa_order)).cli(),
       B("aa-fraction", K::Number, "anti-aliasing cutoff as a fraction of --rate").def(o.aa_fraction).cli(),
       B("max-bridge", K::Number, "longest gap bridged by interpolation").def(o.max_bridge_s).unit("s").cli(),
