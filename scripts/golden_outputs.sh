@@ -23,7 +23,8 @@ run design design --seed 1 -o traj.json
 run check_traj check-trajectory traj.json
 run check_table2 check-trajectory table2
 run simulate simulate --trajectory traj.json --duration 50 -o flight.csv
-run identify identify flight.csv
+run identify identify flight.csv --verbose
+run identify_summary identify flight.csv
 run identify_json identify flight.csv --json -o result.json
 run identify_json_stdout identify flight.csv --json
 run validate validate --log flight.csv --params result.json
@@ -34,12 +35,12 @@ run montecarlo montecarlo --runs 12 --seed 1 --threads 2 --json
 run design_cf design --vehicle crazyflie21 --seed 2 --starts 2 -o cf_traj.json
 run sim_cf simulate --vehicle crazyflie21 --trajectory cf_traj.json --duration 30 --seed 2 -o cf.csv
 run identify_cf identify cf.csv --vehicle crazyflie21 --json -o cf_result.json
-run identify_cf_text identify cf.csv --vehicle crazyflie21
+run identify_cf_text identify cf.csv --vehicle crazyflie21 --verbose
 run identify_cf_km identify cf.csv --vehicle crazyflie21 --known-mass 0.0347 --json
 run validate_cf validate --log cf.csv --vehicle crazyflie21 --params cf_result.json
 if [ -d "$shared/crazyflie-usd" ]; then
   for f in jana00 jana01 jana04 jana06; do
-    run "real_${f}_text" identify "$shared/crazyflie-usd/$f" --vehicle crazyflie21
+    run "real_${f}_text" identify "$shared/crazyflie-usd/$f" --vehicle crazyflie21 --verbose
     run "real_${f}_json" identify "$shared/crazyflie-usd/$f" --vehicle crazyflie21 --json
     run "real_${f}_km" identify "$shared/crazyflie-usd/$f" --vehicle crazyflie21 --known-mass 0.0347 --json
     run "loginfo_$f" log-info "$shared/crazyflie-usd/$f"
@@ -49,7 +50,7 @@ if [ -d "$shared/crazyflie-usd" ]; then
 fi
 if [ -d "$shared/px4-ulog" ]; then
   for f in "$shared"/px4-ulog/*.ulg; do b=$(basename "$f" .ulg)
-    run "loginfo_$b" log-info "$f"; run "import_$b" import "$f" -o "import_$b.csv"; run "identify_$b" identify "$f"
+    run "loginfo_$b" log-info "$f"; run "import_$b" import "$f" -o "import_$b.csv"; run "identify_$b" identify "$f" --verbose
   done
 fi
 for c in design check-trajectory simulate identify validate reproduce import log-info batch montecarlo export; do

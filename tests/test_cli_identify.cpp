@@ -39,8 +39,29 @@ class CliIdentify : public quadid::testing::CliTest {
 
 }  // namespace
 
-TEST_F(CliIdentify, PrintsTable3AndTables5And6) {
+TEST_F(CliIdentify, DefaultIsAShortSummaryOfTheRecommendedSet) {
   const quadid::testing::CliRun r = run(path("log.csv"));
+  ASSERT_EQ(r.rc, 0) << r.err;
+  // The virtual QBall's FMLS breaks the triangle inequality: FMPC is
+  // recommended, shown beside FMLS with FMLS's intervals, and the rest is
+  // where --verbose says.
+  EXPECT_NE(r.out.find("Recommended set: FMPC."), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("FMPC          FMLS          95% interval (FMLS)    rel %"), std::string::npos) << r.out;
+  for (const char* p : {"\nm ", "\nIxx ", "\nIxy ", "\nIxz ", "\nIyy ", "\nIyz ", "\nIzz "})
+    EXPECT_NE(r.out.find(p), std::string::npos) << p;
+  EXPECT_NE(r.out.find("1 warning on stderr"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("--verbose"), std::string::npos) << r.out;
+  EXPECT_EQ(r.out.find("Table 5"), std::string::npos) << r.out;
+  EXPECT_LE(std::count(r.out.begin(), r.out.end(), '\n'), 20) << r.out;
+  // The advice works: --verbose prints the full report.
+  const quadid::testing::CliRun v = run(path("log.csv") + " --verbose");
+  ASSERT_EQ(v.rc, 0) << v.err;
+  EXPECT_NE(v.out.find("Table 5"), std::string::npos) << v.out;
+  EXPECT_NE(v.out.find("Recommended set: FMPC."), std::string::npos) << v.out;
+}
+
+TEST_F(CliIdentify, PrintsTable3AndTables5And6) {
+  const quadid::testing::CliRun r = run(path("log.csv") + " --verbose");
   ASSERT_EQ(r.rc, 0) << r.err;
   // Windows: 10-50 s and the whole log, less the pre-filter's settling time (0.574 s) at the log's ends.
   for (const char* s : {"Estimated parameters (Table 3): window 10-49.426 s (19714 samples at 500 Hz)", "kg m^2",

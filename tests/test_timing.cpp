@@ -314,7 +314,7 @@ TEST_F(Px4Identify, SmallQuadWithoutVehicleFileTextSaysWhereTheModelCameFrom) {
   o.seed = 2;
   const nlohmann::json j = identify(small_vehicle(), o);
   EXPECT_NEAR(j.at("timing").at("motor_time_constant").at("value").get<double>(), 0.02, 0.2 * 0.02);
-  const CliRun r = run("identify " + path("flight.ulg"));
+  const CliRun r = run("identify " + path("flight.ulg") + " --verbose");
   ASSERT_EQ(r.rc, 0) << r.err;
   EXPECT_NE(r.out.find("Wrench (Fz, torques): from the CA_ROTOR* parameters of"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("motor time constant"), std::string::npos) << r.out;

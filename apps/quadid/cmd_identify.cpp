@@ -23,7 +23,7 @@ namespace {
 /// What the command line adds to the library's request: the input, the outputs, -q.
 struct IdentifyArgs {
   std::string log, out, evolution, gd_discretization;
-  bool json = false, quiet = false;
+  bool json = false, quiet = false, verbose = false;
 };
 
 void run(const OptionValues& v) {
@@ -34,6 +34,7 @@ void run(const OptionValues& v) {
   a.gd_discretization = *v.string("gd-discretization");
   a.json = v.flag("json");
   a.quiet = v.flag("quiet");
+  a.verbose = v.flag("verbose");
   IdentifyRequest req = identify_request(v);
   req.options.record_evolution = !a.evolution.empty();  // only --evolution writes it
   // Output paths checked before the work starts.
@@ -71,6 +72,11 @@ void run(const OptionValues& v) {
     fmt::print("Pose {} held between samples at {:.3g} Hz: put back on its sample instants (straight lines between "
                "them; --keep-held-samples to use it as logged)\n\n",
                fmt::join(res.processing.held_columns, " "), res.processing.held_rate_hz);
+  if (!a.verbose) {
+    fmt::print("Wrench (Fz, torques): from {}; window {} ({} samples)\n\n{}", in.wrench_source,
+               res.window.to_string(), res.window_samples, format_summary(res, a.quiet ? 0 : res.warnings.size()));
+    return;
+  }
   fmt::print("{}\n", format_input(in));
   if (!res.input_findings.empty()) fmt::print("Input checks:\n{}\n", format_findings(res.input_findings));
   fmt::print("{}\n", format_estimates_table(res));
@@ -97,8 +103,9 @@ void register_identify(CLI::App& app) {
       "estimate m and the inertia tensor from a flight log (LS, GD, FMLS, FMGD)\n"
       "Processing (paper II-C): zero-phase low-pass of p, eta, omega, F; central differences (eq. 33);\n"
       "v = R^T p_dot. Regressions: standard (eq. 34) and filtered (eqs. 35-39). Estimators: least squares\n"
-      "(eq. 40) and gradient descent (eq. 41). Prints Table 3 (estimates) and Tables 5-6 (RMS output\n"
-      "prediction error, eq. 43, with P_imp% against the reference set). Units: SI, radians.");
+      "(eq. 40) and gradient descent (eq. 41). Prints the recommended set with its 95% intervals; with\n"
+      "--verbose Table 3 (every set), the intervals' method and Tables 5-6 (RMS output prediction error,\n"
+      "eq. 43, with P_imp% against the reference set). Units: SI, radians.");
   auto given = add_table_options(sub, "identify");
   sub->callback([given] { run(given->read()); });
 }

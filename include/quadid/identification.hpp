@@ -188,5 +188,10 @@ nlohmann::json to_json(const IdentificationResult& r);
 std::string format_uncertainty_table(const IdentificationResult& r);
 /// One line per set: physically consistent or why not.
 std::string format_consistency(const IdentificationResult& r);
+/// The short report `identify` prints by default: the recommended set with
+/// its 95 % intervals (a consistent set PC / FMPC shows those of the set it
+/// was projected from, so marked), what the data determine poorly, how many
+/// warnings there were and where the rest is (--verbose, --json).
+std::string format_summary(const IdentificationResult& r, std::size_t warnings);
 
 }  // namespace quadid

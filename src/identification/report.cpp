@@ -207,6 +207,55 @@ std::string format_uncertainty_table(const IdentificationResult& r) {
   return fmt::to_string(out);
 }
 
+std::string format_summary(const IdentificationResult& r, std::size_t warnings) {
+  fmt::memory_buffer out;
+  auto it = std::back_inserter(out);
+  const std::string& name = r.recommended.set;
+  fmt::format_to(it, "Recommended set: {}. {}\n\n", name.empty() ? "none" : name, r.recommended.reason);
+  if (!name.empty()) {
+    // The intervals: the set's own, or (PC, FMPC) those of the least-squares set it was projected from.
+    const SetEstimate& e = r.estimate(name);
+    const std::string source = name == "PC" ? "LS" : name == "FMPC" ? "FMLS" : name;
+    const LeastSquaresSolution* s = r.least_squares_of(source);
+    const bool intervals = s && s->uncertainty.computed;
+    const std::string head = intervals ? (source == name ? "95% interval" : fmt::format("95% interval ({})", source)) : "";
+    // A projection beside the set it came from: how far it had to move shows.
+    const bool projected = source != name && s;
+    const std::string beside = projected ? fmt::format("{:>14}", source) : "";
+    fmt::format_to(it, "{:<10}{:<8}{:>14}{}{:>29}{:>9}\n", "Parameter", "Units", name, beside, head, intervals ? "rel %" : "");
+    const Theta scales = determinedness_scale(e.theta);
+    for (int j = 0; j < 7; ++j) {
+      const std::string n = kThetaNames[static_cast<size_t>(j)];
+      const char* unit = j == 0 ? "kg" : "kg m^2";
+      if (!intervals) {
+        fmt::format_to(it, "{:<10}{:<8}{:>14}{}\n", n, unit, num(e.theta(j)),
+                       projected ? fmt::format("{:>14}", num(s->theta(j))) : "");
+        continue;
+      }
+      const auto& u = s->uncertainty;
+      const bool poor = std::find(s->poorly_determined.begin(), s->poorly_determined.end(), n) != s->poorly_determined.end();
+      fmt::format_to(it, "{:<10}{:<8}{:>14}{}{:>29}{:>9}{}\n", n, unit, num(e.theta(j)),
+                     projected ? fmt::format("{:>14}", num(s->theta(j))) : "",
+                     std::isfinite(u.ci_low(j)) ? fmt::format("[{:.5g}, {:.5g}]", u.ci_low(j), u.ci_high(j)) : "-",
+                     std::isfinite(u.std_error(j)) && scales(j) > 0
+                         ? fmt::format("{:.2f}", 100.0 * u.std_error(j) / scales(j))
+                         : "-",
+                     poor ? "  poorly determined" : "");
+    }
+    for (const auto& [k, v] : e.extra) fmt::format_to(it, "{:<18}{:>14}\n", k, num(v));
+    if (intervals)
+      fmt::format_to(it, "(rel %: the standard error against |m| for m, the mean principal moment for inertia entries{})\n",
+                     source == name ? "" : fmt::format("; {} is the physically consistent body nearest {}, whose "
+                                                       "intervals these are", name, source));
+  }
+  fmt::format_to(it, "\n{}Every set (LS, GD, FMLS, FMGD, PC, FMPC), the intervals' method, physical consistency and "
+                     "Tables 5-6: --verbose; all of it as JSON: --json or -o FILE\n",
+                 warnings ? fmt::format("{} warning{} on stderr (the first names the root cause). ", warnings,
+                                        warnings == 1 ? "" : "s")
+                          : "");
+  return fmt::to_string(out);
+}
+
 std::string format_consistency(const IdentificationResult& r) {
   fmt::memory_buffer out;
   auto it = std::back_inserter(out);
