@@ -11,6 +11,7 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
+#include "px4_sim_log.hpp"
 #include "shared_data.hpp"
 
 #include <cmath>
@@ -560,6 +561,8 @@ struct Px4Flight {
   double duration = 4.0;
   double gap_at = -1, gap_len = 0;  // a hole in vehicle_angular_velocity
   double yaw_rate = 1.5;            // rad/s about NED z (down)
+  int motors_every_ms = 10;         // actuator_motors' period
+  double motor_command = 0.4;       // rotor i at motor_command + 0.01 i (0: all stopped)
 };
 
 // A PX4-like log: vehicle_local_position (NED) at 100 Hz, vehicle_attitude
@@ -600,11 +603,12 @@ std::string px4_flight(const Px4Flight& f) {
       const double cy = std::cos(psi / 2), sy = std::sin(psi / 2), cr = std::cos(phi / 2), sr = std::sin(phi / 2);
       w.data(att, ULogPayload().put(ts).put(float(cy * cr)).put(float(cy * sr)).put(float(sy * sr)).put(float(sy * cr)).str());
     }
-    if (k % 10 == 0) {
-      w.data(pos, ULogPayload().put(ts).put(float(t)).put(2.0f).put(float(-1.0 - 0.5 * t)).str());
+    if (k % 10 == 0) w.data(pos, ULogPayload().put(ts).put(float(t)).put(2.0f).put(float(-1.0 - 0.5 * t)).str());
+    if (k % f.motors_every_ms == 0) {
       ULogPayload m;
       m.put(ts);
-      for (int i = 0; i < 12; ++i) m.put(i < 4 ? float(0.4 + 0.01 * i) : NAN);
+      const double c = f.motor_command;
+      for (int i = 0; i < 12; ++i) m.put(i < 4 ? float(c > 0.0 ? c + 0.01 * i : 0.0) : NAN);
       w.data(mot, m.str());
     }
   }
@@ -851,6 +855,36 @@ TEST_F(LogsCli, ImportWarnsOfTopicsTooSlowForIdentify) {
   for (const auto& w : j.at("warnings"))
     if (w.get<std::string>().rfind("too slow for identify's default cutoffs: ", 0) == 0) ++slow;
   EXPECT_EQ(slow, 2) << j.at("warnings").dump();  // actuator_motors and vehicle_local_position, 10 Hz
+}
+
+TEST(Import, AVehicleThatDidNotFlyIsSaidBeforeItsSlowTopics) {
+  // Motors stopped throughout and logged at 10 Hz: the root cause (it did not
+  // fly) is the error, not the sample rate whose advice could not help.
+  Px4Flight f;
+  f.motors_every_ms = 100;
+  f.motor_command = 0.0;
+  const fs::path p = fs::temp_directory_path() / ("quadid_ground_" + std::to_string(::getpid()) + ".ulg");
+  std::ofstream(p, std::ios::binary) << px4_flight(f);
+  quadid::IdentifyRequest req;
+  req.vehicle = quadid::testing::px4_test_vehicle();
+  try {
+    (void)quadid::prepare_identification(p.string(), req);
+    ADD_FAILURE() << "expected an input error";
+  } catch (const quadid::InputError& e) {
+    const std::string w = e.what();
+    EXPECT_NE(w.find("thrust-units: the thrust Fz is 0 N throughout the log"), std::string::npos) << w;
+    EXPECT_EQ(w.find("sample rate"), std::string::npos) << w;
+  }
+  // Flying (the same rates), the sample rate is the finding.
+  f.motor_command = 0.4;
+  std::ofstream(p, std::ios::binary) << px4_flight(f);
+  try {
+    (void)quadid::prepare_identification(p.string(), req);
+    ADD_FAILURE() << "expected an input error";
+  } catch (const quadid::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("sample rate: actuator_motors"), std::string::npos) << e.what();
+  }
+  fs::remove(p);
 }
 
 TEST_F(LogsCli, ASlowGridIsRefusedAndBothWaysOutWork) {

@@ -51,6 +51,14 @@ struct InputCheckOptions {
   /// mean density below band_hz (a noise-free log's floor is rounding noise).
   double aliasing_band_ratio = 1e-3;
   double band_hz = 2.0;
+  /// Torque sampling: the torques' content between sampling_band_hz and
+  /// 30 Hz (below 0.45 x the rate) against the forward difference of the
+  /// gyro over each period; below this R^2 on both roll and pitch, the torques
+  /// are point samples of a command faster than the log (docs/input-checks.md).
+  /// Right logs: above 0.96 simulated (QBall 2, Crazyflie, PX4 X), 0.58-0.88 per axis on four
+  /// real Crazyflie flights (the larger of the two at least 0.75).
+  double sampling_min_r2 = 0.5;
+  double sampling_band_hz = 4.0;
   /// Saturation: a run of at least this many consecutive samples (and at least
   /// saturation_fraction of the log in all) exactly at the log's max or min.
   long saturation_run = 5;
@@ -65,6 +73,10 @@ struct InputCheckOptions {
 /// q r Fz tau_phi tau_theta tau_psi). Never throws on odd data: that is what it
 /// reports. A clean log gives no finding of severity Warning or Error.
 std::vector<InputFinding> check_input(const FlightLog& log, const InputCheckOptions& opt = {});
+/// The thrust-units Error of a thrust that is 0 N throughout (the vehicle did
+/// not fly), else nullopt: the root cause before any other finding about the
+/// same log (check_input's, and the rates and rotor checks of an autopilot log).
+std::optional<InputFinding> no_thrust_finding(const Eigen::VectorXd& fz);
 
 nlohmann::json to_json(const InputFinding& f);
 nlohmann::json to_json(const std::vector<InputFinding>& f);

@@ -480,6 +480,13 @@ IdentificationInput with_rotor_model(const FlightLog& raw, const logs::ImportRep
     apply_real_flight(req, req.real);
   }
   in.options = req.options;
+  // A vehicle that did not fly first: every finding below would be about a
+  // log with nothing to identify (root cause first).
+  if (wrench)
+    if (const auto none = no_thrust_finding(wrench->column("Fz")); none && !in.options.ignore_input_errors)
+      throw InputError(fmt::format("the log fails the input checks: {}: {} ({}); if the log is right, ignore the "
+                                   "checks (--ignore-input-errors)",
+                                   none->check, none->saw, none->action));
   keep_to_the_air(air, req.real.window_given, in.options, in.warnings);
   // An autopilot log's topics at their own rates: one too slow for the
   // rows' cutoffs is an input error (the checks' rule: --ignore-input-errors
