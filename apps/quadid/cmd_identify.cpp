@@ -73,11 +73,12 @@ void run(const OptionValues& v) {
                "them; --keep-held-samples to use it as logged)\n\n",
                fmt::join(res.processing.held_columns, " "), res.processing.held_rate_hz);
   if (!a.verbose) {
-    fmt::print("Wrench (Fz, torques): from {}; window {} ({} samples)\n\n{}", in.wrench_source,
-               res.window.to_string(), res.window_samples, format_summary(res, a.quiet ? 0 : res.warnings.size()));
+    fmt::print("Wrench (Fz, torques): from {}; window {} ({} samples)\n{}\n{}", in.wrench_source,
+               res.window.to_string(), res.window_samples, format_wrench_timing(res),
+               format_summary(res, a.quiet ? 0 : res.warnings.size()));
     return;
   }
-  fmt::print("{}\n", format_input(in));
+  fmt::print("{}{}\n", format_input(in), format_wrench_timing(res));
   if (!res.input_findings.empty()) fmt::print("Input checks:\n{}\n", format_findings(res.input_findings));
   fmt::print("{}\n", format_estimates_table(res));
   if (res.extended) fmt::print("{}\n", format_real_flight(*res.extended));

@@ -71,7 +71,23 @@ struct IdentificationOptions {
   /// the identification unless ignore_input_errors.
   bool input_checks = true;
   bool ignore_input_errors = false;
+  /// s, how far the log's Fz and torques lead the motion (a controller logs
+  /// the command it holds from its time stamp to the next: half a period):
+  /// they are read that much earlier. nullopt: measured on the standard
+  /// regression and applied when determined (at least 3 standard errors and a
+  /// tenth of a period); 0: as logged. The paper's model only (the
+  /// real-flight regression has its own timing, timing.hpp). docs/identify.md.
+  std::optional<double> wrench_offset{};
+  static constexpr double kMaxWrenchOffset = 0.05;  // s: larger leads are no hold but a timing fault (--gyro-delay)
   void validate() const;
+};
+
+/// What identify() did about the wrench's timing (IdentificationOptions::wrench_offset).
+struct WrenchTiming {
+  bool estimated = false;  ///< measured (wrench_offset nullopt and the paper's model)
+  double measured = 0.0;   ///< s, the measured lead (when estimated)
+  double std_error = 0.0;  ///< s, its standard error (when estimated)
+  double applied = 0.0;    ///< s, the lead read out of the wrench (0: as logged)
 };
 
 /// One estimated set: LS, GD, FMLS or FMGD.
@@ -136,6 +152,7 @@ struct IdentificationResult {
   std::vector<InputFinding> input_findings;
   /// The set to use (recommend_set, filled by identify()).
   Recommendation recommended;
+  WrenchTiming wrench_timing;
   /// Every set: the four of the paper, then the physical ones.
   std::vector<const SetEstimate*> all_sets() const;
   /// The least-squares solution behind LS, FMLS (nullptr for other sets).
@@ -193,5 +210,7 @@ std::string format_consistency(const IdentificationResult& r);
 /// was projected from, so marked), what the data determine poorly, how many
 /// warnings there were and where the rest is (--verbose, --json).
 std::string format_summary(const IdentificationResult& r, std::size_t warnings);
+/// One line on the wrench's lead read out (IdentificationResult::wrench_timing), empty when none.
+std::string format_wrench_timing(const IdentificationResult& r);
 
 }  // namespace quadid

@@ -6,6 +6,7 @@
 #include "quadid/identification/extended.hpp"
 
 #include "quadid/core/parallel.hpp"
+#include "wrench_offset.hpp"
 
 #include <fmt/format.h>
 
@@ -181,6 +182,9 @@ std::optional<std::string> prefilter_removes_motion(const FlightLog& log, const 
 
 void IdentificationOptions::validate() const {
   processing.validate();
+  if (wrench_offset && !(std::abs(*wrench_offset) <= kMaxWrenchOffset))
+    throw std::invalid_argument(fmt::format("wrench_offset={} s must be within +-{:g} s", *wrench_offset,
+                                            kMaxWrenchOffset));
   if (!(window.t0 >= 0.0) || !(window.t1 > window.t0))
     throw std::invalid_argument(fmt::format("--window {}: need 0 <= T0 < T1", window.to_string()));
   if (error_window && (!(error_window->t0 >= 0.0) || !(error_window->t1 > error_window->t0)))
@@ -326,6 +330,7 @@ class IdentifyRun {
   // and the physically consistent set.
   void estimate_paper_model() {
     sig_ = process_log(log_, opt_.processing, &res_.processing);
+    align_wrench();
     std_reg_.emplace(sig_, RegressionModel::Standard, opt_.window);
     filt_reg_.emplace(sig_, RegressionModel::Filtered, opt_.window, opt_.lambda, opt_.gd_variant);
     res_.window = std_reg_->window();
@@ -339,6 +344,31 @@ class IdentifyRun {
     detail::run_both(
         two_, [&] { chain(*std_reg_, s_, res_.ls_standard, pc_std_, 1, 8, false); },
         [&] { chain(*filt_reg_, f_, res_.ls_filtered, pc_filt_, 15, 22, true); });
+  }
+
+  // The wrench's lead over the motion (wrench_offset.hpp), measured on the
+  // standard regression and read out of the processed wrench.
+  void align_wrench() {
+    if (opt_.extended()) return;
+    WrenchTiming& w = res_.wrench_timing;
+    if (opt_.wrench_offset) {
+      w.applied = *opt_.wrench_offset;
+    } else {
+      std::optional<detail::WrenchOffsetEstimate> e;
+      try {
+        e = detail::estimate_wrench_offset(Regression(sig_, RegressionModel::Standard, opt_.window),
+                                           opt_.processing.lowpass.cutoff_hz);
+      } catch (const InputError&) {
+        return;  // the window's own error follows, from the regressions
+      }
+      if (!e) return;
+      w.estimated = true;
+      w.measured = e->offset;
+      w.std_error = e->std_error;
+      const double lead = std::abs(e->offset);
+      if (lead >= 3.0 * e->std_error && lead >= 0.1 * sig_->T && lead <= IdentificationOptions::kMaxWrenchOffset) w.applied = e->offset;
+    }
+    if (w.applied != 0.0) sig_ = detail::wrench_read_earlier(*sig_, w.applied);
   }
 
   // Evolution: t, then LS, GD, FMLS, FMGD (7 each).

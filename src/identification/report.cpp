@@ -207,6 +207,19 @@ std::string format_uncertainty_table(const IdentificationResult& r) {
   return fmt::to_string(out);
 }
 
+std::string format_wrench_timing(const IdentificationResult& r) {
+  const WrenchTiming& w = r.wrench_timing;
+  if (w.applied == 0.0) return {};
+  const double T = r.processing.T;
+  if (!w.estimated)
+    return fmt::format("Wrench timing: Fz and the torques read {:.3g} ms earlier (--wrench-offset)\n", 1e3 * w.applied);
+  return fmt::format(
+      "Wrench timing: Fz and the torques lead the motion by {:.3g} ms (+- {:.2g} ms; {:.2f} of a period{}): read "
+      "that much earlier (--wrench-offset 0: as logged)\n",
+      1e3 * w.applied, 1e3 * w.std_error, T > 0.0 ? w.applied / T : 0.0,
+      T > 0.0 && std::abs(w.applied / T - 0.5) < 0.1 ? ", a controller's commands held from their time stamps" : "");
+}
+
 std::string format_summary(const IdentificationResult& r, std::size_t warnings) {
   fmt::memory_buffer out;
   auto it = std::back_inserter(out);
@@ -423,6 +436,11 @@ json to_json(const IdentificationResult& r) {
             {"held_pose_columns", p.held_columns},
             {"held_pose_rate_hz", p.held_columns.empty() ? json(nullptr) : json(p.held_rate_hz)},
             {"padlen", p.padlen}}},
+          {"wrench_timing",
+           {{"estimated", r.wrench_timing.estimated},
+            {"measured_s", r.wrench_timing.estimated ? json(r.wrench_timing.measured) : json(nullptr)},
+            {"std_error_s", r.wrench_timing.estimated ? json(r.wrench_timing.std_error) : json(nullptr)},
+            {"applied_s", r.wrench_timing.applied}}},
           {"filtered_model",
            {{"lambda", r.options.lambda},
             {"gd_variant", r.options.gd_variant == signal::GdVariant::Consistent ? "consistent" : "printed"}}},

@@ -233,6 +233,11 @@ Defs identify_options() {
                  .unit("Hz").text("--cutoff"),
              B("cutoff-moment", K::Number, "pre-filter cutoff of the moment rows (gyro differentiated once)")
                  .unit("Hz").text("--cutoff; with --vehicle twice it"),
+             B("wrench-offset", K::String,
+               "how far the log's Fz and torques lead the motion, s: auto = measured on the standard regression "
+               "and read out when determined (a controller's log holds each command from its time stamp: half a "
+               "period); 0 = as logged; or a value in seconds. The paper's model only (docs/identify.md)")
+                 .def("auto").choices({"auto"}).or_number().unit("s").range(-0.05, 0.05),
              B("motor-time-constant", K::String,
                "motor time constant, s (first-order lag of the rotor speed behind a command): auto = the rotor "
                "model's, estimated from the flight when the log holds commands and the model gives none (PX4 does "

@@ -152,6 +152,19 @@ Params params_option(const OptionValues& r, const std::string& name) {
 
 }  // namespace
 
+namespace {
+// The number a whole option value spells ("0.005"), or NaN ("5 ms", "auto").
+double whole_number(const std::string& text) {
+  try {
+    std::size_t used = 0;
+    const double v = std::stod(text, &used);
+    return used == text.size() ? v : NAN;
+  } catch (const std::exception&) {
+    return NAN;
+  }
+}
+}  // namespace
+
 IdentifyRequest identify_request(const OptionValues& r) {
   IdentifyRequest req;
   IdentificationOptions& opt = req.options;
@@ -168,6 +181,14 @@ IdentifyRequest identify_request(const OptionValues& r) {
   opt.ignore_input_errors = r.flag("ignore-input-errors");
   opt.evolution_interval = *r.number("evolution-interval");
   opt.uncertainty.jackknife_blocks = *r.integer32("jackknife-blocks");
+  if (const std::string w = *r.string("wrench-offset"); w != "auto") {
+    validate_as(r, [&] {
+      const double v = whole_number(w);
+      if (!(std::abs(v) <= IdentificationOptions::kMaxWrenchOffset))
+        throw std::invalid_argument(fmt::format("--wrench-offset {}: expected auto or a time in [-0.05, 0.05] s", w));
+      opt.wrench_offset = v;
+    });
+  }
   Processing p = read_processing(r);
   opt.processing = p.processing;
   opt.lambda = p.lambda;
@@ -199,16 +220,6 @@ IdentifyRequest identify_options_from_json(const nlohmann::json& j) {
 }
 
 namespace {
-// The number a whole option value spells ("0.005"), or NaN ("5 ms", "auto").
-double whole_number(const std::string& text) {
-  try {
-    std::size_t used = 0;
-    const double v = std::stod(text, &used);
-    return used == text.size() ? v : NAN;
-  } catch (const std::exception&) {
-    return NAN;
-  }
-}
 }  // namespace
 
 void apply_real_flight(IdentifyRequest& req, const RealFlightArgs& a) {
