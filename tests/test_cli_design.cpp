@@ -96,6 +96,8 @@ TEST_F(CliDesign, DesignWritesCheckedTrajectoryReproducibly) {
   EXPECT_EQ(j["seed"].get<int>(), 5);
   EXPECT_TRUE(j["check"]["all_hold"].get<bool>());
   EXPECT_NEAR(j["constraints"]["z_min"].get<double>(), 0.7, 0);
+  EXPECT_EQ(j["best_start"].get<int>(), 1);  // the one start, counted from 1 as the text does
+  EXPECT_EQ(j["start_results"].size(), 1u);
   // The file is a valid trajectory for the other commands, and checks the same.
   const auto c = run("check-trajectory --json " + path("a.json"));
   ASSERT_EQ(c.rc, 0) << c.err;

@@ -151,6 +151,9 @@ TEST(DesignVehicle, VehicleFileLimitsAndBandwidth) {
   EXPECT_NE(message("[limits]\nthrust_margin = 1.5\n").find("limits.thrust_margin"), std::string::npos);
   // 1 kg on four 6 N rotors hovers at 0.41 of their thrust: a 0.7 margin leaves 0.3, too little.
   EXPECT_NE(message("[limits]\nthrust_margin = 0.7\n").find("hovering needs"), std::string::npos);
+  // Every rotor carries the same share: one number, not "0.409 to 0.409".
+  const std::string m = message("[limits]\nthrust_margin = 0.7\n");
+  EXPECT_NE(m.find("hovering needs 0.409 of the rotors' largest thrust"), std::string::npos) << m;
 }
 
 // The designs the issue asks for: every limit (rotor thrusts included) holds on

@@ -887,6 +887,19 @@ TEST(Import, AVehicleThatDidNotFlyIsSaidBeforeItsSlowTopics) {
   fs::remove(p);
 }
 
+TEST_F(LogsCli, NoisyRotorSpeedsAreNotTakenForPointSampledTorques) {
+  // 50 rpm of noise on a Crazyflie's rotor speeds leaves the rotor model's
+  // fast torques as poorly followed by the gyro (R^2 about 0.4) as folded
+  // content would, but their gain is the slow band's: no torque-sampling warning.
+  ASSERT_EQ(run("simulate --vehicle crazyflie21 --trajectory table2 --duration 30 --sigma-rotor 50 --seed 1001 -o " +
+                path("f.csv"))
+                .rc,
+            0);
+  const auto r = run("identify " + path("f.csv") + " --vehicle crazyflie21 --terms paper --cutoffs fixed");
+  ASSERT_EQ(r.rc, 0) << r.err;
+  EXPECT_EQ(r.err.find("torque-sampling"), std::string::npos) << r.err;
+}
+
 TEST_F(LogsCli, ASlowGridIsRefusedAndBothWaysOutWork) {
   // A 30 Hz grid keeps ~7.5 Hz of each signal, below the 8 Hz moment rows:
   // refused, naming the rate that is enough; each advice, followed, gives

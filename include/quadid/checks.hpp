@@ -59,6 +59,12 @@ struct InputCheckOptions {
   /// real Crazyflie flights (the larger of the two at least 0.75).
   double sampling_min_r2 = 0.5;
   double sampling_band_hz = 4.0;
+  /// ... and when on both axes the fast band's gain (torque per rate change)
+  /// is off that of the band below by more than this factor: noise on the
+  /// torques (noisy rotor speeds: R^2 0.40-0.42 on a simulated Crazyflie with
+  /// 50 rpm) leaves it near 1 (0.89-1.03); folded content lowers it (every
+  /// 10th row: 0.58-0.61).
+  double sampling_gain_ratio = 1.33;
   /// Saturation: a run of at least this many consecutive samples (and at least
   /// saturation_fraction of the log in all) exactly at the log's max or min.
   long saturation_run = 5;

@@ -51,10 +51,11 @@ void InputCheckOptions::validate() const {
   if (saturation_run < 2 || !(saturation_fraction >= 0.0 && saturation_fraction < 1.0))
     throw std::invalid_argument("InputCheckOptions: saturation_run must be >= 2, saturation_fraction in [0, 1)");
   if (!(gap_factor > 1.0)) throw std::invalid_argument(fmt::format("InputCheckOptions: gap_factor={} must be > 1", gap_factor));
-  if (!(sampling_min_r2 >= 0.0 && sampling_min_r2 < 1.0) || !(sampling_band_hz > 0.0))
+  if (!(sampling_min_r2 >= 0.0 && sampling_min_r2 < 1.0) || !(sampling_band_hz > 0.0) || !(sampling_gain_ratio > 1.0))
     throw std::invalid_argument(fmt::format(
-        "InputCheckOptions: sampling_min_r2={} must be in [0, 1) and sampling_band_hz={} positive", sampling_min_r2,
-        sampling_band_hz));
+        "InputCheckOptions: sampling_min_r2={} must be in [0, 1), sampling_band_hz={} positive and "
+        "sampling_gain_ratio={} above 1",
+        sampling_min_r2, sampling_band_hz, sampling_gain_ratio));
 }
 
 namespace {
@@ -303,27 +304,41 @@ class InputChecks {
       const Eigen::MatrixXd b = hi < 0.45 * fs_ - 1e-9 ? lowpassed(v, hi) : v;
       return Eigen::MatrixXd(b - lowpassed(v, lo));
     };
-    Eigen::MatrixXd h;
+    Eigen::MatrixXd h, l;
     try {
-      h = band(x).middleRows(e0_, std::min(m_, n - e0_));
+      const Eigen::Index rows = std::min(m_, n - e0_);
+      h = band(x).middleRows(e0_, rows);
+      l = lowpassed(x, lo).middleRows(e0_, rows);
+      l = l.rowwise() - l.colwise().mean();
     } catch (const std::exception&) {
       return;  // too short for the filters
     }
-    std::array<double, 2> r2{};
+    // Per axis: R^2 of the torque on the rate change in the fast band, and
+    // the gain there against the gain in the band below (about the moment of
+    // inertia in both when the torque is the one felt). Noise on the torques
+    // (noisy rotor speeds) lowers R^2 but leaves the gain; folded content
+    // lowers both R^2 and the fast band's gain (every 10th row: 0.59 of the
+    // slow band's).
+    std::array<double, 2> r2{}, gain_ratio{};
     for (int i = 0; i < 2; ++i) {
       const auto t = h.col(i), a = h.col(2 + i);
       const double tt = t.squaredNorm(), aa = a.squaredNorm(), ta = t.dot(a);
+      const double la = l.col(2 + i).squaredNorm(), lt = l.col(i).dot(l.col(2 + i));
       // Too little fast torque to judge (a perfect-tracking log): nothing to say.
-      if (!(tt > 0.0 && aa > 0.0) || std::sqrt(tt / double(h.rows())) < 1e-3 * raw_.col(8 + i).cwiseAbs().maxCoeff())
+      if (!(tt > 0.0 && aa > 0.0 && la > 0.0) ||
+          std::sqrt(tt / double(h.rows())) < 1e-3 * raw_.col(8 + i).cwiseAbs().maxCoeff())
         return;
       r2[static_cast<size_t>(i)] = ta * ta / (tt * aa);
+      gain_ratio[static_cast<size_t>(i)] = (ta / aa) / (lt / la);
     }
-    if (std::max(r2[0], r2[1]) >= opt_.sampling_min_r2) return;
+    const auto gain_off = [&](double g) { return !(std::abs(std::log(g)) <= std::log(opt_.sampling_gain_ratio)); };
+    if (std::max(r2[0], r2[1]) >= opt_.sampling_min_r2 || !gain_off(gain_ratio[0]) || !gain_off(gain_ratio[1])) return;
     add("torque-sampling", Severity::Warning,
         fmt::format("the torques' fast content ({:.3g}-{:.3g} Hz) is not what turned the vehicle: tau_phi against "
                     "the gyro's change over each period dp/dt R^2 = {:.2f}, tau_theta against dq/dt {:.2f} (right "
-                    "logs: 0.58-0.88 on four real Crazyflie flights, above 0.96 simulated)",
-                    lo, hi, r2[0], r2[1]),
+                    "logs: 0.58-0.88 on four real Crazyflie flights, above 0.96 simulated), with gains {:.2f} and "
+                    "{:.2f} times those below {:.3g} Hz (noise on the torques leaves them near 1)",
+                    lo, hi, r2[0], r2[1], gain_ratio[0], gain_ratio[1], lo),
         "the torque columns look like point samples of a command that changes faster than the log's rate (a log "
         "decimated without an anti-aliasing filter, or a controller's output logged at a lower rate): what folds "
         "into the band biases Ixx and Iyy beyond their intervals (every 10th row of a 500 Hz simulated flight: Ixx "

@@ -188,7 +188,7 @@ json design_to_json(const DesignResult& r, const DesignOptions& opt) {
   json starts = json::array();
   for (const auto& s : r.starts) starts.push_back(to_json(s));
   j["start_results"] = starts;
-  j["best_start"] = r.best;
+  j["best_start"] = r.best + 1;  // counted from 1, as the text's "best start 2" (start_results[best_start - 1])
   j["grid"] = {{"grid_dt", opt.grid_dt}, {"check_dt", opt.check_dt}, {"cell_dt", opt.cell_dt}, {"cond_dt", opt.cond_dt}, {"margin", opt.margin}};
   return j;
 }

@@ -44,10 +44,14 @@ Constraints vehicle_constraints(const Vehicle& v, Constraints c) {
   const Eigen::Vector4d hover(v.nominal.m * kDefaultGravity, 0.0, 0.0, 0.0);
   const Eigen::VectorXd f = c.rotor_mixer * hover;
   if (f.minCoeff() < c.thrust_low || f.maxCoeff() > c.thrust_high)
+  {
+    // One number when every rotor carries the same share (not "0.245 to 0.245").
+    const std::string lo = fmt::format("{:.3g}", f.minCoeff()), hi = fmt::format("{:.3g}", f.maxCoeff());
     throw std::invalid_argument(fmt::format(
-        "{}: hovering needs {:.3g} to {:.3g} of the rotors' largest thrust, outside [limits.thrust_min, 1 - "
+        "{}: hovering needs {} of the rotors' largest thrust, outside [limits.thrust_min, 1 - "
         "limits.thrust_margin] = [{:g}, {:g}] (check nominal.m and rotors.thrust_max)",
-        v.source, f.minCoeff(), f.maxCoeff(), c.thrust_low, c.thrust_high));
+        v.source, lo == hi ? lo : lo + " to " + hi, c.thrust_low, c.thrust_high));
+  }
   return c;
 }
 
