@@ -300,15 +300,12 @@ class InputChecks {
       lp.apply(cols.data(), 4, v.rows());
       return v;
     };
-    const auto band = [&](const Eigen::MatrixXd& v) {
-      const Eigen::MatrixXd b = hi < 0.45 * fs_ - 1e-9 ? lowpassed(v, hi) : v;
-      return Eigen::MatrixXd(b - lowpassed(v, lo));
-    };
     Eigen::MatrixXd h, l;
     try {
       const Eigen::Index rows = std::min(m_, n - e0_);
-      h = band(x).middleRows(e0_, rows);
-      l = lowpassed(x, lo).middleRows(e0_, rows);
+      const Eigen::MatrixXd slow = lowpassed(x, lo);
+      h = ((hi < 0.45 * fs_ - 1e-9 ? lowpassed(x, hi) : x) - slow).middleRows(e0_, rows);
+      l = slow.middleRows(e0_, rows);
       l = l.rowwise() - l.colwise().mean();
     } catch (const std::exception&) {
       return;  // too short for the filters
