@@ -1,6 +1,8 @@
 // The wrench's lead over the motion, measured and undone (wrench_offset.hpp).
 #include "wrench_offset.hpp"
 
+#include "quadid/signal.hpp"
+
 #include <Eigen/Dense>
 
 #include <cmath>
@@ -22,8 +24,8 @@ std::optional<WrenchOffsetEstimate> estimate_wrench_offset(const Regression& reg
   Eigen::Index rows = 0;
   Eigen::Matrix<double, 4, 8> A;
   reg.for_each([&](Eigen::Index k, const Regressor4x7& G, const Vec4& Y) {
-    const Eigen::Index km = k > 0 ? k - 1 : k, kp = k + 1 < n ? k + 1 : k;
-    const Vec4 dY = (sig.x.row(kp).tail<4>() - sig.x.row(km).tail<4>()).transpose() / (double(kp - km) * T);
+    const auto wrench = [&sig](Eigen::Index i) -> Vec4 { return sig.x.row(i).tail<4>().transpose(); };
+    const Vec4 dY = signal::central_difference_at(wrench, k, n, T);  // eq. (33), as the regressor's derivatives
     // The moment rows only: the torques against the gyro's derivative pin the
     // lead far better than the thrust against the positions' second
     // derivative (motion capture's noise, differentiated twice); the lead
