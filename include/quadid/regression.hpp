@@ -104,13 +104,115 @@ struct RegressionSignals {
   /// [R00 R10 R01 R11] of R(eta) (eq. 1): the body x components of the world X
   /// and Y axes, then their body y components. Only with keep_body_velocity.
   Eigen::Matrix<double, Eigen::Dynamic, 4> world_axes;
+  /// The real-flight terms' signals (TermSignal order, kTermSignals columns),
+  /// for a regression with terms (process_with_terms); empty otherwise.
+  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> terms;
   Eigen::Index size() const { return x.rows(); }
+};
+
+/// The columns of RegressionSignals::terms. A term's column of Gamma is linear
+/// in these signals and their derivatives, taken by the model's own
+/// discretization (eq. 33, or f_D and g_D) exactly as the paper's signals are.
+enum TermSignal : int {
+  kTsOmegaR = 0,          // Omega_r, rad/s: the rotors' signed speed sum (enters differentiated)
+  kTsU, kTsV,             // body velocity u, v, m/s (the moment rows' processing)
+  kTsW,                   // body z velocity w, m/s (the force row's processing)
+  kTsP, kTsQ, kTsR,       // body rates, rad/s (the moment rows' processing)
+  kTsQOmega, kTsPOmega,   // q Omega_r, p Omega_r
+  kTsRxx, kTsRyx, kTsRxy, kTsRyy,  // body x, then y, components of the world X and Y axes
+  kTermSignals,
 };
 
 /// Section II-C: filter, differentiate (eq. 33), rotate (v = R^T p_dot).
 /// Throws InputError on a missing column, a non-uniform or too short log.
 std::shared_ptr<const RegressionSignals> process_log(const FlightLog& log, const ProcessingOptions& opt = {},
                                                      ProcessingSummary* summary = nullptr);
+
+/// The terms of the real-flight regression. Each is linear in its parameters.
+struct ModelTerms {
+  /// kg, weighed: estimate the thrust scale s instead of the mass.
+  std::optional<double> known_mass{};
+  bool torque_offsets = false;  // o: centre of mass off the rotors' centre, rotor mismatch (N m)
+  bool flapping = false;        // K_x, K_y: blade-flapping moment, -K (e_z x v_body) (N s)
+  bool rate_damping = false;    // D_x, D_y, D_z: -D w (N m s)
+  bool rotor_inertia = false;   // J_r: yaw reaction and gyroscopic torque (kg m^2); needs Omega_r
+  /// With rotor_inertia: J_r of one rotor, kg m^2, known (the vehicle file's
+  /// rotor_inertia, or --rotor-inertia VALUE): the term is applied with it
+  /// instead of being estimated. J_r shares the yaw row with Izz (the yaw
+  /// torque drives both r_dot and Omega_r_dot), so an estimated J_r, attenuated
+  /// by the noise of the differentiated rotor speeds, pulls Izz with it.
+  std::optional<double> known_rotor_inertia{};
+  bool force_drag = false;      // k_w: -k_w w in the force row (N s/m)
+  /// Horizontal moments fixed in the world frame (N m), seen in the body frame:
+  /// a steady wind on flapping blades (-K (e_z x R^T w_wind)). 4 parameters.
+  bool wind = false;
+  /// Weigh the four rows by the inverse of their own residual RMS (two passes).
+  bool weight_rows = false;
+  /// True when any term beyond the paper's model is on.
+  bool any() const {
+    return known_mass || torque_offsets || flapping || rate_damping || rotor_inertia || force_drag || wind ||
+           weight_rows;
+  }
+  /// All real-flight terms on (the defaults with a rotor model).
+  static ModelTerms real_flight(bool have_rotor_speeds);
+  /// Throws std::invalid_argument naming the option (command-line spelling).
+  void validate() const;
+};
+
+/// --terms: "paper" (none of the terms), "real" (real_flight()), or a comma
+/// list of offsets, flapping, damping, rotor-inertia, drag, wind, weighting. Throws
+/// std::invalid_argument naming --terms and the choices.
+ModelTerms parse_model_terms(std::string_view spec, bool have_rotor_speeds);
+
+/// One parameter of the real-flight regression beyond the paper's Theta: its
+/// name and its column of Gamma, given the term signals' derivatives `d` and
+/// values `s` at one sample (TermSignal order). Signs: the term moved to the
+/// left-hand side of "= tau".
+struct RegressionTerm {
+  const char* name;
+  Vec4 (*column)(const double* d, const double* s);
+};
+/// The terms `t` turns on, in column order. highpass: the roll and pitch rows
+/// are high-passed, which leaves nothing of a constant moment there: of the
+/// offsets only offset_z remains. A known rotor inertia is not a column.
+std::vector<RegressionTerm> regression_terms(const ModelTerms& t, bool highpass = false);
+/// The rotor-inertia term (its column moves to the right-hand side when J_r is known).
+const RegressionTerm& rotor_inertia_term();
+/// Whether `name` is a term of the real-flight regression, or thrust_scale.
+bool is_term_name(std::string_view name);
+/// Whether a real-flight term belongs to the vehicle, so that a set's value
+/// predicts another flight: the thrust scale, flapping, rate damping, rotor
+/// inertia and vertical drag do; the torque offsets (a trim, a battery's
+/// place) and the wind terms (that day's wind) belong to the flight they were
+/// identified on.
+bool term_carries_to_other_flights(std::string_view name);
+/// The terms of `t` plus the one named (a term of a carried kind; others are ignored).
+void turn_on_carried_term(ModelTerms& t, std::string_view name);
+
+/// Section II-C at two cutoffs, for the real-flight regression: the force row
+/// (w, c, Fz) from `force`, the moment rows from `moment`, and the signals
+/// of `terms` (RegressionSignals::terms). Throws InputError when a term needs a
+/// column the log lacks.
+struct TermProcessing {
+  std::shared_ptr<const RegressionSignals> signals;
+  ProcessingSummary force, moment;
+};
+TermProcessing process_with_terms(const FlightLog& log, const ProcessingOptions& force, const ProcessingOptions& moment,
+                                  const ModelTerms& terms);
+
+/// One sample's row of a regression with terms: Gamma (4 x parameters),
+/// Upsilon, and the rotor-inertia column J (with a known J_r the right-hand
+/// side is Upsilon - J_r J).
+struct TermRow {
+  Eigen::Matrix<double, 4, Eigen::Dynamic> G;
+  Vec4 Y = Vec4::Zero();
+  Vec4 J = Vec4::Zero();
+  explicit TermRow(Eigen::Index parameters) : G(4, parameters) {}
+};
+/// The row from one sample's discrete signals: d/dt [w p q r], the seven b
+/// signals, the outputs, and the term signals' derivatives and values.
+void assemble_term_row(const std::vector<RegressionTerm>& terms, const Vec4& da, const Eigen::Matrix<double, 7, 1>& b,
+                       const Vec4& y, const double* td, const double* ts, TermRow& row);
 
 // --- Regressions (eqs. 34 and 38) ---------------------------------------------
 
@@ -129,8 +231,11 @@ class Regression {
  public:
   /// Throws InputError when the window is outside the log or holds fewer than
   /// 8 samples clear of the edges, std::invalid_argument on a malformed window.
+  /// terms: the real-flight terms' columns after Theta's seven (the paper's
+  /// model is the empty list); they need the signals' terms (process_with_terms).
   Regression(std::shared_ptr<const RegressionSignals> signals, RegressionModel model, TimeWindow window,
-             double lambda = 30.0, signal::GdVariant gd_variant = signal::GdVariant::Consistent);
+             double lambda = 30.0, signal::GdVariant gd_variant = signal::GdVariant::Consistent,
+             std::vector<RegressionTerm> terms = {});
 
   RegressionModel model() const { return model_; }
   double lambda() const { return lambda_; }
@@ -145,18 +250,32 @@ class Regression {
   TimeWindow window() const;
   const RegressionSignals& signals() const { return *sig_; }
   /// The same regression over another window.
-  Regression with_window(TimeWindow w) const { return Regression(sig_, model_, w, lambda_, variant_); }
+  Regression with_window(TimeWindow w) const { return Regression(sig_, model_, w, lambda_, variant_, terms_); }
+  const std::vector<RegressionTerm>& terms() const { return terms_; }
+  /// Columns of Gamma: Theta's seven, then one per term.
+  Eigen::Index parameters() const { return 7 + static_cast<Eigen::Index>(terms_.size()); }
 
-  /// Calls f(k, G, Y) for every sample k of the window, in time order.
+  /// Calls f(k, G, Y) for every sample k of the window, in time order: the
+  /// paper's 4 x 7 Gamma (the terms' columns left out).
   template <class F>
   void for_each(F&& f) const;
+  /// Calls f(k, row) for every sample k in [k0, k1) (any samples of the log,
+  /// edges included), in time order, with the terms' columns.
+  template <class F>
+  void for_each_row(Eigen::Index k0, Eigen::Index k1, F&& f) const;
 
  private:
+  // The one discretization of both: f(k, da, b, y, td, ts) for k in [k0, k1),
+  // with the term signals' derivatives td and values ts when with_terms.
+  template <class F>
+  void for_each_discrete(Eigen::Index k0, Eigen::Index k1, bool with_terms, F&& f) const;
+
   std::shared_ptr<const RegressionSignals> sig_;
   RegressionModel model_;
   double lambda_;
   signal::GdVariant variant_;
   Eigen::Index begin_ = 0, end_ = 0;
+  std::vector<RegressionTerm> terms_;
 };
 
 // --- Output prediction error (eq. 43, Tables 5-6) -------------------------------
@@ -213,61 +332,49 @@ class PredictionErrorSums {
   std::vector<Vec4> sse_;  // fixed size per set: no allocation per sample
 };
 
-/// The terms of the real-flight regression. Each is linear in its parameters.
-struct ModelTerms {
-  /// kg, weighed: estimate the thrust scale s instead of the mass.
-  std::optional<double> known_mass{};
-  bool torque_offsets = false;  // o: centre of mass off the rotors' centre, rotor mismatch (N m)
-  bool flapping = false;        // K_x, K_y: blade-flapping moment, -K (e_z x v_body) (N s)
-  bool rate_damping = false;    // D_x, D_y, D_z: -D w (N m s)
-  bool rotor_inertia = false;   // J_r: yaw reaction and gyroscopic torque (kg m^2); needs Omega_r
-  /// With rotor_inertia: J_r of one rotor, kg m^2, known (the vehicle file's
-  /// rotor_inertia, or --rotor-inertia VALUE): the term is applied with it
-  /// instead of being estimated. J_r shares the yaw row with Izz (the yaw
-  /// torque drives both r_dot and Omega_r_dot), so an estimated J_r, attenuated
-  /// by the noise of the differentiated rotor speeds, pulls Izz with it.
-  std::optional<double> known_rotor_inertia{};
-  bool force_drag = false;      // k_w: -k_w w in the force row (N s/m)
-  /// Horizontal moments fixed in the world frame (N m), seen in the body frame:
-  /// a steady wind on flapping blades (-K (e_z x R^T w_wind)). 4 parameters.
-  bool wind = false;
-  /// Weigh the four rows by the inverse of their own residual RMS (two passes).
-  bool weight_rows = false;
-  /// True when any term beyond the paper's model is on.
-  bool any() const {
-    return known_mass || torque_offsets || flapping || rate_damping || rotor_inertia || force_drag || wind ||
-           weight_rows;
-  }
-  /// All real-flight terms on (the defaults with a rotor model).
-  static ModelTerms real_flight(bool have_rotor_speeds);
-  /// Throws std::invalid_argument naming the option (command-line spelling).
-  void validate() const;
-};
-
-/// --terms: "paper" (none of the terms), "real" (real_flight()), or a comma
-/// list of offsets, flapping, damping, rotor-inertia, drag, wind, weighting. Throws
-/// std::invalid_argument naming --terms and the choices.
-ModelTerms parse_model_terms(std::string_view spec, bool have_rotor_speeds);
-
-
 // --- Implementation of the template ----------------------------------------------
 
 template <class F>
 void Regression::for_each(F&& f) const {
+  for_each_discrete(begin_, end_, false,
+                    [&](Eigen::Index k, const Vec4& a, const Eigen::Matrix<double, 7, 1>& b, const Vec4& y,
+                        const double*, const double*) { f(k, assemble_regressor(a, b), y); });
+}
+
+template <class F>
+void Regression::for_each_row(Eigen::Index k0, Eigen::Index k1, F&& f) const {
+  TermRow row(parameters());
+  for_each_discrete(k0, k1, true,
+                    [&](Eigen::Index k, const Vec4& a, const Eigen::Matrix<double, 7, 1>& b, const Vec4& y,
+                        const double* td, const double* ts) {
+                      assemble_term_row(terms_, a, b, y, td, ts, row);
+                      f(k, static_cast<const TermRow&>(row));
+                    });
+}
+
+template <class F>
+void Regression::for_each_discrete(Eigen::Index k0, Eigen::Index k1, bool with_terms, F&& f) const {
   const auto& X = sig_->x;
+  const auto& Z = sig_->terms;
   const double T = sig_->T;
   const Eigen::Index n = X.rows();
+  const Eigen::Index nz = with_terms ? Z.cols() : 0;
   Vec4 a;
   Eigen::Matrix<double, 7, 1> b;
   Vec4 y;
+  Eigen::Matrix<double, 1, Eigen::Dynamic> td(nz), ts(nz);
   if (model_ == RegressionModel::Standard) {
-    // eq. (33) on [w p q r]; second-order one-sided at the log's two ends.
+    // eq. (33) on [w p q r] and the term signals; second-order one-sided at the log's two ends.
     const auto awpqr = [&X](Eigen::Index i) -> Vec4 { return X.row(i).template head<4>().transpose(); };
-    for (Eigen::Index k = begin_; k < end_; ++k) {
+    for (Eigen::Index k = k0; k < k1; ++k) {
       a = signal::central_difference_at(awpqr, k, n, T);
       b = X.row(k).segment<7>(4).transpose();
       y = X.row(k).tail<4>().transpose();
-      f(k, assemble_regressor(a, b), y);
+      for (Eigen::Index j = 0; j < nz; ++j) {
+        td(j) = signal::central_difference_at([&Z, j](Eigen::Index i) { return Z(i, j); }, k, n, T);
+        ts(j) = Z(k, j);
+      }
+      f(k, a, b, y, nz ? td.data() : nullptr, nz ? ts.data() : nullptr);
     }
     return;
   }
@@ -277,19 +384,31 @@ void Regression::for_each(F&& f) const {
   // s_k; b and Upsilon are taken there too, (s_k + s_{k+1}) / 2. Left at s_k,
   // the half-sample lead biased FMLS (Ixx -0.06 % in Monte Carlo runs of the
   // virtual QBall 2, beyond its intervals) and made a rotor-inertia column
-  // take up (T/2) d(tau_psi)/dt (extended.cpp).
+  // take up (T/2) d(tau_psi)/dt (4.8e-10 kg m^2 at 19 standard errors on a
+  // simulated Crazyflie with none).
   const signal::FdGd fd(lambda_, T, variant_, "Regression");
   Eigen::Matrix<double, 1, RegressionSignals::kCols> s = X.row(0), next;
-  for (Eigen::Index k = 0; k < end_; ++k) {
+  Eigen::Matrix<double, 1, Eigen::Dynamic> z(nz), znext(nz);
+  if (nz > 0) z = Z.row(0);
+  for (Eigen::Index k = 0; k < k1; ++k) {
     next = s;
     fd.step(next, X.row(k));
-    if (k >= begin_) {
+    if (nz > 0) {
+      znext = z;
+      fd.step(znext, Z.row(k));
+    }
+    if (k >= k0) {
       a = fd.c * (X.row(k).head<4>() - s.head<4>()).transpose();
       b = 0.5 * (s.segment<7>(4) + next.segment<7>(4)).transpose();
       y = 0.5 * (s.tail<4>() + next.tail<4>()).transpose();
-      f(k, assemble_regressor(a, b), y);
+      if (nz > 0) {
+        td = fd.c * (Z.row(k) - z);
+        ts = 0.5 * (z + znext);
+      }
+      f(k, a, b, y, nz ? td.data() : nullptr, nz ? ts.data() : nullptr);
     }
     s = next;
+    if (nz > 0) z = znext;
   }
 }
 

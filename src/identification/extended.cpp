@@ -20,107 +20,6 @@
 namespace quadid {
 namespace {
 
-// Columns of the raw signal matrix. "a" signals enter differentiated (eq. 33
-// in the standard model, g_D in the filtered one), "b" signals as they are
-// (f_D in the filtered model): every column of the regressor is d/dt a + b.
-enum : int {
-  // a signals
-  A_W = 0, A_P, A_Q, A_R, A_OMEGA_R, kNumA,
-};
-enum : int {
-  // b signals (index into the b block)
-  B_C = 0, B_PQ, B_PR, B_QR, B_PP, B_QQ, B_RR,  // Phi_b signals (eq. 13)
-  B_FZ, B_TX, B_TY, B_TZ,                       // outputs
-  B_ONE, B_U, B_V, B_W, B_P, B_Q, B_R, B_QOM, B_POM,
-  B_RXX, B_RYX, B_RXY, B_RYY,  // body x, then y, components of the world X, Y axes
-  kNumB,
-};
-
-struct Term {
-  const char* name;
-  // Column of G for this parameter, given d/dt a (da) and b at one sample.
-  Vec4 (*column)(const double* da, const double* b);
-};
-
-Vec4 v4(double a, double b, double c, double d) { return Vec4(a, b, c, d); }
-
-// Extra columns. Signs follow the rows of the header: terms moved to the
-// left-hand side of "= s tau".
-const Term kOffsetTerms[] = {
-    {"offset_x", [](const double*, const double*) { return v4(0, -1, 0, 0); }},
-    {"offset_y", [](const double*, const double*) { return v4(0, 0, -1, 0); }},
-    {"offset_z", [](const double*, const double*) { return v4(0, 0, 0, -1); }},
-};
-// -K (e_z x v_b) = -K (-v, u, 0): moved left, +K_x (-v) ... as K_x * (-v) on row x.
-const Term kFlapTerms[] = {
-    {"flapping_x", [](const double*, const double* b) { return v4(0, -b[B_V], 0, 0); }},
-    {"flapping_y", [](const double*, const double* b) { return v4(0, 0, b[B_U], 0); }},
-};
-const Term kDampTerms[] = {
-    {"damping_x", [](const double*, const double* b) { return v4(0, b[B_P], 0, 0); }},
-    {"damping_y", [](const double*, const double* b) { return v4(0, 0, b[B_Q], 0); }},
-    {"damping_z", [](const double*, const double* b) { return v4(0, 0, 0, b[B_R]); }},
-};
-// J_r (Omega_r_dot e_z + w x e_z Omega_r), w x e_z = (q, -p, 0).
-const Term kRotorTerms[] = {
-    {"rotor_inertia",
-     [](const double* da, const double* b) { return v4(0, b[B_QOM], -b[B_POM], da[A_OMEGA_R]); }},
-};
-// A steady horizontal wind w (world) on flapping blades: -K (e_z x R^T w), whose
-// body x part is K_x (R^T w)_y = K_x (R01 w_X + R11 w_Y) and y part
-// -K_y (R00 w_X + R10 w_Y). Each product K_i w_J is one parameter: the moment
-// about body axis i per unit of the world axis J seen along the other body axis.
-const Term kWindTerms[] = {
-    {"wind_x_X", [](const double*, const double* b) { return v4(0, -b[B_RXY], 0, 0); }},
-    {"wind_x_Y", [](const double*, const double* b) { return v4(0, -b[B_RYY], 0, 0); }},
-    {"wind_y_X", [](const double*, const double* b) { return v4(0, 0, b[B_RXX], 0); }},
-    {"wind_y_Y", [](const double*, const double* b) { return v4(0, 0, b[B_RYX], 0); }},
-};
-const Term kDragTerms[] = {
-    {"drag_z", [](const double*, const double* b) { return v4(b[B_W], 0, 0, 0); }},
-};
-
-// highpass: the roll and pitch rows are high-passed, which leaves nothing of
-// a constant moment there: only offset_z remains.
-std::vector<Term> active_terms(const ModelTerms& t, bool highpass = false) {
-  std::vector<Term> v;
-  auto add = [&](const auto& arr) {
-    for (const Term& t : arr) v.push_back(t);
-  };
-  if (t.torque_offsets && highpass) v.push_back(kOffsetTerms[2]);
-  else if (t.torque_offsets) add(kOffsetTerms);
-  if (t.flapping) add(kFlapTerms);
-  if (t.rate_damping) add(kDampTerms);
-  if (t.rotor_inertia && !t.known_rotor_inertia) add(kRotorTerms);
-  if (t.force_drag) add(kDragTerms);
-  if (t.wind) add(kWindTerms);
-  return v;
-}
-
-// The regressor of one sample: G (4 x P) and Y (4) with G x = Y.
-struct Assembler {
-  const ModelTerms& terms;
-  const std::vector<Term>& extra;
-  Eigen::Index P;
-  /// A known J_r, in the regression's units (divided by the thrust scale when
-  /// the mass is known): its term moves to the right-hand side.
-  double known_jr = 0.0;
-  void operator()(const double* da, const double* b, Eigen::Matrix<double, 4, Eigen::Dynamic>& G, Vec4& Y) const {
-    Eigen::Matrix<double, 7, 1> bb;
-    for (int i = 0; i < 7; ++i) bb(i) = b[i];
-    const Regressor4x7 Gamma = assemble_regressor(Vec4(da[A_W], da[A_P], da[A_Q], da[A_R]), bb);
-    const Vec4 F(b[B_FZ], b[B_TX], b[B_TY], b[B_TZ]);
-    // Always the thrust model's scale (s = 1): with a known mass the estimates
-    // are rescaled afterwards (identify_extended). Estimating s inside the
-    // regression would make the moment rows homogeneous in (I, s, terms), and
-    // on real data their model error would pull all of them toward zero.
-    G.leftCols<7>() = Gamma;
-    Y = F;
-    if (known_jr != 0.0) Y -= known_jr * kRotorTerms[0].column(da, b);
-    for (size_t j = 0; j < extra.size(); ++j) G.col(7 + static_cast<Eigen::Index>(j)) = extra[j].column(da, b);
-  }
-};
-
 double rms(const Eigen::Ref<const Eigen::VectorXd>& x) {
   return x.size() ? std::sqrt(x.squaredNorm() / static_cast<double>(x.size())) : 0.0;
 }
@@ -152,102 +51,59 @@ namespace {
 
 using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
 
-// The raw a and b signals of one processing (force row at one cutoff, moment
-// rows at another).
+// The signals of one processing at two cutoffs (force row at one, moment
+// rows at the other) with the terms' signals (process_with_terms).
 struct RawSignals {
-  std::shared_ptr<const RegressionSignals> sf, sm;
+  std::shared_ptr<const RegressionSignals> sig;
   ProcessingSummary pf, pm;
-  Eigen::MatrixXd a, b;
   double T = 0.0;
   double f_moment = 0.0;  // Hz, the moment rows' low-pass cutoff
 };
 
 RawSignals raw_signals(const FlightLog& log, const ExtendedOptions& opt, double f_force, double f_moment) {
-  const ModelTerms& terms = opt.terms;
-  RawSignals r;
   ProcessingOptions pf = opt.processing, pm = opt.processing;
   pf.lowpass.cutoff_hz = f_force;
   pm.lowpass.cutoff_hz = f_moment;
-  pm.keep_body_velocity = terms.flapping || terms.wind;
-  r.sf = process_log(log, pf, &r.pf);
-  r.sm = f_moment == f_force && !pm.keep_body_velocity ? r.sf : process_log(log, pm, &r.pm);
-  if (r.sm == r.sf) r.pm = r.pf;
-  const Eigen::Index n = r.sf->size();
-  r.T = r.sf->T;
+  TermProcessing tp = process_with_terms(log, pf, pm, opt.terms);
+  RawSignals r;
+  r.T = tp.signals->T;
   r.f_moment = f_moment;
-  Eigen::VectorXd omega_r = Eigen::VectorXd::Zero(n);
-  if (terms.rotor_inertia) {
-    if (!log.has(kRotorMomentumColumn))
-      throw InputError(fmt::format(
-          "the rotor-inertia term needs the rotor speeds (log column '{}', made from the rotor columns by --vehicle); "
-          "leave rotor-inertia out of --terms (e.g. --terms offsets,flapping), or give --vehicle",
-          kRotorMomentumColumn));
-    omega_r = signal::zero_phase_lowpass(log.column(kRotorMomentumColumn), 1.0 / r.T, pm.lowpass);
-  }
-  Eigen::MatrixXd& a = r.a;
-  Eigen::MatrixXd& b = r.b;
-  a.resize(n, kNumA);
-  b.resize(n, kNumB);
-  const auto& XF = r.sf->x;
-  const auto& XM = r.sm->x;
-  a.col(A_W) = XF.col(0);
-  a.middleCols<3>(A_P) = XM.middleCols<3>(1);
-  a.col(A_OMEGA_R) = omega_r;
-  b.col(B_C) = XF.col(4);
-  b.middleCols<6>(B_PQ) = XM.middleCols<6>(5);
-  b.col(B_FZ) = XF.col(11);
-  b.middleCols<3>(B_TX) = XM.middleCols<3>(12);
-  b.col(B_ONE).setOnes();
-  if (pm.keep_body_velocity) {
-    b.middleCols<2>(B_U) = r.sm->uv;
-    b.middleCols<4>(B_RXX) = r.sm->world_axes;
-  } else {
-    b.middleCols<2>(B_U).setZero();
-    b.middleCols<4>(B_RXX).setZero();
-  }
-  b.col(B_W) = XF.col(0);
-  b.middleCols<3>(B_P) = XM.middleCols<3>(1);
-  b.col(B_QOM) = XM.col(2).cwiseProduct(omega_r);
-  b.col(B_POM) = XM.col(1).cwiseProduct(omega_r);
+  r.sig = std::move(tp.signals);
+  r.pf = std::move(tp.force);
+  r.pm = std::move(tp.moment);
   return r;
+}
+
+// The unknowns of a regression with the given terms: their columns, names,
+// the prior (the reference set, zero for the terms) and a known J_r, in the
+// regression's units (divided by the thrust scale when the mass is known):
+// its column moves to the right-hand side.
+struct Unknowns {
+  std::vector<RegressionTerm> extra;
+  Eigen::Index P = 0;
+  std::vector<std::string> names;
+  Eigen::VectorXd prior;
+  double known_jr = 0.0;
+  explicit Unknowns(const ExtendedOptions& opt, bool highpass = false) : extra(regression_terms(opt.terms, highpass)) {
+    P = 7 + static_cast<Eigen::Index>(extra.size());
+    names.emplace_back(opt.terms.known_mass ? "thrust_scale" : "m");  // thrust_scale: after the rescaling
+    for (int j = 1; j < 7; ++j) names.emplace_back(kThetaNames[static_cast<size_t>(j)]);
+    for (const auto& t : extra) names.emplace_back(t.name);
+    prior = Eigen::VectorXd::Zero(P);
+    prior.head<7>() = opt.reference.theta();
+    known_jr = opt.terms.rotor_inertia ? opt.terms.known_rotor_inertia.value_or(0.0) : 0.0;
+  }
+};
+
+Regression regression(const RawSignals& r, RegressionModel model, const ExtendedOptions& opt,
+                      std::vector<RegressionTerm> terms = {}) {
+  return Regression(r.sig, model, opt.window, opt.lambda, opt.gd_variant, std::move(terms));
 }
 
 // The window's sample range clear of both processings' edges (and f_D's start).
 std::pair<Eigen::Index, Eigen::Index> window_range(const RawSignals& r, RegressionModel model, const ExtendedOptions& opt) {
-  const Regression rf(r.sf, model, opt.window, opt.lambda, opt.gd_variant);
-  const Regression rm(r.sm, model, opt.window, opt.lambda, opt.gd_variant);
-  const Eigen::Index k0 = std::max(rf.begin(), rm.begin()), k1 = std::min(rf.end(), rm.end());
-  if (k1 - k0 < 8)
-    throw InputError(fmt::format("window {}: fewer than 8 samples clear of the pre-filters' edges", opt.window.to_string()));
-  return {k0, k1};
-}
-
-// d/dt a and b through the model's discretization: eq. (33) for the standard
-// model; g_D and f_D (eqs. 35-36) for the filtered one. Row-major, so that one
-// sample's signals are contiguous.
-struct Discrete {
-  RowMajor DA, BV;
-};
-Discrete discretize(const RawSignals& r, RegressionModel model, const ExtendedOptions& opt) {
-  Discrete d;
-  if (model == RegressionModel::Standard) {
-    d.DA = signal::central_difference(r.a, r.T);
-    d.BV = r.b;
-  } else {
-    d.DA = signal::filter_gD(r.a, opt.lambda, r.T, opt.gd_variant);
-    d.BV = signal::filter_fD(r.b, opt.lambda, r.T);
-    // g_D x at k = (f_D x at k+1 - f_D x at k) / T (the consistent g_D): the
-    // derivative half a sample after f_D's output. b is taken there too, as
-    // the mean of its f_D outputs at k and k+1; left at k, the half-sample lead
-    // of every derivative column showed as a rotor inertia (J_r ~ (T/2)
-    // dtau_psi/dOmega_r: 4.8e-10 kg m^2 at 19 standard errors on a simulated
-    // Crazyflie with none).
-    if (d.BV.rows() > 1) {
-      const Eigen::Index n = d.BV.rows();
-      d.BV.topRows(n - 1) = 0.5 * (d.BV.topRows(n - 1) + d.BV.bottomRows(n - 1));
-    }
-  }
-  return d;
+  const Regression reg = regression(r, model, opt);
+  return {reg.begin(), reg.end()};
 }
 
 // The regression rows of every sample, assembled once: G (4 x P), Y (4) and
@@ -268,26 +124,20 @@ struct RowCache {
   }
 };
 
-RowCache build_rows(const Discrete& d, const Assembler& assemble) {
+RowCache build_rows(const RawSignals& raw, RegressionModel model, const ExtendedOptions& opt, const Unknowns& u) {
   RowCache c;
-  c.P = assemble.P;
-  const Eigen::Index n = d.DA.rows();
+  c.P = u.P;
+  const Eigen::Index n = raw.sig->size();
   c.M.resize(n, 4 * c.stride());
-  Assembler a = assemble;
-  a.known_jr = 0.0;
-  Eigen::Matrix<double, 4, Eigen::Dynamic> G(4, c.P);
-  Vec4 Y;
-  const bool jr = assemble.known_jr != 0.0;
-  for (Eigen::Index k = 0; k < n; ++k) {
-    a(d.DA.row(k).data(), d.BV.row(k).data(), G, Y);
-    const Vec4 J = jr ? kRotorTerms[0].column(d.DA.row(k).data(), d.BV.row(k).data()) : Vec4::Zero();
+  const bool jr = u.known_jr != 0.0;
+  regression(raw, model, opt, u.extra).for_each_row(0, n, [&](Eigen::Index k, const TermRow& row) {
     double* m = c.M.row(k).data();
     for (int r = 0; r < 4; ++r, m += c.stride()) {
-      for (Eigen::Index j = 0; j < c.P; ++j) m[j] = G(r, j);
-      m[c.P] = Y(r);
-      m[c.P + 1] = J(r);
+      for (Eigen::Index j = 0; j < c.P; ++j) m[j] = row.G(r, j);
+      m[c.P] = row.Y(r);
+      m[c.P + 1] = jr ? row.J(r) : 0.0;
     }
-  }
+  });
   return c;
 }
 
@@ -395,24 +245,28 @@ std::vector<Eigen::VectorXd> leave_one_block_out(const std::vector<StreamingQR::
 // become noise in the regressor, which would make held-out scores favour
 // parameters shrunk toward zero.
 std::vector<StreamingQR::Factor> block_factors_integral(const RawSignals& r, Eigen::Index k0, Eigen::Index k1,
-                                                        int blocks, Eigen::Index seg, const Assembler& assemble,
+                                                        int blocks, Eigen::Index seg, const Unknowns& u,
                                                         const Vec4& w, unsigned rows) {
   std::vector<StreamingQR::Factor> out;
-  Eigen::Matrix<double, 4, Eigen::Dynamic> G(4, assemble.P);
-  Vec4 Y;
-  Eigen::VectorXd da(kNumA), bavg(kNumB);
+  const auto& X = r.sig->x;
+  const auto& Z = r.sig->terms;
+  TermRow row(u.P);
+  Eigen::Matrix<double, 1, RegressionSignals::kCols> xavg;
+  Eigen::Matrix<double, 1, Eigen::Dynamic> tavg(Z.cols()), td(Z.cols());
   for (int j = 0; j < blocks; ++j) {
     const Eigen::Index b0 = k0 + (k1 - k0) * j / blocks, b1 = k0 + (k1 - k0) * (j + 1) / blocks;
-    StreamingQR qr(assemble.P);
+    StreamingQR qr(u.P);
     for (Eigen::Index s = b0; s + seg < b1; s += seg) {
       const Eigen::Index e = s + seg;
       const double len = static_cast<double>(seg) * r.T;
-      da = (r.a.row(e) - r.a.row(s)).transpose() / len;
-      bavg = (r.b.middleRows(s, seg + 1).colwise().sum() - 0.5 * (r.b.row(s) + r.b.row(e))).transpose() *
-             (r.T / len);
-      assemble(da.data(), bavg.data(), G, Y);
+      xavg = (X.middleRows(s, seg + 1).colwise().sum() - 0.5 * (X.row(s) + X.row(e))) * (r.T / len);
+      tavg = (Z.middleRows(s, seg + 1).colwise().sum() - 0.5 * (Z.row(s) + Z.row(e))) * (r.T / len);
+      td = (Z.row(e) - Z.row(s)) / len;
+      const Vec4 da = (X.row(e).head<4>() - X.row(s).head<4>()).transpose() / len;
+      assemble_term_row(u.extra, da, xavg.segment<7>(4).transpose(), xavg.tail<4>().transpose(), td.data(),
+                        tavg.data(), row);
       for (int q = 0; q < 4; ++q)
-        if (rows & (1u << q)) qr.add_row(w(q) * G.row(q).transpose(), w(q) * Y(q));
+        if (rows & (1u << q)) qr.add_row(w(q) * row.G.row(q).transpose(), w(q) * row.Y(q));
     }
     out.push_back(qr.factor());
   }
@@ -432,26 +286,6 @@ std::vector<double> candidate_cutoffs(double fs) {
 }
 
 namespace {
-
-// The unknowns of a regression with the given terms: their names, the prior
-// (the reference set, zero for the terms) and the per-sample assembler.
-struct Unknowns {
-  std::vector<Term> extra;
-  Eigen::Index P = 0;
-  std::vector<std::string> names;
-  Eigen::VectorXd prior;
-  explicit Unknowns(const ExtendedOptions& opt, bool highpass = false) : extra(active_terms(opt.terms, highpass)) {
-    P = 7 + static_cast<Eigen::Index>(extra.size());
-    names.emplace_back(opt.terms.known_mass ? "thrust_scale" : "m");  // thrust_scale: after the rescaling
-    for (int j = 1; j < 7; ++j) names.emplace_back(kThetaNames[static_cast<size_t>(j)]);
-    for (const auto& t : extra) names.emplace_back(t.name);
-    prior = Eigen::VectorXd::Zero(P);
-    prior.head<7>() = opt.reference.theta();
-  }
-  Assembler assembler(const ModelTerms& terms) const {
-    return Assembler{terms, extra, P, terms.rotor_inertia ? terms.known_rotor_inertia.value_or(0.0) : 0.0};
-  }
-};
 
 // Samples left out at each end of the window after the roll and pitch rows'
 // high-pass at f_hz (its zero-phase response has settled to ~1 % by then).
@@ -512,7 +346,6 @@ double noise_gain(const ExtendedOptions& opt, double f_moment, double f_hz, doub
 
 HighpassSelection choose_highpass(const RawSignals& raw, const Eigen::Vector3d& gyro_sd, const ExtendedOptions& opt) {
   HighpassSelection sel;
-  const Discrete disc = discretize(raw, RegressionModel::Standard, opt);
   const auto [k0, k1] = window_range(raw, RegressionModel::Standard, opt);
   const int K = opt.uncertainty.jackknife_blocks > 0 ? opt.uncertainty.jackknife_blocks : 8;
   const double fs = 1.0 / raw.T;
@@ -522,14 +355,13 @@ HighpassSelection choose_highpass(const RawSignals& raw, const Eigen::Vector3d& 
     HighpassCandidate hc;
     hc.hz = f;
     const Unknowns u(opt, f > 0.0);
-    const Assembler a = u.assembler(opt.terms);
-    RowCache c = build_rows(disc, a);
+    RowCache c = build_rows(raw, RegressionModel::Standard, opt, u);
     if (f > 0.0) highpass_rows(c, f, fs, opt.highpass_order);
     const Eigen::Index e = highpass_edge(f, raw.T), b0 = k0 + e, b1 = k1 - e;
     if (b1 - b0 >= 32 * K) {
-      const Fit ft = fit(c, b0, b1, a.known_jr, u.prior, opt);
+      const Fit ft = fit(c, b0, b1, u.known_jr, u.prior, opt);
       const auto loo =
-          leave_one_block_out(block_factors(c, b0, b1, K, a.known_jr, ft.w, 0xFu), b0, b1, u.prior, opt.ls.rank_tolerance);
+          leave_one_block_out(block_factors(c, b0, b1, K, u.known_jr, ft.w, 0xFu), b0, b1, u.prior, opt.ls.rank_tolerance);
       // In the known mass's units when it is given (the s = 1 fit's m' = m / s).
       const double sc = opt.terms.known_mass && ft.sol.x(0) > 0.0 ? *opt.terms.known_mass / ft.sol.x(0) : 1.0;
       const Eigen::VectorXd se = jackknife_covariance(loo).diagonal().cwiseSqrt();
@@ -714,7 +546,6 @@ class ExtendedEstimator {
         hp_(hp),
         gyro_sd_(gyro_sd),
         u_(opt, hp > 0.0),
-        assemble_(u_.assembler(opt.terms)),
         edge_(highpass_edge(hp, raw.T)) {}
 
   ExtendedEstimate estimate(int mi, ExtendedResult& res) const {
@@ -724,10 +555,10 @@ class ExtendedEstimator {
       res.window = {static_cast<double>(k0) * raw_.T, static_cast<double>(k1 - 1) * raw_.T};
       res.window_samples = k1 - k0;
     }
-    RowCache rows = build_rows(discretize(raw_, model, opt_), assemble_);
+    RowCache rows = build_rows(raw_, model, opt_, u_);
     if (hp_ > 0.0) highpass_rows(rows, hp_, 1.0 / raw_.T, opt_.highpass_order);
     if (mi == 0) gyro_noise(rows, k0, k1, res);
-    double jr = assemble_.known_jr;
+    double jr = u_.known_jr;
     const Fit f = fit_with_rotor_inertia(rows, k0, k1, jr);
     ExtendedEstimate e;
     e.computed = true;
@@ -968,7 +799,6 @@ class ExtendedEstimator {
   const double hp_;  // Hz, the roll and pitch rows' high-pass (0: none)
   const Eigen::Vector3d gyro_sd_;
   const Unknowns u_;
-  const Assembler assemble_;
   const Eigen::Index edge_;  // samples the high-pass leaves out at each end
 };
 
@@ -1026,7 +856,6 @@ CutoffSelection select_cutoffs(const FlightLog& log, const ExtendedOptions& opt)
   CutoffSelection sel;
   const Unknowns u(opt);
   const Eigen::VectorXd& prior = u.prior;
-  const Assembler assemble = u.assembler(opt.terms);
   const int K = opt.cv_blocks;
 
   // The sample rate, from a first processing at the given cutoffs.
@@ -1043,29 +872,27 @@ CutoffSelection select_cutoffs(const FlightLog& log, const ExtendedOptions& opt)
   const auto [k0, k1] = window_range(narrow, RegressionModel::Standard, opt);
   if (k1 - k0 < 8 * K) throw InputError("the log is too short to choose the pre-filter cutoffs on held-out data");
   const RawSignals eval_raw = raw_signals(log, opt, f_eval, f_eval);
-  const Discrete eval = discretize(eval_raw, RegressionModel::Standard, opt);
   const Eigen::Index seg = std::max<Eigen::Index>(
       4, std::min<Eigen::Index>(std::llround(opt.cv_segment / first.T), (k1 - k0) / (4 * K)));
   // Weights: the final weights of a fit at the given cutoffs, so that every
   // candidate is scored on the same footing.
-  const Discrete d0 = discretize(first, RegressionModel::Standard, opt);
-  Vec4 w = fit(build_rows(d0, assemble), k0, k1, assemble.known_jr, prior, opt).w;
+  Vec4 w = fit(build_rows(first, RegressionModel::Standard, opt, u), k0, k1, u.known_jr, prior, opt).w;
   if (!opt.terms.weight_rows) {
     for (int r = 0; r < 4; ++r) {
-      const double s = rms(eval.BV.col(B_FZ + r).segment(k0, k1 - k0));
+      // The standard model's outputs are the processed wrench itself.
+      const double s = rms(eval_raw.sig->x.col(11 + r).segment(k0, k1 - k0));
       w(r) = s > 0.0 ? 1.0 / s : 1.0;
     }
   }
-  const auto eval_force = block_factors_integral(eval_raw, k0, k1, K, seg, assemble, w, 0x1u);
-  const auto eval_moment = block_factors_integral(eval_raw, k0, k1, K, seg, assemble, w, 0xEu);
+  const auto eval_force = block_factors_integral(eval_raw, k0, k1, K, seg, u, w, 0x1u);
+  const auto eval_moment = block_factors_integral(eval_raw, k0, k1, K, seg, u, w, 0xEu);
 
   // Held-out scores of one candidate pair, per block: fit on K-1 blocks, the
   // held-out block's weighted SSE of the force row and of the moment rows.
   using Scores = std::pair<Eigen::VectorXd, Eigen::VectorXd>;
   auto score = [&](double ff, double fm) {
     const RawSignals r = raw_signals(log, opt, ff, fm);
-    const Discrete d = discretize(r, RegressionModel::Standard, opt);
-    const auto train = block_factors(build_rows(d, assemble), k0, k1, K, assemble.known_jr, w, 0xFu);
+    const auto train = block_factors(build_rows(r, RegressionModel::Standard, opt, u), k0, k1, K, u.known_jr, w, 0xFu);
     Scores s{Eigen::VectorXd(K), Eigen::VectorXd(K)};
     const auto loo = leave_one_block_out(train, k0, k1, prior, opt.ls.rank_tolerance);
     for (int j = 0; j < K; ++j) {
@@ -1102,26 +929,6 @@ CutoffSelection select_cutoffs(const FlightLog& log, const ExtendedOptions& opt)
   return sel;
 }
 
-namespace {
-
-template <size_t N>
-bool names_a_term(const Term (&terms)[N], std::string_view name) {
-  return std::any_of(std::begin(terms), std::end(terms), [&](const Term& t) { return name == t.name; });
-}
-
-bool is_term_name(std::string_view name) {
-  return name == "thrust_scale" || names_a_term(kOffsetTerms, name) || names_a_term(kFlapTerms, name) ||
-         names_a_term(kDampTerms, name) || names_a_term(kRotorTerms, name) || names_a_term(kWindTerms, name) ||
-         names_a_term(kDragTerms, name);
-}
-
-}  // namespace
-
-bool term_carries_to_other_flights(std::string_view name) {
-  return name == "thrust_scale" || names_a_term(kFlapTerms, name) || names_a_term(kDampTerms, name) ||
-         names_a_term(kRotorTerms, name) || names_a_term(kDragTerms, name);
-}
-
 PredictionErrorTable real_flight_prediction_error(const FlightLog& log, const std::vector<NamedParams>& sets,
                                                   const NamedParams& reference, RegressionModel model,
                                                   const ExtendedOptions& opt, bool centre_torques) {
@@ -1138,11 +945,8 @@ PredictionErrorTable real_flight_prediction_error(const FlightLog& log, const st
                                      s->name, name));
       if (!std::isfinite(v)) throw InputError(fmt::format("set {}: its term {} is not a finite number", s->name, name));
       if (!term_carries_to_other_flights(name)) continue;
-      terms.flapping |= names_a_term(kFlapTerms, name);
-      terms.rate_damping |= names_a_term(kDampTerms, name);
-      terms.rotor_inertia |= names_a_term(kRotorTerms, name);
-      terms.force_drag |= names_a_term(kDragTerms, name);
-      if (names_a_term(kRotorTerms, name) && !log.has(kRotorMomentumColumn))
+      turn_on_carried_term(terms, name);
+      if (name == rotor_inertia_term().name && !log.has(kRotorMomentumColumn))
         throw InputError(fmt::format("set {} has a rotor inertia, whose term needs the rotor speeds (log column '{}', "
                                      "made from the rotor columns by --vehicle)",
                                      s->name, kRotorMomentumColumn));
@@ -1152,11 +956,10 @@ PredictionErrorTable real_flight_prediction_error(const FlightLog& log, const st
   eo.moment_highpass_hz = 0.0;
   const double f = opt.processing.lowpass.cutoff_hz;
   const RawSignals raw = raw_signals(log, eo, f, f);
-  const auto [k0, k1] = window_range(raw, model, eo);
-  const Discrete d = discretize(raw, model, eo);
-  const std::vector<Term> extra = active_terms(terms);
-  const Eigen::Index P = 7 + static_cast<Eigen::Index>(extra.size());
-  const Assembler assemble{terms, extra, P};
+  const std::vector<RegressionTerm> extra = regression_terms(terms);
+  const Regression reg = regression(raw, model, eo, extra);
+  const Eigen::Index k0 = reg.begin(), k1 = reg.end();
+  const Eigen::Index P = reg.parameters();
   // Each set's x (rigid body, then its terms in the columns' order) and s.
   std::vector<Eigen::VectorXd> x(all.size(), Eigen::VectorXd::Zero(P));
   std::vector<double> s(all.size(), 1.0);
@@ -1170,24 +973,20 @@ PredictionErrorTable real_flight_prediction_error(const FlightLog& log, const st
   }
   // e = G x - s F (the rows with s F on the right); centred: two passes, the
   // means, then the squares about them (no cancellation).
-  Eigen::Matrix<double, 4, Eigen::Dynamic> G(4, P);
-  Vec4 Y;
   const double n = static_cast<double>(k1 - k0);
   std::vector<Vec4> mean(all.size(), Vec4::Zero()), ss(all.size(), Vec4::Zero());
   if (centre_torques) {
-    for (Eigen::Index k = k0; k < k1; ++k) {
-      assemble(d.DA.row(k).data(), d.BV.row(k).data(), G, Y);
-      for (size_t i = 0; i < all.size(); ++i) mean[i] += G * x[i] - s[i] * Y;
-    }
+    reg.for_each_row(k0, k1, [&](Eigen::Index, const TermRow& row) {
+      for (size_t i = 0; i < all.size(); ++i) mean[i] += row.G * x[i] - s[i] * row.Y;
+    });
     for (auto& m : mean) {
       m /= n;
       m(0) = 0.0;  // the force row keeps its constant: a wrong mass or thrust scale shows there
     }
   }
-  for (Eigen::Index k = k0; k < k1; ++k) {
-    assemble(d.DA.row(k).data(), d.BV.row(k).data(), G, Y);
-    for (size_t i = 0; i < all.size(); ++i) ss[i] += (G * x[i] - s[i] * Y - mean[i]).cwiseAbs2();
-  }
+  reg.for_each_row(k0, k1, [&](Eigen::Index, const TermRow& row) {
+    for (size_t i = 0; i < all.size(); ++i) ss[i] += (row.G * x[i] - s[i] * row.Y - mean[i]).cwiseAbs2();
+  });
   std::vector<std::string> names;
   for (const auto* p : all) names.push_back(p->name);
   return prediction_error_table(names, ss, model, {static_cast<double>(k0) * raw.T, static_cast<double>(k1 - 1) * raw.T},

@@ -10,6 +10,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <initializer_list>
@@ -252,6 +253,51 @@ std::shared_ptr<const RegressionSignals> process_log(const FlightLog& log, const
   if (summary) summarize_held(held, n, T, *summary);
   body_signals(opt, *out);
   return out;
+}
+
+TermProcessing process_with_terms(const FlightLog& log, const ProcessingOptions& force, const ProcessingOptions& moment,
+                                  const ModelTerms& terms) {
+  ProcessingOptions pm = moment;
+  pm.keep_body_velocity = terms.flapping || terms.wind;
+  TermProcessing tp;
+  const auto sf = process_log(log, force, &tp.force);
+  const bool one = pm.lowpass.cutoff_hz == force.lowpass.cutoff_hz && !pm.keep_body_velocity;
+  const auto sm = one ? sf : process_log(log, pm, &tp.moment);
+  if (one) tp.moment = tp.force;
+  const Eigen::Index n = sf->size();
+  Eigen::VectorXd omega_r = Eigen::VectorXd::Zero(n);
+  if (terms.rotor_inertia) {
+    if (!log.has(kRotorMomentumColumn))
+      throw InputError(fmt::format(
+          "the rotor-inertia term needs the rotor speeds (log column '{}', made from the rotor columns by --vehicle); "
+          "leave rotor-inertia out of --terms (e.g. --terms offsets,flapping), or give --vehicle",
+          kRotorMomentumColumn));
+    omega_r = signal::zero_phase_lowpass(log.column(kRotorMomentumColumn), 1.0 / sf->T, pm.lowpass);
+  }
+  // The force row (w, c, Fz) from the force processing, the moment rows from
+  // the moment processing; the edges are the wider of the two.
+  auto out = std::make_shared<RegressionSignals>();
+  out->t_start = sf->t_start;
+  out->T = sf->T;
+  out->edge = std::max(sf->edge, sm->edge);
+  out->x = sm->x;
+  for (int c : {0, 4, 11}) out->x.col(c) = sf->x.col(c);
+  auto& Z = out->terms;
+  Z.resize(n, kTermSignals);
+  Z.col(kTsOmegaR) = omega_r;
+  if (pm.keep_body_velocity) {
+    Z.middleCols<2>(kTsU) = sm->uv;
+    Z.middleCols<4>(kTsRxx) = sm->world_axes;
+  } else {
+    Z.middleCols<2>(kTsU).setZero();
+    Z.middleCols<4>(kTsRxx).setZero();
+  }
+  Z.col(kTsW) = sf->x.col(0);
+  Z.middleCols<3>(kTsP) = sm->x.middleCols<3>(1);
+  Z.col(kTsQOmega) = sm->x.col(2).cwiseProduct(omega_r);
+  Z.col(kTsPOmega) = sm->x.col(1).cwiseProduct(omega_r);
+  tp.signals = std::move(out);
+  return tp;
 }
 
 }  // namespace quadid

@@ -12,9 +12,11 @@ namespace quadid {
 const char* to_string(RegressionModel m) { return m == RegressionModel::Standard ? "standard" : "filtered"; }
 
 Regression::Regression(std::shared_ptr<const RegressionSignals> signals, RegressionModel model, TimeWindow window,
-                       double lambda, signal::GdVariant gd_variant)
-    : sig_(std::move(signals)), model_(model), lambda_(lambda), variant_(gd_variant) {
+                       double lambda, signal::GdVariant gd_variant, std::vector<RegressionTerm> terms)
+    : sig_(std::move(signals)), model_(model), lambda_(lambda), variant_(gd_variant), terms_(std::move(terms)) {
   if (!sig_) throw std::invalid_argument("Regression: no signals");
+  if (!terms_.empty() && sig_->terms.cols() != kTermSignals)
+    throw std::invalid_argument("Regression: terms need the signals of process_with_terms");
   const double T = sig_->T;
   const Eigen::Index n = sig_->size();
   if (!(T > 0.0) || n < 3) throw std::invalid_argument("Regression: the signals hold fewer than 3 samples");

@@ -221,13 +221,6 @@ struct TermsProjection {
 TermsProjection closest_physical_with_terms(const ExtendedEstimate& x, std::optional<double> known_mass,
                                             const Theta& scale, const PhysicalProjectionOptions& opt = {});
 
-/// Whether a real-flight term belongs to the vehicle, so that a set's value
-/// predicts another flight: the thrust scale, flapping, rate damping, rotor
-/// inertia and vertical drag do; the torque offsets (a trim, a battery's
-/// place) and the wind terms (that day's wind) belong to the flight they were
-/// identified on.
-bool term_carries_to_other_flights(std::string_view name);
-
 /// Output prediction error of the real-flight rows (this header's equations)
 /// on `log`, for every set with its own terms (NamedParams::terms; a term a
 /// set lacks is 0, its thrust scale 1): per sample e = G x - s F, with x the
