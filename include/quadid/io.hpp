@@ -88,6 +88,21 @@ void read_columns_later(FlightLog& log, const std::vector<std::string>& names, d
 /// Parses "canonical=name" pairs of --map; throws std::invalid_argument on a malformed item.
 std::map<std::string, std::string> parse_column_map(const std::vector<std::string>& items);
 
+/// --map canonical=name applied to a header (the one implementation the CSV
+/// reader and the log importer use): the renamed header and the columns taken
+/// negated (canonical=-name, a sign convention: FRD's q, r). Renames are checked
+/// against the original header, so they cannot chain and two can swap (p=q q=p).
+struct ColumnMapping {
+  std::vector<std::string> header;
+  std::vector<int> negated;  // indices into header
+};
+/// Throws InputError, without a location (callers add theirs), on a name the
+/// header lacks (when missing_is_error; else the entry is skipped, left to the
+/// required-column check) or a rename onto a column that stays; `holder` names
+/// the header's owner in those messages ("the file", "the imported log").
+ColumnMapping map_columns(const std::vector<std::string>& header, const std::map<std::string, std::string>& map,
+                          bool missing_is_error, std::string_view holder);
+
 /// Writes a log as CSV (comments, header, rows; numbers in shortest round-trip
 /// form so that the same data gives the same bytes). Atomic: temporary file + rename.
 void write_flight_log(const FlightLog& log, const std::filesystem::path& path);

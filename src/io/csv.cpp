@@ -543,30 +543,17 @@ class CsvRead {
     }
   }
 
-  // --map canonical=name: rename the file's column to the canonical one. All
-  // renames are checked against the original header, so they cannot chain.
-  // canonical=-name takes the column negated (a sign convention: FRD's q, r).
+  // --map canonical=name: rename the file's column to the canonical one
+  // (map_columns); canonical=-name takes the column negated.
   void apply_map() {
-    std::vector<std::string> renamed = header_;
-    std::vector<std::string> sources;  // file columns renamed away by the map
-    for (const auto& kv : opt_.map)
-      sources.push_back(kv.second.size() > 1 && kv.second[0] == '-' && find_in(kv.second) < 0 ? kv.second.substr(1)
-                                                                                              : kv.second);
-    for (const auto& [canon, mapped] : opt_.map) {
-      const bool negate = mapped.size() > 1 && mapped[0] == '-' && find_in(mapped) < 0;
-      const std::string name = negate ? mapped.substr(1) : mapped;
-      if (negate) negated_.push_back(canon);
-      const int i = find_in(name);
-      if (i < 0)
-        throw InputError(fmt::format("{}:{}: --map {}={}: the file has no column '{}' (it has: {})", file_,
-                                     header_line_, canon, name, name, fmt::join(header_, ",")));
-      const int j = find_in(canon);
-      if (j >= 0 && canon != name && std::find(sources.begin(), sources.end(), canon) == sources.end())
-        throw InputError(fmt::format("{}:{}: --map {}={}: the file already has a column '{}'", file_, header_line_,
-                                     canon, name, canon));
-      renamed[static_cast<size_t>(i)] = canon;
+    ColumnMapping m;
+    try {
+      m = map_columns(header_, opt_.map, true, "the file");
+    } catch (const InputError& e) {
+      throw InputError(fmt::format("{}:{}: {}", file_, header_line_, e.what()));
     }
-    header_ = std::move(renamed);
+    header_ = std::move(m.header);
+    for (int i : m.negated) negated_.push_back(header_[static_cast<size_t>(i)]);
   }
 
   // The attitude as a quaternion (docs/file-formats.md): qw qx qy qz stand for

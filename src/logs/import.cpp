@@ -499,36 +499,6 @@ std::string motors_topic_named(const std::vector<std::string>& names) {
   return topic.empty() ? "auto" : topic;
 }
 
-namespace {
-
-// --map canonical=name on an imported log, as the CSV reader does: renames
-// against the imported names (so two can be swapped, e.g. p=q q=p), and
-// canonical=-name takes the column negated (a sign convention). A name the
-// log lacks is left to the required-column check; a rename onto a column
-// that stays is an error.
-void apply_column_map(FlightLog& log, const std::map<std::string, std::string>& map,
-                      const std::filesystem::path& path) {
-  std::vector<std::string> renamed = log.columns;
-  std::vector<int> sources;
-  for (const auto& [canon, mapped] : map) {
-    const bool negate = mapped.size() > 1 && mapped[0] == '-' && log.find(mapped) < 0;
-    const int k = log.find(negate ? std::string_view(mapped).substr(1) : std::string_view(mapped));
-    if (k < 0) continue;
-    sources.push_back(k);
-    renamed[static_cast<std::size_t>(k)] = canon;
-    if (negate) log.data.col(k) = -log.data.col(k);
-  }
-  for (const auto& [canon, mapped] : map) {
-    const int j = log.find(canon);
-    if (j >= 0 && std::find(sources.begin(), sources.end(), j) == sources.end() && canon != mapped)
-      throw InputError(fmt::format("{}: --map {}={}: the imported log already has a column '{}'", path.string(),
-                                   canon, mapped, canon));
-  }
-  log.columns = std::move(renamed);
-}
-
-}  // namespace
-
 FlightLog load_any_log(const std::filesystem::path& path, const LoadOptions& opt_in, ImportReport* report) {
   const LogKind kind = detect_log_kind(path);
   if (kind == LogKind::Csv) return read_flight_log(path, opt_in.csv);
@@ -556,7 +526,15 @@ FlightLog load_any_log(const std::filesystem::path& path, const LoadOptions& opt
     throw InputError(fmt::format("{}: {}", path.string(), what));
   }
   // --map canonical=name: the log's column `name` serves as `canonical`.
-  apply_column_map(log, opt.csv.map, path);
+  // (map_columns, as the CSV reader; a name the log lacks is left to the
+  // required-column check).
+  try {
+    ColumnMapping m = map_columns(log.columns, opt.csv.map, false, "the imported log");
+    log.columns = std::move(m.header);
+    for (int k : m.negated) log.data.col(k) = -log.data.col(k);
+  } catch (const InputError& e) {
+    throw InputError(fmt::format("{}: {}", path.string(), e.what()));
+  }
   read_columns_later(log, {"p", "q", "r"}, opt.csv.gyro_delay);
   if (opt.check_required) {
     std::vector<std::string> missing;
