@@ -72,6 +72,12 @@ Theta relative_error_scale(const Theta& theta);
 /// mean principal moment (|Ixx| + |Iyy| + |Izz|) / 3 for every inertia entry,
 /// so that a product of inertia near 0 is judged against the body's size.
 Theta determinedness_scale(const Theta& theta);
+/// The one determinedness rule: a parameter is poorly determined when its
+/// standard error is not within `fraction` of its scale (determinedness_scale;
+/// LeastSquaresOptions::poor_fraction, default 5 %), or is not a number.
+inline bool poorly_determined(double std_error, double scale, double fraction) {
+  return !(std_error <= fraction * scale);
+}
 
 /// The size of a flying multirotor, for checks of units by plausibility
 /// (issue 37): arm (centre to the farthest rotor) ~ 0.15 m (m / 0.5 kg)^(1/3)

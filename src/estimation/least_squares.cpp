@@ -179,7 +179,7 @@ void judge_poorly_determined(LeastSquaresSolution& sol, const Theta& prior, cons
   for (int j = 0; j < 7; ++j) {
     const std::string name = kThetaNames[static_cast<size_t>(j)];
     const bool near = std::find(sol.near_null.begin(), sol.near_null.end(), name) != sol.near_null.end();
-    if (!(sol.std_error(j) <= opt.poor_fraction * scale(j)) || near) sol.poorly_determined.push_back(name);
+    if (poorly_determined(sol.std_error(j), scale(j), opt.poor_fraction) || near) sol.poorly_determined.push_back(name);
   }
 }
 

@@ -789,7 +789,7 @@ class ExtendedEstimator {
     Theta scale = determinedness_scale(e.theta);
     scale(0) = std::abs(e.value(0));
     for (Eigen::Index j = 0; j < 7; ++j) {
-      if (!(e.std_error(j) <= opt_.ls.poor_fraction * scale(j))) e.poorly_determined.push_back(names[static_cast<size_t>(j)]);
+      if (poorly_determined(e.std_error(j), scale(j), opt_.ls.poor_fraction)) e.poorly_determined.push_back(names[static_cast<size_t>(j)]);
     }
   }
 

@@ -554,7 +554,8 @@ class IdentifyRun {
       for (int j = 0; j < 7; ++j) {
         const std::string name(kThetaNames[static_cast<size_t>(j)]);
         auto& poor = sol->poorly_determined;
-        if (u.std_error(j) > opt_.ls.poor_fraction * scale(j) && std::find(poor.begin(), poor.end(), name) == poor.end())
+        if (poorly_determined(u.std_error(j), scale(j), opt_.ls.poor_fraction) &&
+            std::find(poor.begin(), poor.end(), name) == poor.end())
           poor.push_back(name);
       }
       u.poorly_determined = sol->poorly_determined;
