@@ -239,7 +239,10 @@ TEST(Extended, HeldOutCutoffChoice) {
   const auto cand = candidate_cutoffs(500.0);
   ASSERT_EQ(sel.moment_scores.size(), cand.size());
   for (const auto& [f, s] : sel.moment_scores) EXPECT_TRUE(std::isfinite(s)) << f;
-  EXPECT_GT(sel.moment_cutoff_hz, cand.front());
+  // The lowest candidate may win: with the nonlinear signals filtered as
+  // formed (ProcessingOptions::filter_products) a 1 Hz cutoff no longer bends
+  // the products (sum of |errors| 0.068 %, against 0.99 % with F[p] F[q]);
+  // the highest, where the gyro's noise dominates, must not.
   EXPECT_LT(sel.moment_cutoff_hz, cand.back());
   auto izz_err = [&](double fm) {
     ExtendedOptions x;

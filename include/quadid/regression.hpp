@@ -14,6 +14,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <array>
 #include <memory>
 #include <optional>
 #include <string>
@@ -51,6 +52,17 @@ struct ProcessingOptions {
   /// (RegressionSignals::world_axes), for the blade-flapping and wind terms of
   /// the real-flight regression.
   bool keep_body_velocity = false;
+  /// The rate products of Phi_b (pq pr qr p^2 q^2 r^2, eq. 11): formed from
+  /// the log's rates, then pre-filtered (F[p q]), so that the moment rows keep
+  /// the rigid body's identity F[tau] = J F[w_dot] + F[w x J w] (F is linear,
+  /// the products are not). false (--products paper): the products of the
+  /// filtered rates (F[p] F[q]), section II-C as printed, which leaves out
+  /// the slow part of the products of rotation above the cutoff: on the
+  /// virtual QBall 2 (a controller reacting to 0.3 mm position noise) LS Ixx
+  /// came out 0.058 % low, 2.2 of its standard errors, and its 95 % interval
+  /// held the truth in 34 % of 200 flights (docs/uncertainty.md). The force
+  /// row's c stays formed from filtered signals (process.cpp says why).
+  bool filter_products = true;
   /// Put the pose (x y z psi) back on its sample instants when the log repeats
   /// each of its samples until the next (motion capture held at 30-120 Hz in a
   /// faster log): signal::interpolate_held_samples, before the pre-filter. The
@@ -188,6 +200,10 @@ bool is_term_name(std::string_view name);
 bool term_carries_to_other_flights(std::string_view name);
 /// The terms of `t` plus the one named (a term of a carried kind; others are ignored).
 void turn_on_carried_term(ModelTerms& t, std::string_view name);
+
+/// The signals of the force row (w, c, Fz: RegressionSignals columns 0, 4, 11),
+/// pre-filtered at the force cutoff when the rows have two (process_with_terms).
+inline constexpr std::array<int, 3> kForceRowSignals{0, 4, 11};
 
 /// Section II-C at two cutoffs, for the real-flight regression: the force row
 /// (w, c, Fz) from `force`, the moment rows from `moment`, and the signals

@@ -87,6 +87,11 @@ Defs processing_group() {
       B("derivative-filter", K::String,
         "g_D: consistent ((1-a)/T (z-1)/(z-a), the derivative of f_D's output) or printed (eq. 36)")
           .def("consistent").choices({"consistent", "printed"}),
+      B("products", K::String,
+        "the rate products pq pr qr p^2 q^2 r^2 of the moment rows: filtered (the log's rates multiplied, then "
+        "pre-filtered like every signal, F[pq]: exact for the filtered rigid body) or paper (products of the "
+        "filtered rates, F[p]F[q], section II-C as printed; rotation above the cutoff then biases the inertia)")
+          .def("filtered").choices({"filtered", "paper"}),
       B("g", K::Number, "gravity").def(p.g).unit("m/s^2"),
       B("period-tolerance", K::Number, "relative tolerance on a uniform sample period").def(p.period_tolerance),
       B("time-unit", K::String, "unit of the log's column t: s (the format's), ms, us or ns (e.g. a logger's "

@@ -60,6 +60,7 @@ Processing read_processing(const OptionValues& r) {
   lp.taps = *r.integer32("taps");
   p.lambda = *r.number("lambda");
   p.gd_variant = *r.string("derivative-filter") == "printed" ? signal::GdVariant::Printed : signal::GdVariant::Consistent;
+  p.processing.filter_products = *r.string("products") == "filtered";
   p.processing.g = *r.number("g");
   p.processing.period_tolerance = *r.number("period-tolerance");
   p.processing.exclude_edges = !r.flag("keep-edges");

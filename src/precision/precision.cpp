@@ -108,24 +108,19 @@ RegressorSeries regressor_series(const Regression& reg, Eigen::Index n, const Th
   return s;
 }
 
-// The signals of section II-C as the real-flight regression takes them (extended.cpp,
-// raw_signals): w, c and Fz (columns 0, 4, 11: the force row) pre-filtered at the force
-// cutoff, the others at the moment cutoff; the edges left out are the wider filter's.
-constexpr std::array<int, 3> kForceSignals = {0, 4, 11};
-bool is_force_signal(int s) { return std::find(kForceSignals.begin(), kForceSignals.end(), s) != kForceSignals.end(); }
+// The signals of section II-C as the real-flight regression takes them
+// (process_with_terms): the force row's (kForceRowSignals) pre-filtered at the
+// force cutoff, the others at the moment cutoff; the edges left out are the wider filter's.
+bool is_force_signal(int s) {
+  return std::find(kForceRowSignals.begin(), kForceRowSignals.end(), s) != kForceRowSignals.end();
+}
 
 std::shared_ptr<const RegressionSignals> row_signals(const FlightLog& log, const ProcessingOptions& proc,
                                                      double f_force, double f_moment) {
   ProcessingOptions pf = proc, pm = proc;
   pf.lowpass.cutoff_hz = f_force;
   pm.lowpass.cutoff_hz = f_moment;
-  auto sf = process_log(log, pf);
-  if (f_force == f_moment) return sf;
-  auto sm = process_log(log, pm);
-  auto mixed = std::make_shared<RegressionSignals>(*sm);
-  for (int c : kForceSignals) mixed->x.col(c) = sf->x.col(c);
-  mixed->edge = std::max(sf->edge, sm->edge);
-  return mixed;
+  return process_with_terms(log, pf, pm, ModelTerms{}).signals;
 }
 
 // The simulation of the planned flight: PrecisionOptions::simulation, or one built from its fields.

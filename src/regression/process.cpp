@@ -131,6 +131,33 @@ void summarize_processing(const signal::ZeroPhaseFilter& zf, const ProcessingOpt
   summary.filter_f3db = zero_phase_f3db(zf, fs);
 }
 
+// The rate products [pq pr qr p^2 q^2 r^2] of Phi_b (eq. 11) formed from the
+// log's rates, then pre-filtered like every other signal: F[p q], not
+// F[p] F[q]. The rigid body's identity F[tau] = J F[w_dot] + F[w x J w]
+// holds for the filtered signals only in this form (F is linear, the
+// products are not): rotation above the cutoff (a controller's reaction to
+// noisy positions) has products whose slow part F[p] F[q] leaves out, and a
+// cutoff near the motion bends F[p] F[q] away from F[p q]. The force row's
+// c = p v - q u + g_bz stays formed from filtered signals: its velocity is
+// differentiated motion capture, whose noise the controller's rotation
+// answers, so the products of their unfiltered parts do not average out
+// (the virtual QBall 2's m then came out +0.004 %, six of its standard errors).
+using Products = Eigen::Matrix<double, Eigen::Dynamic, 6>;
+void filtered_products(const FlightLog& log, const std::vector<int>& col, signal::ZeroPhaseFilter& f, Products& P) {
+  const Eigen::Index n = log.rows();
+  P.resize(n, 6);
+  const auto p = log.data.col(col[7]), q = log.data.col(col[8]), r = log.data.col(col[9]);
+  P.col(0) = p.cwiseProduct(q);
+  P.col(1) = p.cwiseProduct(r);
+  P.col(2) = q.cwiseProduct(r);
+  P.col(3) = p.cwiseAbs2();
+  P.col(4) = q.cwiseAbs2();
+  P.col(5) = r.cwiseAbs2();
+  std::array<double*, 6> cols{};
+  for (int j = 0; j < 6; ++j) cols[static_cast<size_t>(j)] = P.col(j).data();
+  f.apply(cols.data(), 6, n);
+}
+
 // Step 1: zero-phase low-pass (as scipy sosfiltfilt: odd padding, steady-state
 // starts), and step 2: p_dot by eq. (33) from the filtered position. The
 // columns are independent: rates and wrench on one thread, attitude and
@@ -140,7 +167,8 @@ void summarize_processing(const signal::ZeroPhaseFilter& zf, const ProcessingOpt
 // Returns the pose columns' held samples (x y z psi phi theta).
 std::array<signal::HeldSamples, 6> filter_and_differentiate(const FlightLog& log, const std::vector<int>& col,
                                                             const ProcessingOptions& opt, signal::ZeroPhaseFilter& zf,
-                                                            double T, double fs, SignalColumns& X) {
+                                                            double T, double fs, SignalColumns& X,
+                                                            Products* products) {
   const Eigen::Index n = log.rows();
   auto filter_into = [&](signal::ZeroPhaseFilter& f, std::initializer_list<std::pair<int, int>> log_to_x) {
     std::array<double*, 7> cols{};
@@ -151,8 +179,9 @@ std::array<signal::HeldSamples, 6> filter_and_differentiate(const FlightLog& log
     }
     f.apply(cols.data(), count, n);
   };
-  auto rates_and_wrench = [&] {  // p q r, Fz tau
+  auto rates_and_wrench = [&] {  // p q r, Fz tau, and the rate products
     filter_into(zf, {{col[7], 1}, {col[8], 2}, {col[9], 3}, {col[10], 11}, {col[11], 12}, {col[12], 13}, {col[13], 14}});
+    if (products) filtered_products(log, col, zf, *products);
   };
   // The pose, put back on its sample instants when held. The yaw is unwrapped
   // first: a wrapped yaw's 2 pi jump, interpolated over a hold, would become
@@ -249,9 +278,12 @@ std::shared_ptr<const RegressionSignals> process_log(const FlightLog& log, const
   out->T = T;
   out->edge = opt.exclude_edges ? settling : 0.0;
   out->x.resize(n, RegressionSignals::kCols);
-  const std::array<signal::HeldSamples, 6> held = filter_and_differentiate(log, col, opt, zf, T, fs, out->x);
+  Products products;
+  const std::array<signal::HeldSamples, 6> held =
+      filter_and_differentiate(log, col, opt, zf, T, fs, out->x, opt.filter_products ? &products : nullptr);
   if (summary) summarize_held(held, n, T, *summary);
   body_signals(opt, *out);
+  if (opt.filter_products) out->x.middleCols<6>(5) = products;  // the rate products, pre-filtered as formed
   return out;
 }
 
@@ -281,7 +313,11 @@ TermProcessing process_with_terms(const FlightLog& log, const ProcessingOptions&
   out->T = sf->T;
   out->edge = std::max(sf->edge, sm->edge);
   out->x = sm->x;
-  for (int c : {0, 4, 11}) out->x.col(c) = sf->x.col(c);
+  for (int c : kForceRowSignals) out->x.col(c) = sf->x.col(c);
+  if (!terms.any()) {  // the paper's rows at two cutoffs: no term signals
+    tp.signals = std::move(out);
+    return tp;
+  }
   auto& Z = out->terms;
   Z.resize(n, kTermSignals);
   Z.col(kTsOmegaR) = omega_r;
