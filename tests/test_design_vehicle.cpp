@@ -212,7 +212,7 @@ TEST(DesignPrecision, ValueIsTheWorstRelativeStdErrorOfWeightedLeastSquares) {
     M += Phi.transpose() * Phi;
   }
   const Eigen::Matrix<double, 7, 7> C = M.inverse() * (static_cast<double>(K) / noise.samples);
-  const Theta s = relative_error_scale(P.theta());
+  const Theta s = determinedness_scale(P.theta());
   for (int i = 0; i < 7; ++i)
     EXPECT_NEAR(v.relative_std(i), std::sqrt(C(i, i)) / s(i), 1e-9 * v.relative_std(i)) << i;
   EXPECT_DOUBLE_EQ(v.worst_relative_std, v.relative_std.maxCoeff());

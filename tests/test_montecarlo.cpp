@@ -165,7 +165,7 @@ TEST(MonteCarlo, VehicleRunsUseTheRotorColumnsWrench) {
   o.simulation.rotor_noise = 0.0;
   const MonteCarloResult clean = run_montecarlo(o);
   ASSERT_EQ(clean.failed, 0) << clean.runs[0].error;
-  const Theta truth = o.simulation.plant.theta(), scale = relative_error_scale(truth);
+  const Theta truth = o.simulation.plant.theta(), scale = determinedness_scale(truth);
   for (int j : {0, 1, 4, 6}) EXPECT_LT(std::abs(ls(clean).bias(j)) / scale(j), 5e-3) << j;
   EXPECT_LT(ls(clean).std.maxCoeff(), 1e-12);  // same flight every run: no noise anywhere
   o.simulation.rotor_noise = 50.0;  // rpm

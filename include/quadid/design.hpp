@@ -102,7 +102,7 @@ struct CriterionValues {
   double cond_scaled = 0.0;  // cond(W S)
   double dopt = 0.0;         // -(1/7) log det(S M S / K)
   /// Precision criterion (with a RowNoise): the smooth maximum it minimizes, the worst
-  /// relative standard error, and each parameter's (relative_error_scale of the reference). NaN without.
+  /// relative standard error, and each parameter's (determinedness_scale of the reference). NaN without.
   double precision = std::numeric_limits<double>::quiet_NaN();
   double worst_relative_std = std::numeric_limits<double>::quiet_NaN();
   Theta relative_std = Theta::Constant(std::numeric_limits<double>::quiet_NaN());
@@ -274,7 +274,7 @@ class ExcitationProblem {
   int N_;
   double wf_, g_;
   Criterion crit_;
-  Theta scales_;           // parameter_scales(), or relative_error_scale() for Precision
+  Theta scales_;           // parameter_scales(), or determinedness_scale() for Precision
   Eigen::Vector4d row_w_;  // row weights 1 / sigma (Precision), else ones
   double samples_ = 0.0;   // RowNoise::samples (Precision)
   std::array<double, 4> q0_;

@@ -61,16 +61,12 @@ struct NamedParams {
   std::vector<std::pair<std::string, double>> terms{};
 };
 
-/// The scale relative errors of Theta are quoted against (bias, spread, standard
-/// errors, "poorly determined"): |m| for the mass, |I_ii| for a moment, and the mean
-/// principal moment (|Ixx| + |Iyy| + |Izz|) / 3 for a product of inertia, which may be
-/// zero. The one definition montecarlo, the predicted precision, the recommendation
-/// and the design's precision criterion share.
-Theta relative_error_scale(const Theta& theta);
-/// The scale a standard error is judged against ("poorly determined", the
-/// recommendation's precision, the report's rel %): |m| for the mass and the
-/// mean principal moment (|Ixx| + |Iyy| + |Izz|) / 3 for every inertia entry,
-/// so that a product of inertia near 0 is judged against the body's size.
+/// The one scale relative errors are quoted against (identify's rel %,
+/// "poorly determined", the recommendation, montecarlo's bias and spread, the
+/// predicted precision and the design's precision criterion): |m| for the
+/// mass and the mean principal moment (|Ixx| + |Iyy| + |Izz|) / 3 for every
+/// inertia entry, so that a product of inertia near 0 is judged against the
+/// body's size.
 Theta determinedness_scale(const Theta& theta);
 /// The one determinedness rule: a parameter is poorly determined when its
 /// standard error is not within `fraction` of its scale (determinedness_scale;

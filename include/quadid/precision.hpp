@@ -47,6 +47,9 @@
 // (long_run_covariance), added to the linear part.
 #pragma once
 
+#include <array>
+#include <limits>
+
 #include "quadid/identification.hpp"
 #include "quadid/model.hpp"
 #include "quadid/simulation.hpp"
@@ -110,7 +113,7 @@ struct PrecisionOptions {
 struct PredictedSet {
   std::string name;        // "LS" (standard regression, eq. 34) or "FMLS" (filtered, eq. 38)
   Theta std_error = Theta::Zero();   // kg, kg m^2
-  /// std_error / relative_error_scale(truth) (model.hpp), as montecarlo reports bias and spread.
+  /// std_error / determinedness_scale(truth) (model.hpp), as montecarlo reports bias and spread.
   Theta relative = Theta::Zero();
   Eigen::Matrix<double, 7, 7> covariance = Eigen::Matrix<double, 7, 7>::Zero();
   /// Variance of each parameter from each noise source, in the order of
@@ -122,7 +125,23 @@ struct PredictedSet {
   /// The linear part alone (sensor noise to first order) and the closed-loop part.
   Theta linear_std_error = Theta::Zero();
   Theta closed_loop_std_error = Theta::Zero();
+  /// With a model-error level (PrecisionResult::model_error): sqrt(std_error^2
+  /// + (level x scale)^2), the flight-to-flight scatter to expect of real
+  /// flights; NaN without one.
+  Theta realistic_std_error = Theta::Constant(std::numeric_limits<double>::quiet_NaN());
 };
+
+/// The model error of a wrench made from rotor speeds (thrusts kf w|w|, yaw
+/// torques torque ratio x thrust), per flight, as fractions of
+/// determinedness_scale (|m|; the mean principal moment for every inertia
+/// entry): a multirotor's rotors differ in kf by ~5 % from the one the model
+/// uses (4.5 %), which the roll and pitch rows (thrust differences x arm) carry; the
+/// yaw row rests on the torque ratio and the rotor inertia, known to ~15 %;
+/// products of inertia come from the axes' misalignment, a third of the roll
+/// and pitch level; the mass from the mean thrust, whose error is the same in
+/// every flight (a bias, not scatter). Checked against the four shared real
+/// Crazyflie flights (docs/design.md, "Realistic precision").
+inline constexpr std::array<double, 7> kRotorWrenchModelError{0.002, 0.045, 0.015, 0.015, 0.045, 0.015, 0.15};
 
 struct PrecisionResult {
   std::string trajectory;            // Trajectory::describe()
@@ -132,6 +151,11 @@ struct PrecisionResult {
   std::vector<std::string> sources;  // "position", "yaw", "attitude", "gyro", "rotor" or "wrench", then "closed loop"
   std::array<PredictedSet, 2> sets;  // LS, FMLS
   Theta truth = Theta::Zero();
+  /// The model-error level behind PredictedSet::realistic_std_error, and its
+  /// class ("rotor-speed wrench"); none when the wrench is logged (a
+  /// measured or simulated wrench: its error depends on how it was made).
+  std::optional<Theta> model_error{};
+  std::string model_error_class{};
 };
 
 /// Seconds of hover regression_row_noise() simulates.

@@ -355,7 +355,7 @@ CriterionValues evaluate_criteria(const Trajectory& traj, double dt, double g, c
   v.cond_scaled = criterion_of(M, v.samples, Criterion::CondScaled, scales, nullptr);
   v.dopt = criterion_of(M, v.samples, Criterion::DOpt, scales, nullptr);
   if (noise) {
-    v.precision = precision_of(Mw, v.samples, relative_error_scale(reference->theta()), noise->samples, nullptr,
+    v.precision = precision_of(Mw, v.samples, determinedness_scale(reference->theta()), noise->samples, nullptr,
                                &v.relative_std);
     v.worst_relative_std = v.relative_std.maxCoeff();
   }
@@ -364,7 +364,7 @@ CriterionValues evaluate_criteria(const Trajectory& traj, double dt, double g, c
 
 ExcitationProblem::ExcitationProblem(const DesignOptions& opt, double grid_dt)
     : N_(opt.harmonics), wf_(opt.wf), g_(opt.g), crit_(opt.criterion),
-      scales_(opt.criterion == Criterion::Precision ? relative_error_scale(opt.reference.theta())
+      scales_(opt.criterion == Criterion::Precision ? determinedness_scale(opt.reference.theta())
                                                     : parameter_scales(opt.reference, opt.product_floor)),
       row_w_(opt.criterion == Criterion::Precision ? opt.row_noise.sigma.cwiseInverse().eval()
                                                    : Eigen::Vector4d::Ones()),

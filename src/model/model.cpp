@@ -28,13 +28,6 @@ Eigen::MatrixXd euler_zyx_series(const Eigen::Ref<const Eigen::MatrixXd>& q) {
   return e;
 }
 
-Theta relative_error_scale(const Theta& th) {
-  const double mean_moment = (std::abs(th(1)) + std::abs(th(4)) + std::abs(th(6))) / 3.0;
-  Theta s;
-  s << std::abs(th(0)), std::abs(th(1)), mean_moment, mean_moment, std::abs(th(4)), mean_moment, std::abs(th(6));
-  return s;
-}
-
 double typical_multirotor_arm(double m_kg) { return 0.15 * std::cbrt(m_kg / 0.5); }
 
 Theta determinedness_scale(const Theta& th) {

@@ -213,7 +213,7 @@ std::string format_montecarlo(const MonteCarloResult& r) {
                  o.runs, r.failed, o.trajectory, o.simulation.duration, o.seed, r.threads, r.seconds,
                  o.identification.window.to_string(), o.identification.processing.lowpass.cutoff_hz,
                  o.identification.lambda);
-  const Theta scale = relative_error_scale(r.truth);
+  const Theta scale = determinedness_scale(r.truth);
   fmt::format_to(it, "Relative to the truth (m, Ixx, Iyy, Izz) or to the mean moment (products), in %.\n");
   if (const std::string note = unreachable_truth_note(r.truth); !note.empty()) fmt::format_to(it, "{}\n", note);
   auto table = [&](const char* title, auto value) {

@@ -22,6 +22,7 @@
 #include "quadid/identification/extended.hpp"
 #include "quadid/model/regressor.hpp"
 #include "quadid/signal.hpp"
+#include "quadid/core/json.hpp"
 #include "quadid/core/parallel.hpp"
 
 #include <fmt/format.h>
@@ -445,6 +446,11 @@ class PrecisionRun {
                           ? fmt::format(" (force row pre-filtered at {:g} Hz, moment rows at {:g} Hz)", f_force_, f_moment_)
                           : fmt::format(" (pre-filter {:g} Hz)", f_force_);
     res.truth = theta_;
+    // A wrench made from rotor speeds: the rotor model given, or the simulated vehicle's.
+    if (opt_.rotors || (opt_.simulation && opt_.simulation->rotors)) {
+      res.model_error = Eigen::Map<const Theta>(kRotorWrenchModelError.data());
+      res.model_error_class = "rotor-speed wrench";
+    }
     res.sources = {"position", "yaw", "attitude", "gyro", rotor_mode_ ? "rotor" : "wrench", "closed loop"};
     return res;
   }
@@ -627,7 +633,11 @@ class PrecisionRun {
     }
     out.covariance = cov;
     out.std_error = cov.diagonal().cwiseSqrt();
-    out.relative = out.std_error.cwiseQuotient(relative_error_scale(theta_));
+    out.relative = out.std_error.cwiseQuotient(determinedness_scale(theta_));
+    if (res.model_error)
+      out.realistic_std_error = (out.std_error.cwiseAbs2() +
+                                 res.model_error->cwiseProduct(determinedness_scale(theta_)).cwiseAbs2())
+                                    .cwiseSqrt();
     if (m == 0) {
       res.samples = reg.size();
       res.window = reg.window();
@@ -746,28 +756,39 @@ PrecisionResult predict_precision(const Trajectory& traj, const PrecisionOptions
 }
 
 std::string format_precision(const PrecisionResult& r) {
+  const bool real = r.model_error.has_value();
   std::string s = fmt::format("predicted precision ({} regression rows, window {}; regression {}):\n", r.samples,
                               r.window.to_string(), r.regression);
-  s += fmt::format("  {:<5} {:>12} {:>13} {:>8} {:>13} {:>8}  {}\n", "param", "value", "LS std err", "LS %",
-                   "FMLS std err", "FMLS %", "main noise source (LS)");
-  const Theta scale = relative_error_scale(r.truth);
+  s += "  noise only: the sensors' noise carried through the regression; the model's own error is not in these\n";
+  s += fmt::format("  {:<5} {:>12} {:>13} {:>8} {:>13} {:>8}{}  {}\n", "param", "value", "LS std err", "LS %",
+                   "FMLS std err", "FMLS %", real ? fmt::format(" {:>11}", "realistic %") : "", "main noise source (LS)");
+  const Theta scale = determinedness_scale(r.truth);
   for (int j = 0; j < 7; ++j) {
     Eigen::Index src = 0;
     r.sets[0].variance_by_source.row(j).maxCoeff(&src);
     const double total = r.sets[0].variance_by_source.row(j).sum();
     const double share = total > 0.0 ? r.sets[0].variance_by_source(j, src) / total : 0.0;
-    s += fmt::format("  {:<5} {:>12.5g} {:>13.3e} {:>8.3f} {:>13.3e} {:>8.3f}  {} ({:.0f}% of the variance)\n",
+    s += fmt::format("  {:<5} {:>12.5g} {:>13.3e} {:>8.3f} {:>13.3e} {:>8.3f}{}  {} ({:.0f}% of the variance)\n",
                      kThetaNames[static_cast<size_t>(j)], r.truth(j), r.sets[0].std_error(j),
                      100.0 * r.sets[0].relative(j), r.sets[1].std_error(j), 100.0 * r.sets[1].relative(j),
+                     real ? fmt::format(" {:>11.2f}", 100.0 * r.sets[0].realistic_std_error(j) / scale(j)) : "",
                      r.sources[static_cast<size_t>(src)], 100.0 * share);
   }
-  s += fmt::format("  units: kg for m, kg m^2 for the inertia; % of |m|, |I_ii|, or of the mean principal moment "
-                   "({:.4g} kg m^2) for a product of inertia\n",
-                   scale(2));
+  s += fmt::format("  units: kg for m, kg m^2 for the inertia; % of |m| for m and of the mean principal moment "
+                   "({:.4g} kg m^2) for every inertia entry, as identify's rel %\n",
+                   scale(1));
+  if (real)
+    s += fmt::format("  realistic %: with the model error of a {} (m {:g} %, Ixx and Iyy {:g} %, Izz {:g} %, "
+                     "products {:g} %; docs/design.md, \"Realistic precision\"): the scatter to expect over real flights\n",
+                     r.model_error_class, 100.0 * (*r.model_error)(0), 100.0 * (*r.model_error)(1),
+                     100.0 * (*r.model_error)(6), 100.0 * (*r.model_error)(2));
+  else
+    s += "  realistic %: none for a logged wrench (its model error depends on how it was measured or simulated)\n";
   const double worst = std::max(r.sets[0].relative.maxCoeff(), 0.0);
   Eigen::Index jw = 0;
   r.sets[0].relative.maxCoeff(&jw);
-  s += fmt::format("  worst relative std error (LS): {} at {:.3f}%\n", kThetaNames[static_cast<size_t>(jw)], 100.0 * worst);
+  s += fmt::format("  worst relative std error (LS, noise only): {} at {:.3f}%\n", kThetaNames[static_cast<size_t>(jw)],
+                   100.0 * worst);
   return s;
 }
 
@@ -778,12 +799,20 @@ nlohmann::json to_json(const PrecisionResult& r) {
   j["samples"] = r.samples;
   j["window"] = {r.window.t0, r.window.t1};
   j["sources"] = r.sources;
+  j["noise_only"] = "std_error and relative: the sensors' noise alone; realistic_std_error adds model_error";
+  if (r.model_error) {
+    j["model_error"]["class"] = r.model_error_class;
+    for (int p = 0; p < 7; ++p) j["model_error"]["relative"][kThetaNames[static_cast<size_t>(p)]] = (*r.model_error)(p);
+  } else {
+    j["model_error"] = nullptr;
+  }
   for (const auto& set : r.sets) {
     nlohmann::json s;
     for (int p = 0; p < 7; ++p) {
       nlohmann::json e;
       e["std_error"] = set.std_error(p);
       e["relative"] = set.relative(p);
+      e["realistic_std_error"] = finite_or_null(set.realistic_std_error(p));
       nlohmann::json by;
       for (size_t k = 0; k < r.sources.size(); ++k)
         by[r.sources[k]] = std::sqrt(std::max(0.0, set.variance_by_source(p, static_cast<Eigen::Index>(k))));
