@@ -119,4 +119,7 @@ def summarize(records: _Iterable[dict], set: str = "recommended", level: float =
             return [plain(x) for x in o]
         return o
 
-    return quadid._quadid.summarize_fleet(json.dumps(plain(kept)), set, float(level))
+    try:
+        return quadid._quadid.summarize_fleet(json.dumps(plain(kept)), set, float(level))
+    except ValueError as e:  # the library names batch's keys; this function's arguments are set= and level=
+        raise ValueError(str(e).replace("summary_set=", "set=").replace("outlier_level=", "level=")) from None

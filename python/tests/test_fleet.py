@@ -63,7 +63,7 @@ def test_summarize_equals_the_batch_summary(fleet, tmp_path):
     py = quadid.fleet.summarize(records, set="LS")
     assert py["flights"] == 3 and len(py["skipped"]) == 1 and "corrupt.csv" in py["skipped"][0]
     assert_same(py, cli, 1e-12)
-    with pytest.raises(ValueError, match="--summary-set"):
+    with pytest.raises(ValueError, match="set=XY"):
         quadid.fleet.summarize(records, set="XY")
-    with pytest.raises(ValueError, match="--outlier-level"):
+    with pytest.raises(ValueError, match="level=1.5"):
         quadid.fleet.summarize(records, level=1.5)

@@ -7,6 +7,7 @@
 #include <fmt/ranges.h>
 
 #include <algorithm>
+#include <regex>
 #include <charconv>
 #include <cmath>
 #include <limits>
@@ -70,7 +71,8 @@ OptionValues::OptionValues(const json& given, std::string_view command, OptionSo
       throw std::invalid_argument(fmt::format("{}: unknown option '{}' (known: {})", command, key, fmt::join(known, ", ")));
     }
     if (spelled_.contains(d->name))
-      throw std::invalid_argument(fmt::format("{}: option --{} is given twice ({} and {})", command, d->name,
+      throw std::invalid_argument(fmt::format("{}: option {} is given twice ({} and {})", command,
+                                              source_ == OptionSource::Cli ? "--" + d->name : "'" + key + "'",
                                               spelled_[d->name].get<std::string>(), key));
     if (d->name != n) deprecations_.push_back(deprecation_message(*d, n));
     spelled_[d->name] = key;
@@ -83,7 +85,8 @@ bool OptionValues::given(const std::string& name) const { return spelled_.contai
 std::string OptionValues::prefix(const std::string& name) const {
   const std::string as_given = spelled_.contains(name) ? spelled_.at(name).get<std::string>() : name;
   if (source_ == OptionSource::Cli) return fmt::format("--{}: ", normalize_option_key(as_given));
-  return fmt::format("{}: option '{}' (--{}): ", command(), as_given, name);
+  // JSON and Python name the option as their caller spelled it, not the command line's flag.
+  return fmt::format("{}: option '{}': ", command(), as_given);
 }
 
 void OptionValues::bad(const std::string& name, const std::string& why) const {
@@ -246,6 +249,28 @@ constexpr FieldOption kFieldOptions[] = {
 
 }  // namespace
 
+// The library's advice names the command line's flags ("give --known-mass
+// 0.0347"); JSON and Python callers get their own spelling of each: the key
+// with underscores, "known_mass=0.0347", or "vehicle=..." for a flag given
+// without a number.
+static std::string flags_as_keys(const std::string& s) {
+  // The value: a number, or a token the library closes with ':' ("--summary-set XY: expected ...").
+  static const std::regex flag(
+      R"((^|[^A-Za-z0-9-])--([a-z][a-z0-9]*(?:-[a-z0-9]+)*)(?: (-?[0-9][0-9.eE+-]*|-?\.[0-9]+|[^\s:,;]+(?=:)))?)");
+  std::string out;
+  auto last = s.cbegin();
+  for (std::sregex_iterator it(s.begin(), s.end(), flag), end; it != end; ++it) {
+    const std::smatch& m = *it;
+    out.append(last, m[0].first);
+    std::string key = m[2].str();
+    std::replace(key.begin(), key.end(), '-', '_');
+    out += m[1].str() + key + "=" + (m[3].matched ? m[3].str() : std::string("..."));
+    last = m[0].second;
+  }
+  out.append(last, s.cend());
+  return out;
+}
+
 std::string with_option_names(std::string_view message, OptionSource source) {
   std::string s(message);
   for (const auto& [field, option] : kFieldOptions) {
@@ -255,7 +280,7 @@ std::string with_option_names(std::string_view message, OptionSource source) {
     for (size_t at = s.find(from); at != std::string::npos; at = s.find(from, at + to.size()))
       s.replace(at, from.size(), to);
   }
-  return s;
+  return source == OptionSource::Cli ? s : flags_as_keys(s);
 }
 
 }  // namespace quadid

@@ -647,7 +647,7 @@ SimulateRequest simulate_request(const OptionValues& r) {
   SimulateRequest req;
   SimulationOptions& o = req.options;
   const auto spec = r.string("trajectory");
-  if (!spec) fail(r, "option 'trajectory' (--trajectory) is required");
+  if (!spec) fail(r, "option 'trajectory' is required");
   const auto radius = r.number("radius");
   const auto altitude = r.number("altitude");
   if (*spec == "circle") {

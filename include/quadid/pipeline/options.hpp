@@ -91,6 +91,8 @@ enum class OptionSource { Cli, Json };
 /// library names the field it checks ("LowpassOptions: cutoff_hz=300 must be
 /// below Nyquist"); the command line reads "--cutoff 300 must be below
 /// Nyquist", Python and JSON "cutoff=300 ...". Fields no option sets are kept.
+/// For Python and JSON the flags the library's advice names become keys:
+/// "give --known-mass 0.0347" reads "give known_mass=0.0347", "--vehicle" "vehicle=...".
 std::string with_option_names(std::string_view message, OptionSource source);
 
 /// The options given to one command, read against its table: each accessor
