@@ -142,20 +142,26 @@ void summarize_processing(const signal::ZeroPhaseFilter& zf, const ProcessingOpt
 // differentiated motion capture, whose noise the controller's rotation
 // answers, so the products of their unfiltered parts do not average out
 // (the virtual QBall 2's m then came out +0.004 %, six of its standard errors).
+// Columns [first, first + 3) of P (sized n x 6 by the caller): the cross
+// products (first = 0) or the squares (first = 3), so that the two threads
+// of the processing each filter three.
 using Products = Eigen::Matrix<double, Eigen::Dynamic, 6>;
-void filtered_products(const FlightLog& log, const std::vector<int>& col, signal::ZeroPhaseFilter& f, Products& P) {
+void filtered_products(const FlightLog& log, const std::vector<int>& col, signal::ZeroPhaseFilter& f, Products& P,
+                       int first) {
   const Eigen::Index n = log.rows();
-  P.resize(n, 6);
   const auto p = log.data.col(col[7]), q = log.data.col(col[8]), r = log.data.col(col[9]);
-  P.col(0) = p.cwiseProduct(q);
-  P.col(1) = p.cwiseProduct(r);
-  P.col(2) = q.cwiseProduct(r);
-  P.col(3) = p.cwiseAbs2();
-  P.col(4) = q.cwiseAbs2();
-  P.col(5) = r.cwiseAbs2();
-  std::array<double*, 6> cols{};
-  for (int j = 0; j < 6; ++j) cols[static_cast<size_t>(j)] = P.col(j).data();
-  f.apply(cols.data(), 6, n);
+  if (first == 0) {
+    P.col(0) = p.cwiseProduct(q);
+    P.col(1) = p.cwiseProduct(r);
+    P.col(2) = q.cwiseProduct(r);
+  } else {
+    P.col(3) = p.cwiseAbs2();
+    P.col(4) = q.cwiseAbs2();
+    P.col(5) = r.cwiseAbs2();
+  }
+  std::array<double*, 3> cols{};
+  for (int j = 0; j < 3; ++j) cols[static_cast<size_t>(j)] = P.col(first + j).data();
+  f.apply(cols.data(), 3, n);
 }
 
 // Step 1: zero-phase low-pass (as scipy sosfiltfilt: odd padding, steady-state
@@ -181,7 +187,7 @@ std::array<signal::HeldSamples, 6> filter_and_differentiate(const FlightLog& log
   };
   auto rates_and_wrench = [&] {  // p q r, Fz tau, and the rate products
     filter_into(zf, {{col[7], 1}, {col[8], 2}, {col[9], 3}, {col[10], 11}, {col[11], 12}, {col[12], 13}, {col[13], 14}});
-    if (products) filtered_products(log, col, zf, *products);
+    if (products) filtered_products(log, col, zf, *products, 0);
   };
   // The pose, put back on its sample instants when held. The yaw is unwrapped
   // first: a wrapped yaw's 2 pi jump, interpolated over a hold, would become
@@ -201,6 +207,7 @@ std::array<signal::HeldSamples, 6> filter_and_differentiate(const FlightLog& log
     pose_into(col[4], 8, 4);  // phi
     pose_into(col[5], 9, 5);  // theta
     filter_into(f, {{-1, 8}, {-1, 9}, {-1, 10}, {-1, 5}, {-1, 6}, {-1, 7}});  // phi theta psi x y z
+    if (products) filtered_products(log, col, f, *products, 3);
     for (int i = 0; i < 3; ++i) signal::central_difference_inplace(X.col(5 + i).data(), n, T);
   };
   if (detail::use_second_thread(opt.threads)) {
@@ -278,7 +285,7 @@ std::shared_ptr<const RegressionSignals> process_log(const FlightLog& log, const
   out->T = T;
   out->edge = opt.exclude_edges ? settling : 0.0;
   out->x.resize(n, RegressionSignals::kCols);
-  Products products;
+  Products products(opt.filter_products ? n : 0, 6);
   const std::array<signal::HeldSamples, 6> held =
       filter_and_differentiate(log, col, opt, zf, T, fs, out->x, opt.filter_products ? &products : nullptr);
   if (summary) summarize_held(held, n, T, *summary);
