@@ -214,7 +214,7 @@ std::string format_montecarlo(const MonteCarloResult& r) {
                  o.identification.window.to_string(), o.identification.processing.lowpass.cutoff_hz,
                  o.identification.lambda);
   const Theta scale = determinedness_scale(r.truth);
-  fmt::format_to(it, "Relative to the truth (m, Ixx, Iyy, Izz) or to the mean moment (products), in %.\n");
+  fmt::format_to(it, "Relative to |m| (m) or to the mean principal moment (every inertia entry), in %, as identify's rel %.\n");
   if (const std::string note = unreachable_truth_note(r.truth); !note.empty()) fmt::format_to(it, "{}\n", note);
   auto table = [&](const char* title, auto value) {
     fmt::format_to(it, "\n{}\n{:<6}", title, "Set");
