@@ -260,11 +260,14 @@ std::vector<StreamingQR::Factor> block_factors_integral(const RawSignals& r, Eig
       const Eigen::Index e = s + seg;
       const double len = static_cast<double>(seg) * r.T;
       xavg = (X.middleRows(s, seg + 1).colwise().sum() - 0.5 * (X.row(s) + X.row(e))) * (r.T / len);
-      tavg = (Z.middleRows(s, seg + 1).colwise().sum() - 0.5 * (Z.row(s) + Z.row(e))) * (r.T / len);
-      td = (Z.row(e) - Z.row(s)) / len;
+      const bool terms = Z.cols() > 0;  // the paper's rows at two cutoffs have no term signals
+      if (terms) {
+        tavg = (Z.middleRows(s, seg + 1).colwise().sum() - 0.5 * (Z.row(s) + Z.row(e))) * (r.T / len);
+        td = (Z.row(e) - Z.row(s)) / len;
+      }
       const Vec4 da = (X.row(e).head<4>() - X.row(s).head<4>()).transpose() / len;
-      assemble_term_row(u.extra, da, xavg.segment<7>(4).transpose(), xavg.tail<4>().transpose(), td.data(),
-                        tavg.data(), row);
+      assemble_term_row(u.extra, da, xavg.segment<7>(4).transpose(), xavg.tail<4>().transpose(),
+                        terms ? td.data() : nullptr, terms ? tavg.data() : nullptr, row);
       for (int q = 0; q < 4; ++q)
         if (rows & (1u << q)) qr.add_row(w(q) * row.G.row(q).transpose(), w(q) * row.Y(q));
     }
