@@ -582,3 +582,36 @@ TEST(Estimate, TheRigidBodyInThetaOrderAndAsATensor) {
   const Estimate small = Estimate::unfilled({"m"});
   EXPECT_THROW((void)small.rigid_body(), std::logic_error);
 }
+
+// difference_covariance is long_run_covariance of the two series' difference,
+// aligned by their first samples: checked against that difference formed by
+// hand (the same bits), against b = a (no noise in the difference: zero), and
+// against b absent where it has no samples (a's own covariance there).
+TEST(Uncertainty, DifferenceCovarianceIsThatOfTheAlignedDifference) {
+  constexpr int P = 7;
+  const long n = 4000;
+  std::mt19937_64 rng(7);
+  std::normal_distribution<double> g(0.0, 1.0);
+  std::vector<double> a(static_cast<size_t>(n * P)), b(static_cast<size_t>((n - 500) * P));
+  double prev = 0.0;
+  for (auto& v : a) v = prev = 0.6 * prev + g(rng);  // coloured, as influences are
+  for (auto& v : b) v = g(rng);
+  const UncertaintyOptions opt;
+  // b starts 300 samples after a and ends 200 before a's end.
+  std::vector<double> d = a;
+  for (size_t i = 0; i < b.size(); ++i) d[300 * P + i] -= b[i];
+  const LongRunCovariance want = long_run_covariance(d, P, opt);
+  const LongRunCovariance got = difference_covariance(a, 100, b, 400, P, opt);
+  EXPECT_EQ(got.covariance, want.covariance);
+  EXPECT_EQ(got.correlation_time, want.correlation_time);
+  // The same series twice: their difference has no noise at all.
+  const LongRunCovariance same = difference_covariance(a, 0, a, 0, P, opt);
+  EXPECT_EQ(same.covariance.norm(), 0.0);
+  // A given correlation time is used as it is (no search).
+  EXPECT_EQ(difference_covariance(a, 100, b, 400, P, opt, 17).correlation_time, 17);
+  // b entirely beyond a's end: a then -b, one after the other.
+  std::vector<double> cat = a;
+  for (double v : b) cat.push_back(-v);
+  EXPECT_EQ(difference_covariance(a, 0, b, n, P, opt).covariance, long_run_covariance(cat, P, opt).covariance);
+  EXPECT_THROW(difference_covariance(a, 0, std::vector<double>(5), 0, P, opt), std::invalid_argument);
+}

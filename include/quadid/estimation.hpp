@@ -235,8 +235,21 @@ struct LongRunCovariance {
   double quantile = kZ95;  // Student t at opt.confidence, dof
 };
 /// psi: n x P influences, row-major (sample k's P numbers contiguous). The
-/// series is centred first. Needs n >= 8.
-LongRunCovariance long_run_covariance(const std::vector<double>& psi, int P, const UncertaintyOptions& opt);
+/// series is centred first. Needs n >= 8. correlation_time >= 0: the lag to
+/// use instead of searching for it (a series whose correlation time is known,
+/// e.g. the difference of two series whose own are).
+LongRunCovariance long_run_covariance(const std::vector<double>& psi, int P, const UncertaintyOptions& opt,
+                                      long correlation_time = -1);
+
+/// The noise alone in the difference of two estimates of the same P
+/// parameters from the same flight (LS and FMLS): the long-run covariance of
+/// their influence series' difference, sample by sample. Series a starts at
+/// sample a_begin of the log, b at b_begin (n x P each, row-major, as
+/// long_run_covariance takes them); where only one has a sample the other
+/// counts as 0. Needs 8 samples in all. correlation_time as long_run_covariance
+/// takes it (the larger of the two series' own is the difference's).
+LongRunCovariance difference_covariance(const std::vector<double>& a, long a_begin, const std::vector<double>& b,
+                                        long b_begin, int P, const UncertaintyOptions& opt, long correlation_time = -1);
 
 /// The delete-a-block jackknife covariance of K estimates, each fitted
 /// without one of K blocks: (K - 1) / K sum_j (x_j - mean)(x_j - mean)^T
@@ -254,6 +267,8 @@ class InfluenceAccumulator {
   void reserve(long samples) { psi_.reserve(7 * static_cast<size_t>(std::max(0L, samples))); }
   long count() const { return static_cast<long>(psi_.size() / 7); }
   Estimate finish(const UncertaintyOptions& opt = {}) const;
+  /// The influence series added so far (count() x 7, row-major).
+  const std::vector<double>& series() const { return psi_; }
 
  private:
   Theta theta_;

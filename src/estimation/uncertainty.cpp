@@ -298,7 +298,8 @@ void InfluenceAccumulator::add(const Regressor4x7& G, const Vec4& Y) {
   for (int j = 0; j < 7; ++j) psi_.push_back(psi(j));
 }
 
-LongRunCovariance long_run_covariance(const std::vector<double>& psi, int P, const UncertaintyOptions& opt) {
+LongRunCovariance long_run_covariance(const std::vector<double>& psi, int P, const UncertaintyOptions& opt,
+                                      long correlation_time) {
   opt.validate();
   if (P < 1 || psi.size() % static_cast<size_t>(P) != 0)
     throw std::invalid_argument("long_run_covariance: the influence series is not n x P");
@@ -325,7 +326,7 @@ LongRunCovariance long_run_covariance(const std::vector<double>& psi, int P, con
   // kLags at a time as the search reaches them.
   std::vector<double> col(static_cast<size_t>(n));
   long m_hat = 0;
-  for (int j = 0; j < P; ++j) {
+  for (int j = 0; j < P && correlation_time < 0; ++j) {
     for (long i = 0; i < n; ++i) col[static_cast<size_t>(i)] = x[at(i, j)];
     double ac[kLags];
     autocov_lags(col.data(), n, 0, ac);
@@ -345,6 +346,7 @@ LongRunCovariance long_run_covariance(const std::vector<double>& psi, int P, con
     if (run < K) r.correlation_time_capped = true;
     m_hat = std::max(m_hat, m);
   }
+  if (correlation_time >= 0) m_hat = correlation_time;
   r.correlation_time = m_hat;
   // The frequencies: those below 1 / (band_factor m) cycles per sample, where
   // the influences' spectrum is still that of frequency 0 (docs/uncertainty.md),
@@ -396,6 +398,21 @@ LongRunCovariance long_run_covariance(const std::vector<double>& psi, int P, con
   r.dof = 2.0 * static_cast<double>(nf);
   r.quantile = student_t_quantile(0.5 + 0.5 * opt.confidence, r.dof);
   return r;
+}
+
+LongRunCovariance difference_covariance(const std::vector<double>& a, long a_begin, const std::vector<double>& b,
+                                        long b_begin, int P, const UncertaintyOptions& opt, long correlation_time) {
+  const auto Ps = static_cast<size_t>(P);
+  if (P < 1 || a.size() % Ps != 0 || b.size() % Ps != 0)
+    throw std::invalid_argument("difference_covariance: an influence series is not n x P");
+  const long na = static_cast<long>(a.size() / Ps), nb = static_cast<long>(b.size() / Ps);
+  const long k0 = std::min(a_begin, b_begin), k1 = std::max(a_begin + na, b_begin + nb);
+  std::vector<double> d(static_cast<size_t>(k1 - k0) * Ps, 0.0);
+  for (long i = 0; i < na; ++i)
+    for (size_t j = 0; j < Ps; ++j) d[static_cast<size_t>(a_begin - k0 + i) * Ps + j] += a[static_cast<size_t>(i) * Ps + j];
+  for (long i = 0; i < nb; ++i)
+    for (size_t j = 0; j < Ps; ++j) d[static_cast<size_t>(b_begin - k0 + i) * Ps + j] -= b[static_cast<size_t>(i) * Ps + j];
+  return long_run_covariance(d, P, opt, correlation_time);
 }
 
 Estimate Estimate::unfilled(std::vector<std::string> names) {

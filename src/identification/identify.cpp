@@ -414,6 +414,7 @@ class IdentifyRun {
       reg.for_each([&](Eigen::Index, const Regressor4x7& G, const Vec4& Y) { infl.add(G, Y); });
     }
     attach_uncertainty(sol, infl.finish(opt_.uncertainty), prior_, opt_.ls);
+    influences_[filtered ? 1 : 0] = {infl.series(), static_cast<long>(reg.begin())};
     // The physically consistent set: the closest consistent Theta in the LS metric.
     pc = closest_physical(sol, prior_, opt_.physical);
   }
@@ -526,14 +527,31 @@ class IdentifyRun {
     res_.projections[i] = std::move(pr);
   }
 
-  // The two regressions' disagreement, |LS - FMLS|, in quadrature in both
-  // sets' standard errors and intervals (UncertaintyOptions::model_disagreement):
-  // processing and model error that the residuals do not show.
+  // The two regressions' disagreement, |LS - FMLS|, beyond what noise
+  // explains, in quadrature in both sets' standard errors and intervals
+  // (UncertaintyOptions::model_disagreement): processing and model error that
+  // the residuals do not show. Noise moves the two sets nearly together but
+  // not quite: on a flight with no model error their difference is noise
+  // (the QBall's m: |LS - FMLS| ~0.45 of its standard error), which, added,
+  // counted the noise twice (m's 95 % intervals covered 100 % of 200 flights).
+  // So only the part beyond the difference's own interval is added: t times
+  // the HAC standard error of the two influence series' difference.
   void widen_for_model_disagreement() {
     if (!opt_.uncertainty.model_disagreement) return;
     LeastSquaresSolution* sols[2] = {&res_.ls_standard, &res_.ls_filtered};
     if (!sols[0]->uncertainty.computed || !sols[1]->uncertainty.computed) return;
-    const Theta d = (res_.estimates[0].theta - res_.estimates[2].theta).cwiseAbs();
+    Theta d = (res_.estimates[0].theta - res_.estimates[2].theta).cwiseAbs();
+    const Influences &a = influences_[0], &b = influences_[1];
+    if (!opt_.extended() && !a.psi.empty() && !b.psi.empty()) {
+      // The difference decorrelates when both series have: the larger of
+      // their correlation times (no search of its own).
+      const long m = std::max(sols[0]->uncertainty.correlation_time, sols[1]->uncertainty.correlation_time);
+      const LongRunCovariance noise = difference_covariance(a.psi, a.begin, b.psi, b.begin, 7, opt_.uncertainty, m);
+      for (Eigen::Index j = 0; j < 7; ++j) {
+        const double within = noise.quantile * std::sqrt(std::max(0.0, noise.covariance(j, j)));
+        if (std::isfinite(within)) d(j) = std::max(0.0, d(j) - within);
+      }
+    }
     for (LeastSquaresSolution* sol : sols) {
       Estimate& u = sol->uncertainty;
       if (u.size() != 7) continue;
@@ -791,6 +809,13 @@ class IdentifyRun {
   std::optional<Regression> std_reg_, filt_reg_;
   Recorder rec_{0, 1, 1, false};
   RunOutput s_, f_;
+  // Each regression's influence series and its first sample (LS, FMLS): the
+  // noise in their difference (widen_for_model_disagreement).
+  struct Influences {
+    std::vector<double> psi;
+    long begin = 0;
+  };
+  std::array<Influences, 2> influences_;
   PhysicalProjection pc_std_, pc_filt_;
   std::exception_ptr estimation_error_;
   std::optional<PredictionErrorTable> errors_standard_, errors_filtered_;  // when computed in the second pass

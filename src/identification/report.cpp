@@ -174,7 +174,10 @@ std::string format_uncertainty_table(const IdentificationResult& r) {
     fmt::format_to(it, "{}: 95% intervals (HAC: {}; correlation time {} samples{}; Student t, {:.0f} dof, quantile {:.3f}){}\n",
                    name, how, u.correlation_time, u.correlation_time_capped ? " (search capped)" : "", u.dof,
                    u.quantile,
-                   u.model_disagreement.size() == 7 ? "\n   with |LS - FMLS| added in quadrature (model disagreement, docs/uncertainty.md)" : "");
+                   u.model_disagreement.size() != 7 ? ""
+                   : r.extended ? "\n   with |LS - FMLS| added in quadrature (model disagreement, docs/uncertainty.md)"
+                                : "\n   with |LS - FMLS| beyond its own noise added in quadrature (model disagreement, "
+                                  "docs/uncertainty.md)");
     const bool jk = u.jackknife_blocks > 0;
     if (jk)
       fmt::format_to(it,
