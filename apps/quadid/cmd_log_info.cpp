@@ -31,9 +31,13 @@ void run(const OptionValues& v) {
     const logs::UsdLog log = logs::read_usd(a.file);
     if (a.json) fmt::print("{}\n", logs::usd_info_json(log).dump(2));
     else fmt::print("{}", logs::format_usd_info(log));
+  } else if (kind == logs::LogKind::DataFlash) {
+    const logs::DataFlashLog log = logs::read_dataflash(a.file);
+    if (a.json) fmt::print("{}\n", logs::dataflash_info_json(log).dump(2));
+    else fmt::print("{}", logs::format_dataflash_info(log, a.verbose));
   } else {
-    throw InputError(fmt::format("{}: byte 0: not an autopilot log (expected the ULog magic \"ULog\" or the "
-                                 "Crazyflie uSD byte 0xBC)",
+    throw InputError(fmt::format("{}: byte 0: not an autopilot log (expected the ULog magic \"ULog\", the "
+                                 "Crazyflie uSD byte 0xBC or ArduPilot's DataFlash header 0xA3 0x95)",
                                  a.file));
   }
 }
@@ -44,8 +48,9 @@ void register_log_info(CLI::App& app) {
   auto* sub = app.add_subcommand(
       "log-info",
       "what an autopilot log holds: PX4 ULog (topics with multi id, message size and count, info messages,\n"
-      "parameters, logged messages, dropouts; pyulog's ulog_info layout) or Crazyflie uSD (events, variables,\n"
-      "counts, rates, gaps). The kind is recognised by the first bytes, not the name.");
+      "parameters, logged messages, dropouts; pyulog's ulog_info layout), Crazyflie uSD (events, variables,\n"
+      "counts, rates, gaps) or ArduPilot DataFlash .bin (message types with records, instances, rates, columns\n"
+      "with units; parameters). The kind is recognised by the first bytes, not the name.");
   auto given = add_table_options(sub, "log-info");
   sub->callback([given] { run(given->read()); });
 }

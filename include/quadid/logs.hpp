@@ -281,6 +281,106 @@ UsdLog parse_usd(std::span<const std::uint8_t> bytes, const std::string& source)
 UsdLog read_usd(const std::filesystem::path& path);
 
 // ============================================================================
+// ArduPilot DataFlash (.bin, docs/ardupilot.md): self-describing records, each
+// 0xA3 0x95, a type byte and a payload whose layout an FMT record (type 128)
+// defines; FMTU, UNIT and MULT give the columns' units and multipliers.
+// Little endian.
+// ============================================================================
+
+/// One message type as its FMT record defines it, with the units and
+/// multipliers of its columns from FMTU (UNIT and MULT resolve their ids).
+struct DataFlashFormat {
+  std::uint8_t type = 0;
+  std::size_t length = 0;  // bytes of a whole record, the 3 header bytes included
+  std::string name;        // "IMU", "ATT", ...
+  std::string format;      // one format character per column ("QBffffff...")
+  std::vector<std::string> columns;
+  std::vector<std::string> units;        // per column: UNIT's label ("deg", "m/s"), "" when not given
+  std::vector<double> multipliers;       // per column: MULT's value, NaN when not given
+  std::vector<std::size_t> offsets;      // per column, byte offset in the payload
+  /// Index of a column; -1 when absent.
+  int column(std::string_view name) const;
+};
+
+/// Size in bytes of a DataFlash format character (b B h H i I f d n N Z c C
+/// e E L M q Q a); 0 for a character ArduPilot does not define.
+int dataflash_type_size(char c);
+
+/// Every record of one type, payloads (length - 3 bytes each) in file order.
+struct DataFlashMessages {
+  DataFlashFormat format;  // a copy of the log's definition (units resolved)
+  std::vector<std::uint8_t> data;
+  std::size_t count() const;
+  /// A numeric column of every record, as ArduPilot's tools read it: integers
+  /// as they are, c C e E divided by 100, L (latitude, longitude) times 1e-7
+  /// degrees; InputError naming the message and column when it is absent or
+  /// not a number (n N Z text, a int16[32]).
+  Eigen::VectorXd column(std::string_view name) const;
+  /// A text column (n N Z) of record i, trailing NULs removed.
+  std::string text(std::string_view name, std::size_t i) const;
+  /// TimeUS of every record (the first column, when it is TimeUS).
+  std::vector<std::uint64_t> time_us() const;
+};
+
+struct DataFlashParameter {
+  std::uint64_t time_us = 0;
+  std::string name;
+  double value = 0.0;
+};
+
+struct DataFlashLog {
+  std::size_t bytes = 0;
+  /// Bytes skipped to find the next record (corrupt bytes, records of a type
+  /// no FMT defines), and where the first such run began (bytes when none).
+  std::size_t skipped_bytes = 0, first_skip_offset = 0;
+  std::size_t resyncs = 0;  // runs of skipped bytes
+  /// Bytes after the last complete record (a file cut mid-record) and where
+  /// that record began.
+  std::size_t trailing_bytes = 0, trailing_offset = 0;
+  std::map<std::uint8_t, DataFlashFormat> formats;       // by type id
+  std::map<std::uint8_t, DataFlashMessages> messages;    // by type id, only types with records
+  std::vector<DataFlashParameter> parameters;            // PARM records in file order
+  /// Problems met and read past (an FMT whose length disagrees with its
+  /// format), each naming its byte offset.
+  std::vector<std::string> problems;
+  const DataFlashMessages* find(std::string_view name) const;
+  /// The last value a PARM record logged for `name`.
+  std::optional<double> parameter(std::string_view name) const;
+};
+
+/// True when the bytes start with a DataFlash record header 0xA3 0x95.
+bool is_dataflash(std::span<const std::uint8_t> head);
+/// Parses a DataFlash log held in memory; `source` names it in messages. An
+/// InputError when the bytes hold no FMT record (not a DataFlash log);
+/// corrupt bytes and a cut last record are read past and counted.
+DataFlashLog parse_dataflash(std::span<const std::uint8_t> bytes, const std::string& source);
+DataFlashLog read_dataflash(const std::filesystem::path& path);
+
+/// Builds a DataFlash file in memory, for tests: FMT records as defined,
+/// data records packed from numbers (and text for n N Z).
+class DataFlashWriter {
+ public:
+  DataFlashWriter();
+  /// Defines a type: its FMT record (and, when units are given, its FMTU
+  /// with UNIT records for the labels used). format as ArduPilot's
+  /// ("QBfff"), columns comma-separated; units one label per column ("" none).
+  void define(std::uint8_t type, std::string_view name, std::string_view format, std::string_view columns,
+              const std::vector<std::string>& units = {});
+  /// A record of a defined type: one number per numeric column, texts in
+  /// order for the n N Z columns.
+  void record(std::uint8_t type, const std::vector<double>& numbers, const std::vector<std::string>& texts = {});
+  void parameter(std::uint64_t time_us, std::string_view name, float value);
+  /// Raw bytes (corruption, for tests).
+  void raw(std::string_view bytes);
+  const std::string& bytes() const { return out_; }
+
+ private:
+  std::string out_;
+  std::map<std::uint8_t, std::pair<std::string, std::size_t>> defined_;  // format, record length
+  std::map<std::string, char> unit_ids_;
+};
+
+// ============================================================================
 // What a log holds (quadid log-info)
 // ============================================================================
 
@@ -295,6 +395,10 @@ std::vector<TimeGap> find_gaps(const std::vector<double>& t, double factor);
 /// ulog_messages): `verbose` as ulog_info -v (perf_ info, multi-info values).
 std::string format_ulog_info(const ULog& log, bool verbose);
 nlohmann::json ulog_info_json(const ULog& log);
+/// Messages with counts, instances, rates and their columns' units; the
+/// parameters' last values (`verbose`: also those logged again with another value).
+std::string format_dataflash_info(const DataFlashLog& log, bool verbose);
+nlohmann::json dataflash_info_json(const DataFlashLog& log);
 /// Events with their variables, record counts, mean rates and gaps.
 std::string format_usd_info(const UsdLog& log);
 nlohmann::json usd_info_json(const UsdLog& log);
@@ -372,8 +476,8 @@ struct ImportReport {
 FlightLog import_ulog(const ULog& log, const ImportOptions& opt = {}, ImportReport* report = nullptr);
 FlightLog import_usd(const UsdLog& log, const ImportOptions& opt = {}, ImportReport* report = nullptr);
 
-enum class LogKind { Ulog, Usd, Csv };
-/// The kind from the first bytes: ULog magic, 0xBC, else CSV.
+enum class LogKind { Ulog, Usd, DataFlash, Csv };
+/// The kind from the first bytes: ULog magic, 0xBC, 0xA3 0x95, else CSV.
 LogKind detect_log_kind(const std::filesystem::path& path);
 
 struct LoadOptions {

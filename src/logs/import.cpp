@@ -482,6 +482,7 @@ LogKind detect_log_kind(const std::filesystem::path& path) {
   const std::span<const std::uint8_t> s(head, n);
   if (is_ulog(s)) return LogKind::Ulog;
   if (is_usd(s)) return LogKind::Usd;
+  if (is_dataflash(s)) return LogKind::DataFlash;
   return LogKind::Csv;
 }
 
@@ -502,6 +503,10 @@ std::string motors_topic_named(const std::vector<std::string>& names) {
 FlightLog load_any_log(const std::filesystem::path& path, const LoadOptions& opt_in, ImportReport* report) {
   const LogKind kind = detect_log_kind(path);
   if (kind == LogKind::Csv) return read_flight_log(path, opt_in.csv);
+  if (kind == LogKind::DataFlash)
+    throw InputError(fmt::format("{}: an ArduPilot DataFlash log: quadid lists it (`quadid log-info {}`) but does "
+                                 "not import or identify DataFlash logs yet (docs/ardupilot.md)",
+                                 path.string(), path.string()));
   LoadOptions opt = opt_in;
   if (kind == LogKind::Ulog && opt.import.motors_topic == "auto") {
     // The rotor columns a vehicle names (directly or through --map) choose

@@ -1,7 +1,8 @@
 // libFuzzer target for the autopilot-log readers (docs/log-info.md, "Fuzzing").
 // Any input must parse or end in an InputError: a crash, a sanitizer report,
 // a hang or another exception is a bug. The first byte picks the reader:
-// even -> ULog (parse, then import), odd -> Crazyflie uSD.
+// % 3 == 0 -> ULog (parse, then import), 1 -> Crazyflie uSD, 2 -> ArduPilot
+// DataFlash (parse, then its listing).
 #include "quadid/logs.hpp"
 
 #include <cstddef>
@@ -12,7 +13,11 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   if (size == 0) return 0;
   const std::span<const std::uint8_t> bytes(data + 1, size - 1);
   try {
-    if (data[0] % 2 == 0) {
+    if (data[0] % 3 == 2) {
+      const auto log = quadid::logs::parse_dataflash(bytes, "fuzz");
+      (void)quadid::logs::format_dataflash_info(log, true);
+      (void)quadid::logs::dataflash_info_json(log).dump();
+    } else if (data[0] % 3 == 0) {
       const auto log = quadid::logs::parse_ulog(bytes, "fuzz");
       (void)quadid::logs::format_ulog_info(log, true);
       try {
