@@ -1,7 +1,7 @@
 // quadid log-info FILE: what an autopilot log holds (docs/log-info.md).
 #include "commands.hpp"
 #include "options_cli.hpp"
-#include "quadid/logs.hpp"
+#include "quadid/pipeline.hpp"
 
 #include <fmt/format.h>
 
@@ -20,26 +20,8 @@ void run(const OptionValues& v) {
   a.verbose = v.flag("verbose");
   a.allow_truncated = v.flag("allow-truncated");
   a.json = v.flag("json");
-  const auto kind = logs::detect_log_kind(a.file);
-  if (kind == logs::LogKind::Ulog) {
-    logs::ULogReadOptions opt;
-    opt.allow_truncated = a.allow_truncated;
-    const logs::ULog log = logs::read_ulog(a.file, opt);
-    if (a.json) fmt::print("{}\n", logs::ulog_info_json(log).dump(2));
-    else fmt::print("{}", logs::format_ulog_info(log, a.verbose));
-  } else if (kind == logs::LogKind::Usd) {
-    const logs::UsdLog log = logs::read_usd(a.file);
-    if (a.json) fmt::print("{}\n", logs::usd_info_json(log).dump(2));
-    else fmt::print("{}", logs::format_usd_info(log));
-  } else if (kind == logs::LogKind::DataFlash) {
-    const logs::DataFlashLog log = logs::read_dataflash(a.file);
-    if (a.json) fmt::print("{}\n", logs::dataflash_info_json(log).dump(2));
-    else fmt::print("{}", logs::format_dataflash_info(log, a.verbose));
-  } else {
-    throw InputError(fmt::format("{}: byte 0: not an autopilot log (expected the ULog magic \"ULog\", the "
-                                 "Crazyflie uSD byte 0xBC or ArduPilot's DataFlash header 0xA3 0x95)",
-                                 a.file));
-  }
+  if (a.json) fmt::print("{}\n", log_info_json(a.file, a.allow_truncated).dump(2));
+  else fmt::print("{}", log_info_text(a.file, a.verbose, a.allow_truncated));
 }
 
 }  // namespace

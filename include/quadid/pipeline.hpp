@@ -261,4 +261,11 @@ LogValidation validate_log(const FlightLog& log, const ValidateRequest& req,
 /// The JSON of `quadid validate --json` ("log": log_name).
 nlohmann::json to_json(const LogValidation& v, const std::string& log_name);
 
+/// `quadid log-info PATH` (docs/log-info.md): the listing of a PX4 ULog, a
+/// Crazyflie uSD log or an ArduPilot DataFlash log, the kind from the file's
+/// first bytes; an InputError naming byte 0 for anything else.
+/// allow_truncated: a ULog cut mid-message keeps the messages before it.
+nlohmann::json log_info_json(const std::string& path, bool allow_truncated = false);
+std::string log_info_text(const std::string& path, bool verbose, bool allow_truncated = false);
+
 }  // namespace quadid

@@ -48,6 +48,7 @@ __all__ = [
     "design",
     "check_trajectory",
     "validate",
+    "log_info",
     "option_names",
     "option_specs",
 ]
@@ -222,6 +223,22 @@ def check_trajectory(trajectory="table2", **options) -> dict:
     """`quadid check-trajectory TRAJECTORY --json [options]` (no_precision=True: without the
     predicted precision)."""
     return _quadid.check_trajectory(_path(trajectory), _options("check-trajectory", options))
+
+
+def log_info(log=None, *, allow_truncated: bool = False, **kwargs) -> dict:
+    """`quadid log-info LOG --json` as Python objects: what an autopilot log holds.
+
+    LOG is a PX4 ULog, a Crazyflie uSD log or an ArduPilot DataFlash .bin (the
+    kind from the file's first bytes). The result is the command's JSON
+    ("kind": "ulog", "usd" or "dataflash"; for DataFlash "messages" with each
+    type's count, instances, rate and columns with units, and "parameters"
+    with each one's last value); arrays of numbers as numpy arrays.
+    `allow_truncated`: a ULog cut mid-message keeps the messages before it.
+    """
+    log = _log_argument(log, kwargs, "log_info")
+    if kwargs:
+        raise TypeError(f"log_info: unexpected keyword arguments {', '.join(kwargs)}")
+    return _quadid.log_info(_path(log), bool(allow_truncated))
 
 
 def validate(log=None, params=None, **options) -> dict:

@@ -350,6 +350,10 @@ PYBIND11_MODULE(_quadid, m) {
   m.def("validate", &validate, py::arg("log"), py::arg("options"), py::arg("warn"));
   m.def("option_specs", &option_specs, py::arg("command"));
   m.def(
+      "log_info",
+      [](const std::string& path, bool allow_truncated) { return to_py(quadid::log_info_json(path, allow_truncated)); },
+      py::arg("path"), py::arg("allow_truncated"));
+  m.def(
       "check_identify_options",
       [](const py::dict& opts) { (void)quadid::identify_options_from_json(options_json(opts)); },
       py::arg("options"), "raises ValueError for an option identify would reject");

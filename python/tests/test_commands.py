@@ -106,3 +106,33 @@ def test_validate_with_a_vehicle_judges_the_sets_with_their_terms(tmp_path):
     assert res["prediction_error"]["real_flight_terms"] is True
     assert "thrust_scale" in res["sets"]["LS"]["extra"]
     assert_same(res, cli, 1e-12)
+
+
+def test_log_info_equals_the_command_line(tmp_path):
+    """quadid.log_info on an ArduPilot DataFlash log and a PX4 ULog: the JSON of
+    `quadid log-info --json` (the real logs in ../shared; skipped without them,
+    as the C++ tests do)."""
+    import gzip
+    import os
+
+    shared = os.path.join(os.path.dirname(__file__), "..", "..", "..", "shared", "data")
+    gz = os.path.join(shared, "ardupilot-real", "2023-07-06_10-12-18.bin.gz")
+    ulg = os.path.join(shared, "px4-ulog", "sample.ulg")
+    if not os.path.exists(gz):
+        if os.environ.get("QUADID_REQUIRE_SHARED") == "1":
+            pytest.fail(f"{gz} absent, and QUADID_REQUIRE_SHARED=1 says the shared data is here")
+        pytest.skip(f"{gz} absent")
+    binf = tmp_path / "flight.bin"
+    binf.write_bytes(gzip.decompress(open(gz, "rb").read()))
+    for path in (binf, ulg):
+        got = quadid.log_info(path)
+        want = cli_json("log-info", str(path))
+        assert_same(got, want, where=str(path))
+    got = quadid.log_info(binf)
+    assert got["kind"] == "dataflash"
+    assert got["messages"]["IMU"]["instances"] == 3
+    assert abs(got["parameters"]["MOT_THST_HOVER"] - 0.19679) < 1e-5  # the independent listing's value
+    with pytest.raises(ValueError, match="not an autopilot log"):
+        bad = tmp_path / "x.txt"
+        bad.write_text("hello")
+        quadid.log_info(bad)
