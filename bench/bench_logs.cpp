@@ -6,6 +6,8 @@
 #include <benchmark/benchmark.h>
 
 #include <cstdlib>
+#include <fstream>
+#include <unistd.h>
 #include <filesystem>
 #include <string>
 
@@ -44,5 +46,49 @@ static void BM_UsdImport(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_UsdImport)->Unit(benchmark::kMillisecond);
+
+// ArduPilot DataFlash (issue 38): `quadid log-info` on a 50 MB .bin under
+// 200 ms, whole process. The file is written once by the test writer: an
+// ArduCopter-like mix (IMU x3 instances, ATT, RATE, RCOU, BAT, PARM) of ~50 MB.
+static const fs::path& dataflash_50mb() {
+  static const fs::path path = [] {
+    const fs::path p = fs::temp_directory_path() / ("quadid_bench_" + std::to_string(::getpid()) + ".bin");
+    logs::DataFlashWriter w;
+    w.define(162, "IMU", "QBffffff", "TimeUS,I,GyrX,GyrY,GyrZ,AccX,AccY,AccZ",
+             {"s", "instance", "rad/s", "rad/s", "rad/s", "m/s/s", "m/s/s", "m/s/s"});
+    w.define(68, "ATT", "QccCfcC", "TimeUS,Roll,Pitch,Yaw,ErrRP,DesRoll,DesYaw", {"s", "deg", "deg", "degheading", "deg", "deg", "degheading"});
+    w.define(47, "RCOU", "QHHHHHHHH", "TimeUS,C1,C2,C3,C4,C5,C6,C7,C8");
+    w.define(83, "BAT", "QBfffff", "TimeUS,Instance,Volt,VoltR,Curr,CurrTot,EnrgTot", {"s", "instance", "V", "V", "A", "Ah", "W.h"});
+    for (int k = 0; k < 1000; ++k) w.parameter(0, "PARAM_" + std::to_string(k), static_cast<float>(k));
+    for (std::uint64_t t = 0; w.bytes().size() < 50'000'000; t += 2500) {  // 400 Hz
+      for (int i = 0; i < 3; ++i) w.record(162, {double(t), double(i), 0.1, 0.2, 0.3, 0.0, 0.0, -9.81});
+      w.record(68, {double(t), 1.5, -2.25, 181.5, 0.1, 1.4, 180.0});
+      w.record(47, {double(t), 1500, 1510, 1490, 1505, 0, 0, 0, 0});
+      if (t % 100000 == 0) w.record(83, {double(t), 0, 16.2, 16.4, 12.5, 1.2, 70.0});
+    }
+    std::ofstream(p, std::ios::binary) << w.bytes();
+    return p;
+  }();
+  return path;
+}
+
+static void BM_DataFlashReadAndList50MB(benchmark::State& state) {
+  const fs::path& p = dataflash_50mb();
+  for (auto _ : state) {
+    const auto log = logs::read_dataflash(p);
+    benchmark::DoNotOptimize(logs::format_dataflash_info(log, false).size());
+  }
+  state.SetBytesProcessed(state.iterations() * static_cast<std::int64_t>(fs::file_size(p)));
+}
+BENCHMARK(BM_DataFlashReadAndList50MB)->Unit(benchmark::kMillisecond);
+
+static void BM_DataFlashLogInfoWholeProcess50MB(benchmark::State& state) {
+  const std::string cmd = std::string("\"") + QUADID_EXE + "\" log-info \"" + dataflash_50mb().string() + "\" > /dev/null";
+  for (auto _ : state)
+    if (std::system(cmd.c_str()) != 0) return state.SkipWithError("quadid log-info failed");
+  std::error_code ec;
+  fs::remove(dataflash_50mb(), ec);  // the last benchmark that reads it
+}
+BENCHMARK(BM_DataFlashLogInfoWholeProcess50MB)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(10);
 
 BENCHMARK_MAIN();
