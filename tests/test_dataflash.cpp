@@ -6,6 +6,7 @@
 #include "quadid/logs.hpp"
 
 #include "cli_fixture.hpp"
+#include "mutations.hpp"
 #include "shared_data.hpp"
 
 #include <fmt/format.h>
@@ -171,30 +172,14 @@ TEST(DataFlash, MutatedFilesEndInSuccessOrInputError) {
   DataFlashWriter w;
   const std::string good = rich_log(w);
   int errors = 0, oks = 0;
-  const auto run = [&](const std::string& b) {
-    try {
-      const DataFlashLog log = parse_dataflash(bytes_of(b), "m");
-      (void)format_dataflash_info(log, true);
-      (void)dataflash_info_json(log).dump();  // names from corrupt bytes are made printable
-      ++oks;
-    } catch (const InputError&) {
-      ++errors;
-    }
-  };
-  for (std::size_t n = 0; n < good.size(); n += 7) run(good.substr(0, n));
-  std::mt19937 rng(4242);
-  std::uniform_int_distribution<std::size_t> pos(0, good.size() - 2);
-  for (int k = 0; k < 600; ++k) {
-    std::string b = good;
-    b[pos(rng)] ^= static_cast<char>(1u << (rng() % 8));
-    run(b);
-  }
-  for (int k = 0; k < 400; ++k) {
-    std::string b = good;
-    const auto v = static_cast<std::uint16_t>(rng());
-    std::memcpy(&b[pos(rng)], &v, 2);
-    run(b);
-  }
+  quadid::testing::mutate_and_parse(
+      good,
+      [](const std::string& b) {
+        const DataFlashLog log = parse_dataflash(bytes_of(b), "m");
+        (void)format_dataflash_info(log, true);
+        (void)dataflash_info_json(log).dump();  // names from corrupt bytes are made printable
+      },
+      4242, &errors, &oks, 600, 400);
   EXPECT_GT(errors, 0);  // cut before the first FMT: not a log
   EXPECT_GT(oks, 900);
 }

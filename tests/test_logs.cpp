@@ -7,6 +7,7 @@
 #include "quadid/pipeline.hpp"
 
 #include "cli_fixture.hpp"
+#include "mutations.hpp"
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
@@ -782,35 +783,7 @@ TEST(Import, LoadAnyLogRecognisesTheKindByItsFirstBytes) {
 
 // --- Robustness: deterministic mutations ----------------------------------------
 
-// Every mutated file must parse or end in an InputError: no crash, no hang, no
-// other exception. Mutations (seeded): truncation at every 7th byte, single bit
-// flips, 16-bit length fields overwritten with large values.
-template <class Parse>
-void mutate_and_parse(const std::string& good, Parse parse, std::uint32_t seed, int* errors, int* oks) {
-  auto run = [&](const std::string& b) {
-    try {
-      parse(b);
-      ++*oks;
-    } catch (const InputError&) {
-      ++*errors;
-    }
-  };
-  for (std::size_t n = 0; n < good.size(); n += 7) run(good.substr(0, n));
-  std::mt19937 rng(seed);
-  std::uniform_int_distribution<std::size_t> pos(0, good.size() - 1);
-  for (int k = 0; k < 400; ++k) {
-    std::string b = good;
-    b[pos(rng)] ^= static_cast<char>(1u << (rng() % 8));
-    run(b);
-  }
-  for (int k = 0; k < 300; ++k) {
-    std::string b = good;
-    const std::size_t p = pos(rng) % (good.size() - 1);
-    const std::uint16_t v = static_cast<std::uint16_t>(rng());
-    std::memcpy(&b[p], &v, 2);
-    run(b);
-  }
-}
+using quadid::testing::mutate_and_parse;  // mutations.hpp
 
 TEST(Robustness, MutatedULogFilesEndInInputErrorOrSuccess) {
   int errors = 0, oks = 0;

@@ -68,6 +68,14 @@ class Cursor {
   std::size_t pos_ = 0;
 };
 
+/// Appends v's bytes (little endian, the host's order) to s: the writers' one packer.
+template <class T>
+void put(std::string& s, T v) {
+  char b[sizeof(T)];
+  std::memcpy(b, &v, sizeof(T));
+  s.append(b, sizeof(T));
+}
+
 inline std::string as_string(std::span<const std::uint8_t> s) {
   return std::string(reinterpret_cast<const char*>(s.data()), s.size());
 }

@@ -3,6 +3,8 @@
 // their units, the parameters' last values.
 #include "quadid/logs.hpp"
 
+#include "quadid/core/json.hpp"
+
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 #include <nlohmann/json.hpp>
@@ -73,8 +75,6 @@ std::map<std::string, double> last_parameters(const DataFlashLog& log) {
   for (const auto& par : log.parameters) p[par.name] = par.value;
   return p;
 }
-
-nlohmann::json finite_or_null(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
 
 }  // namespace
 

@@ -2,6 +2,8 @@
 // ArduPilot writes them (LogStructure.h), data records packed from numbers.
 #include "quadid/logs.hpp"
 
+#include "bytes.hpp"
+
 #include <fmt/format.h>
 
 #include <cmath>
@@ -11,6 +13,8 @@
 namespace quadid::logs {
 namespace {
 
+using detail::put;
+
 // Type ids as ArduPilot numbers them (LogMessages in LogStructure.h); the
 // reader finds them by name, not by these numbers.
 constexpr std::uint8_t kParm = 64, kUnit = 177, kFmtu = 193;
@@ -19,13 +23,6 @@ void put_text(std::string& out, std::string_view s, std::size_t n) {
   std::string field(n, '\0');
   std::memcpy(field.data(), s.data(), std::min(n, s.size()));
   out += field;
-}
-
-template <class T>
-void put(std::string& out, T v) {
-  char b[sizeof(T)];
-  std::memcpy(b, &v, sizeof(T));
-  out.append(b, sizeof(T));
 }
 
 template <class T>

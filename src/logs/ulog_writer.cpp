@@ -2,6 +2,8 @@
 // files from data with it, and simulated flights can be written as PX4 logs.
 #include "quadid/logs.hpp"
 
+#include "bytes.hpp"
+
 #include "frames.hpp"
 
 #include <fmt/format.h>
@@ -12,14 +14,7 @@
 #include <stdexcept>
 
 namespace quadid::logs {
-namespace {
-template <class T>
-void put(std::string& s, T v) {
-  char b[sizeof(T)];
-  std::memcpy(b, &v, sizeof(T));
-  s.append(b, sizeof(T));
-}
-}  // namespace
+using detail::put;
 
 ULogWriter::ULogWriter(std::uint64_t start_timestamp_us) {
   out_.append("ULog\x01\x12\x35", 7);
