@@ -414,7 +414,9 @@ class IdentifyRun {
       reg.for_each([&](Eigen::Index, const Regressor4x7& G, const Vec4& Y) { infl.add(G, Y); });
     }
     attach_uncertainty(sol, infl.finish(opt_.uncertainty), prior_, opt_.ls);
-    influences_[filtered ? 1 : 0] = {infl.series(), static_cast<long>(reg.begin())};
+    // Kept for the disagreement's noise (the real-flight regression replaces
+    // these sets and adds the whole disagreement: nothing to keep then).
+    if (!opt_.extended()) influences_[filtered ? 1 : 0] = {infl.series(), static_cast<long>(reg.begin())};
     // The physically consistent set: the closest consistent Theta in the LS metric.
     pc = closest_physical(sol, prior_, opt_.physical);
   }
