@@ -131,6 +131,9 @@ struct ULog {
   std::size_t sync_count = 0;
   std::size_t unknown_messages = 0;  // messages of unknown type, skipped
   std::vector<ULogTopic> topics;     // sorted by name + multi id (pyulog's order)
+  /// A cut last message (read with allow_truncated): where it began and the
+  /// bytes left after it began; 0, 0 for a complete file.
+  std::size_t truncated_at = 0, truncated_bytes = 0;
 
   const ULogTopic* find_topic(std::string_view name, int multi_id = 0) const;
   /// The current value of a parameter: the last change, else the initial value.
@@ -270,6 +273,10 @@ struct UsdLog {
   int version = 2;
   std::vector<UsdEvent> events;
   std::uint32_t crc = 0;  // stored = computed (checked)
+  /// Read with allow_truncated from a file whose CRC-32 does not match (a
+  /// card pulled or power lost mid-write): the records up to the first one
+  /// cut or unreadable, which begins at truncated_at (0: a complete file).
+  std::size_t truncated_at = 0, truncated_bytes = 0;
 
   const UsdEvent* find_event(std::string_view name) const;
 };
@@ -277,8 +284,12 @@ struct UsdLog {
 /// CRC-32 as zlib's crc32 (polynomial 0xEDB88320, reflected, init and final xor ~0).
 std::uint32_t crc32(std::span<const std::uint8_t> bytes, std::uint32_t crc = 0);
 bool is_usd(std::span<const std::uint8_t> head);  // first byte 0xBC
-UsdLog parse_usd(std::span<const std::uint8_t> bytes, const std::string& source);
-UsdLog read_usd(const std::filesystem::path& path);
+struct UsdReadOptions {
+  /// Accept a file without a matching CRC-32 (cut mid-write): its complete records are kept.
+  bool allow_truncated = false;
+};
+UsdLog parse_usd(std::span<const std::uint8_t> bytes, const std::string& source, const UsdReadOptions& opt = {});
+UsdLog read_usd(const std::filesystem::path& path, const UsdReadOptions& opt = {});
 
 // ============================================================================
 // ArduPilot DataFlash (.bin, docs/ardupilot.md): self-describing records, each
@@ -381,6 +392,76 @@ class DataFlashWriter {
 };
 
 // ============================================================================
+// ArduPilot's copter conventions (docs/ardupilot.md), read from a DataFlash log
+// ============================================================================
+
+/// The output channel of each motor: SERVOn_FUNCTION = 32 + k makes channel n
+/// motor k (Motor1 = 33 .. Motor8 = 40; SRV_Channel.h). Without any such
+/// parameter, channel k is motor k (ArduPilot's default layout) and
+/// `from_parameters` is false.
+struct ArduPilotMotors {
+  std::vector<int> channel;  // [k - 1] = output channel (1-based, RCOU.Cn) of motor k
+  bool from_parameters = false;
+};
+ArduPilotMotors ardupilot_motors(const DataFlashLog& log);
+
+/// ArduPilot's thrust model of a motor output (AP_MotorsMulticopter): the
+/// pulse width p maps to the actuator a = (p - MOT_PWM_MIN) / (MOT_PWM_MAX -
+/// MOT_PWM_MIN), the throttle t = (a - MOT_SPIN_MIN) / (MOT_SPIN_MAX -
+/// MOT_SPIN_MIN) clamped to 0..1, the battery-scaled throttle r = t V / V_ref,
+/// and the thrust as a fraction of full thrust at V_ref, c = (1 - e) r + e r^2,
+/// e = MOT_THST_EXPO. `c` is what quadid's rotor input "command" takes.
+struct ArduPilotThrustCurve {
+  double pwm_min = 1000.0, pwm_max = 2000.0;  // us, MOT_PWM_MIN/MAX (0 there, ArduCopter <= 4.2: RC3_MIN/MAX)
+  double spin_min = 0.15, spin_max = 0.95;    // MOT_SPIN_MIN/MAX (ArduPilot's defaults)
+  double expo = 0.65;                         // MOT_THST_EXPO
+  /// The parameters the log holds, ArduPilot's defaults for those it does not
+  /// (named in `defaulted`). InputError naming the parameter when out of its range.
+  static ArduPilotThrustCurve from_log(const DataFlashLog& log, std::vector<std::string>* defaulted = nullptr);
+  /// c of a pulse width (us) at the voltage ratio V / V_ref; 0 below the spin range.
+  double thrust_of_pwm(double pwm, double voltage_ratio = 1.0) const;
+  /// The pulse width of thrust fraction c (0..1) at voltage ratio V / V_ref: the inverse above the spin range.
+  double pwm_of_thrust(double c, double voltage_ratio = 1.0) const;
+};
+
+/// A quadrotor's layout from FRAME_CLASS = 1 (quad) and FRAME_TYPE (0 plus,
+/// 1 X; AP_MotorsMatrix): per motor k, its arm's direction (degrees from
+/// forward, positive towards the right, as ArduPilot gives them) and its spin
+/// (-1 counter-clockwise, +1 clockwise seen from above, as quadid's spin).
+/// Empty when the log has no FRAME_CLASS / FRAME_TYPE or another frame.
+struct ArduPilotFrame {
+  std::string name;                // "quad X", "quad +"
+  std::vector<double> angle_deg;   // per motor, from forward, clockwise seen from above
+  std::vector<int> spin;           // per motor
+};
+std::optional<ArduPilotFrame> ardupilot_frame(const DataFlashLog& log);
+
+/// A flight log (docs/file-formats.md columns, z up / FLU) as an ArduCopter
+/// DataFlash log: IMU (GyrX..Z rad/s and AccX..Z m/s^2, body FRD; the specific
+/// force from ax_b ay_b az_b when the log has them, else from the motion), ATT
+/// (Roll Pitch Yaw, centidegrees, FRD -> NED), XKF1 (PN PE PD, VN VE VD: NED),
+/// RCOU (C1..C14 pulse widths, from `command_columns` through `curve`, motor k
+/// on channel k), ESC (RPM per instance, from `rpm_columns`), BAT (Volt), and
+/// the PARM records of the curve, FRAME_CLASS/TYPE, SERVOn_FUNCTION and
+/// LOG_BITMASK. Every record at every row of the log (full-rate logging).
+struct ArduPilotWriteOptions {
+  std::vector<std::string> command_columns;  // normalised thrust commands c (0..1) in motor order
+  std::vector<std::string> rpm_columns;      // rotor speeds, rev/min, in motor order
+  ArduPilotThrustCurve curve;
+  double battery_voltage = 16.8;  // V, BAT.Volt and MOT_BAT_VOLT_MAX (no compensation sag)
+  int frame_type = 1;             // FRAME_TYPE: 1 X, 0 plus
+  /// LOG_BITMASK as written: ArduCopter's default 176126 with bits 0 ATTITUDE_FAST and 18 IMU_FAST.
+  std::int32_t log_bitmask = 438271;
+  /// Each message at every n-th row of the flight log (1 = every row, full
+  /// rate). ArduCopter's default logging of a 400 Hz loop: ATT, XKF1, RCOU
+  /// and BAT at 10 Hz, IMU at 25 Hz; with ATTITUDE_FAST and IMU_FAST: ATT and
+  /// IMU at the loop rate, XKF1 at 25 Hz, RCOU still 10 Hz.
+  int every_imu = 1, every_att = 1, every_ekf = 1, every_rcou = 1, every_esc = 1, every_bat = 1;
+  std::uint64_t start_time_us = 1'000'000;
+};
+std::string ardupilot_log_from_flight_log(const FlightLog& log, const ArduPilotWriteOptions& opt = {});
+
+// ============================================================================
 // What a log holds (quadid log-info)
 // ============================================================================
 
@@ -462,12 +543,16 @@ struct ImportReport {
   };
   std::vector<Gap> gaps;
   std::vector<std::string> warnings;
+  /// The file ended mid-record: where, in one sentence ("" = complete); also among the warnings.
+  std::string truncated;
   /// Each imported column's source: its topic (or event) and that topic's
   /// median sample rate, Hz, before resampling (a topic logged at 10 Hz holds
   /// nothing above 5 Hz, whatever the grid's rate).
   struct Source {
     std::string topic;
     double rate_hz = 0.0;
+    /// How to log this source faster, in the autopilot's own terms ("" = PX4's SDLOG_PROFILE).
+    std::string faster = {};
   };
   std::map<std::string, Source> column_sources;
   std::string summary() const;  // human-readable, one line per item
@@ -475,6 +560,15 @@ struct ImportReport {
 
 FlightLog import_ulog(const ULog& log, const ImportOptions& opt = {}, ImportReport* report = nullptr);
 FlightLog import_usd(const UsdLog& log, const ImportOptions& opt = {}, ImportReport* report = nullptr);
+/// An ArduCopter log: p q r and ax_b ay_b az_b from IMU (instance 0; body FRD
+/// -> FLU), phi theta psi from ATT, or ANG when it has more records (4.6's
+/// loop-rate attitude; degrees, FRD -> NED), x y z from XKF1
+/// (core 0; NED -> z up) or else POS (latitude, longitude, altitude about the
+/// first fix), and per motor k (ardupilot_motors): motorK.pwm (RCOU, us),
+/// motorK.command (its thrust fraction, ArduPilotThrustCurve, scaled by the
+/// battery's voltage BAT.Volt against MOT_BAT_VOLT_MAX or its median),
+/// motorK.rpm (ESC telemetry of motor k's channel), battery.voltage (V).
+FlightLog import_dataflash(const DataFlashLog& log, const ImportOptions& opt = {}, ImportReport* report = nullptr);
 
 enum class LogKind { Ulog, Usd, DataFlash, Csv };
 /// The kind from the first bytes: ULog magic, 0xBC, 0xA3 0x95, else CSV.
@@ -484,6 +578,10 @@ struct LoadOptions {
   CsvReadOptions csv;      // for a CSV log
   ImportOptions import;    // for an autopilot log
   ULogReadOptions ulog;
+  /// A ULog or uSD file cut mid-record (a crash, a power loss) is read to its
+  /// last complete record, with a warning naming the byte (ImportReport::truncated);
+  /// false: an InputError. (ulog.allow_truncated also allows it.)
+  bool allow_truncated = true;
   /// Imported logs: InputError naming the missing `csv.required` columns
   /// (an import has no wrench columns; a rotor model adds them).
   bool check_required = true;

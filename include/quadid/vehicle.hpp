@@ -64,6 +64,10 @@ struct RotorModel {
   /// {1000, 2000} for PWM in microseconds or {48, 2047} for DShot. A logged value from 0 up to
   /// the low end is a stopped motor (command 0: a PWM output's disarmed value).
   std::array<double, 2> command_range = {0.0, 1.0};
+  /// The vehicle file gave neither kf nor thrust_max (an ArduPilot log carries
+  /// no thrust coefficient): identify calibrates it from the weighed mass
+  /// (--known-mass) on the log's hover thrust, and the thrust scale refines it.
+  bool thrust_coefficient_unknown = false;
 
   int count() const { return static_cast<int>(columns.size()); }
   /// Throws std::invalid_argument naming the bad key (rotors.<key>).
@@ -157,6 +161,8 @@ struct Vehicle {
   VehicleController controller;
   VehicleSensors sensors;
   VehicleFlightLimits limits;
+  /// The file gave nominal.m only: Ixx, Iyy, Izz are a rough guess from the rotor positions.
+  bool nominal_moments_guessed = false;
 
   /// Throws std::invalid_argument naming the bad key.
   void validate() const;

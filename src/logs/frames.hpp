@@ -7,6 +7,7 @@
 
 #include <Eigen/Dense>
 
+#include <cmath>
 #include <vector>
 
 namespace quadid::logs::detail {
@@ -15,6 +16,15 @@ namespace quadid::logs::detail {
 inline Eigen::Vector3d frd_to_flu(double x, double y, double z) { return Eigen::Vector3d(x, -y, -z); }
 /// A vector given in FLU (or z up) as FRD (or NED): (x, -y, -z).
 inline Eigen::Vector3d flu_to_frd(const Eigen::Vector3d& v) { return Eigen::Vector3d(v.x(), -v.y(), -v.z()); }
+
+/// The attitude quaternion (scalar first) of ZYX Euler angles (roll phi,
+/// pitch theta, yaw psi; rad): body to world in the angles' own frames.
+inline Eigen::Vector4d quaternion_from_euler_zyx(double phi, double theta, double psi) {
+  const double cr = std::cos(phi / 2), sr = std::sin(phi / 2), cp = std::cos(theta / 2), sp = std::sin(theta / 2),
+               cy = std::cos(psi / 2), sy = std::sin(psi / 2);
+  return {cr * cp * cy + sr * sp * sy, sr * cp * cy - cr * sp * sy, cr * sp * cy + sr * cp * sy,
+          cr * cp * sy - sr * sp * cy};
+}
 
 /// The same as signs per field of a logged 3-vector, for the importer's series.
 inline const std::vector<double> kFrdToFluSigns = {1, -1, -1};

@@ -12,6 +12,7 @@
 
 #include "bytes.hpp"
 #include "frames.hpp"
+#include "import_series.hpp"
 
 #include <fmt/format.h>
 
@@ -24,18 +25,7 @@
 namespace quadid::logs {
 namespace {
 
-// One time series: columns sampled at t (s, log clock, strictly increasing).
-struct Series {
-  std::string source;  // e.g. "vehicle_attitude"
-  std::vector<double> t;
-  std::vector<std::string> names;  // output column names
-  Eigen::MatrixXd x;               // t.size() x names.size()
-  bool quaternion = false;         // 4 columns q0..q3 (scalar first)
-  /// Resampled values kept within each column's range of samples: the
-  /// anti-aliasing filter rings past a step (a motor command at its limit 1
-  /// overshoots to ~1.006), which a rotor model would refuse as out of range.
-  bool bounded = false;
-};
+using detail::Series;
 
 // Keeps strictly increasing times (a repeated or backward time stamp is
 // dropped); NaN values become 0 and are counted.
@@ -220,11 +210,11 @@ void resample_series(std::vector<Series>& series, const Eigen::VectorXd& grid, c
     if (s.quaternion) {
       y = euler_zyx_series(y);  // psi unwrapped: continuous past +-pi
       out.columns.insert(out.columns.end(), {"phi", "theta", "psi"});
-      for (const char* c : {"phi", "theta", "psi"}) rep.column_sources[c] = {s.source, fs};
+      for (const char* c : {"phi", "theta", "psi"}) rep.column_sources[c] = {s.source, fs, s.faster};
       rep.sources.push_back(fmt::format("phi theta psi <- {} ({})", s.source, how));
     } else {
       out.columns.insert(out.columns.end(), s.names.begin(), s.names.end());
-      for (const auto& c : s.names) rep.column_sources[c] = {s.source, fs};
+      for (const auto& c : s.names) rep.column_sources[c] = {s.source, fs, s.faster};
       rep.sources.push_back(fmt::format("{} <- {} ({})", fmt::join(s.names, " "), s.source, how));
     }
     blocks.push_back(std::move(y));
@@ -260,32 +250,6 @@ void join_blocks(const std::vector<Eigen::MatrixXd>& blocks, const std::vector<S
   out.data = std::move(sorted);
 }
 
-FlightLog assemble(std::vector<Series> series, const ImportOptions& opt, ImportReport& rep,
-                   const std::string& kind) {
-  rep.kind = kind;
-  rep.rate_hz = opt.rate_hz;
-  prepare_series(series, rep);
-  const auto [best_a, best_b] = longest_span(series, opt, rep);
-  const auto rows = static_cast<Eigen::Index>(std::floor((best_b - best_a) * opt.rate_hz + 1e-9)) + 1;
-  if (rows < 10)
-    throw InputError(fmt::format("only {} samples at {:g} Hz between the gaps ({:.3f}..{:.3f} s)", rows, opt.rate_hz,
-                                 best_a, best_b));
-  Eigen::VectorXd grid(rows);
-  for (Eigen::Index i = 0; i < rows; ++i) grid[i] = best_a + static_cast<double>(i) / opt.rate_hz;
-  rep.t0 = best_a;
-  rep.duration = static_cast<double>(rows - 1) / opt.rate_hz;
-
-  FlightLog out;
-  out.columns = {"t"};
-  std::vector<Eigen::MatrixXd> blocks = {grid.array() - best_a};
-  if (rows > 10'000'000)
-    throw InputError(fmt::format("the topics span {:.0f} s: more than 10^7 samples at {:g} Hz (corrupt time stamps?)",
-                                 best_b - best_a, opt.rate_hz));
-  resample_series(series, grid, opt, rep, out, blocks);
-  join_blocks(blocks, series, rows, out);
-  return out;
-}
-
 // Gaps in a few lines: those that split the log one by one, the bridged ones
 // per topic as a count and the longest.
 std::vector<std::string> gap_lines(const ImportReport& rep) {
@@ -312,7 +276,37 @@ std::vector<std::string> gap_lines(const ImportReport& rep) {
   return lines;
 }
 
-void comments(FlightLog& log, const ImportReport& rep, const std::string& what) {
+}  // namespace
+
+namespace detail {
+
+FlightLog assemble(std::vector<Series> series, const ImportOptions& opt, ImportReport& rep,
+                   const std::string& kind) {
+  rep.kind = kind;
+  rep.rate_hz = opt.rate_hz;
+  prepare_series(series, rep);
+  const auto [best_a, best_b] = longest_span(series, opt, rep);
+  const auto rows = static_cast<Eigen::Index>(std::floor((best_b - best_a) * opt.rate_hz + 1e-9)) + 1;
+  if (rows < 10)
+    throw InputError(fmt::format("only {} samples at {:g} Hz between the gaps ({:.3f}..{:.3f} s)", rows, opt.rate_hz,
+                                 best_a, best_b));
+  Eigen::VectorXd grid(rows);
+  for (Eigen::Index i = 0; i < rows; ++i) grid[i] = best_a + static_cast<double>(i) / opt.rate_hz;
+  rep.t0 = best_a;
+  rep.duration = static_cast<double>(rows - 1) / opt.rate_hz;
+
+  FlightLog out;
+  out.columns = {"t"};
+  std::vector<Eigen::MatrixXd> blocks = {grid.array() - best_a};
+  if (rows > 10'000'000)
+    throw InputError(fmt::format("the topics span {:.0f} s: more than 10^7 samples at {:g} Hz (corrupt time stamps?)",
+                                 best_b - best_a, opt.rate_hz));
+  resample_series(series, grid, opt, rep, out, blocks);
+  join_blocks(blocks, series, rows, out);
+  return out;
+}
+
+void import_comments(FlightLog& log, const ImportReport& rep, const std::string& what) {
   log.comments.push_back(fmt::format(" imported by quadid from {} ({}); t = 0 at {:.6f} s of the log clock", what,
                                      rep.kind, rep.t0));
   log.comments.push_back(fmt::format(" grid {:g} Hz; no wrench columns (Fz tau_*): computed from the rotor signals "
@@ -323,7 +317,10 @@ void comments(FlightLog& log, const ImportReport& rep, const std::string& what) 
   for (const auto& w : rep.warnings) log.comments.push_back(" warning: " + w);
 }
 
-}  // namespace
+}  // namespace detail
+
+using detail::assemble;
+using detail::import_comments;
 
 void ImportOptions::validate() const {
   if (!(rate_hz > 0.0 && rate_hz <= 10000.0))
@@ -417,7 +414,7 @@ FlightLog import_ulog(const ULog& log, const ImportOptions& opt, ImportReport* r
     }
   }
   FlightLog out = assemble(std::move(series), opt, rep, "ulog");
-  comments(out, rep, "a PX4 ULog");
+  import_comments(out, rep, "a PX4 ULog");
   if (report) *report = rep;
   return out;
 }
@@ -468,7 +465,7 @@ FlightLog import_usd(const UsdLog& log, const ImportOptions& opt, ImportReport* 
   if (fixed->find("acc.x") >= 0)  // specific force, g -> m/s^2
     series.push_back(series_of(*fixed, {"acc.x", "acc.y", "acc.z"}, {"ax_b", "ay_b", "az_b"}, opt.g));
   FlightLog out = assemble(std::move(series), opt, rep, "usd");
-  comments(out, rep, "a Crazyflie uSD log");
+  import_comments(out, rep, "a Crazyflie uSD log");
   if (report) *report = rep;
   return out;
 }
@@ -500,13 +497,43 @@ std::string motors_topic_named(const std::vector<std::string>& names) {
   return topic.empty() ? "auto" : topic;
 }
 
+namespace {
+
+// The file cut mid-record, in one sentence, first among the warnings.
+void note_truncation(ImportReport& rep, std::size_t at, std::size_t bytes, std::size_t size) {
+  if (!bytes) return;
+  rep.truncated = fmt::format("the file ends mid-record at byte {} of {} (a crash or power loss cut it): every "
+                              "complete record before it is read",
+                              at, size);
+  rep.warnings.insert(rep.warnings.begin(), rep.truncated);
+}
+
+FlightLog import_log_of_kind(const std::filesystem::path& path, LogKind kind, const LoadOptions& opt, ImportReport& rep) {
+  if (kind == LogKind::Ulog) {
+    ULogReadOptions ro = opt.ulog;
+    ro.allow_truncated = ro.allow_truncated || opt.allow_truncated;
+    const ULog u = read_ulog(path, ro);
+    FlightLog log = import_ulog(u, opt.import, &rep);
+    note_truncation(rep, u.truncated_at, u.truncated_bytes, std::filesystem::file_size(path));
+    return log;
+  }
+  if (kind == LogKind::Usd) {
+    const UsdLog u = read_usd(path, {opt.allow_truncated || opt.ulog.allow_truncated});
+    FlightLog log = import_usd(u, opt.import, &rep);
+    note_truncation(rep, u.truncated_at, u.truncated_bytes, std::filesystem::file_size(path));
+    return log;
+  }
+  const DataFlashLog d = read_dataflash(path);
+  FlightLog log = import_dataflash(d, opt.import, &rep);
+  note_truncation(rep, d.trailing_offset, d.trailing_bytes, d.bytes);
+  return log;
+}
+
+}  // namespace
+
 FlightLog load_any_log(const std::filesystem::path& path, const LoadOptions& opt_in, ImportReport* report) {
   const LogKind kind = detect_log_kind(path);
   if (kind == LogKind::Csv) return read_flight_log(path, opt_in.csv);
-  if (kind == LogKind::DataFlash)
-    throw InputError(fmt::format("{}: an ArduPilot DataFlash log: quadid lists it (`quadid log-info {}`) but does "
-                                 "not import or identify DataFlash logs yet (docs/ardupilot.md)",
-                                 path.string(), path.string()));
   LoadOptions opt = opt_in;
   if (kind == LogKind::Ulog && opt.import.motors_topic == "auto") {
     // The rotor columns a vehicle names (directly or through --map) choose
@@ -522,14 +549,15 @@ FlightLog load_any_log(const std::filesystem::path& path, const LoadOptions& opt
     }
   }
   FlightLog log;
+  ImportReport rep;
   try {
-    log = kind == LogKind::Ulog ? import_ulog(read_ulog(path, opt.ulog), opt.import, report)
-                                : import_usd(read_usd(path), opt.import, report);
+    log = import_log_of_kind(path, kind, opt, rep);
   } catch (const InputError& e) {
     const std::string what = e.what();
     if (what.rfind(path.string(), 0) == 0) throw;
     throw InputError(fmt::format("{}: {}", path.string(), what));
   }
+  if (report) *report = rep;
   // --map canonical=name: the log's column `name` serves as `canonical`.
   // (map_columns, as the CSV reader; a name the log lacks is left to the
   // required-column check).

@@ -127,7 +127,11 @@ class Parser {
           offsets.erase(offsets.begin());
           continue;
         }
-        if (opt_.allow_truncated) break;
+        if (opt_.allow_truncated) {
+          log_.truncated_at = at;
+          log_.truncated_bytes = limit - at;
+          break;
+        }
         if (at + 3 > limit)
           c_.fail(at, fmt::format("expected a 3-byte message header, the file ends after {} bytes", limit - at));
         c_.fail(at, fmt::format("expected a '{}' message of {} bytes, the file ends after {}", printable(type), size,

@@ -176,10 +176,8 @@ std::string px4_ulog_from_flight_log(const FlightLog& log, const Px4UlogWriteOpt
     const Eigen::Vector3d p_ned = detail::flu_to_frd(Eigen::Vector3d(x[i], y[i], z[i]));
     w.data(pos, ULogPayload().put(ts).put(float(p_ned.x())).put(float(p_ned.y())).put(float(p_ned.z())).str());
     // ZYX Euler -> quaternion (body FLU -> world z up), then (q0, q1, -q2, -q3).
-    const double cr = std::cos(phi[i] / 2), sr = std::sin(phi[i] / 2), cp = std::cos(theta[i] / 2),
-                 sp = std::sin(theta[i] / 2), cy = std::cos(psi[i] / 2), sy = std::sin(psi[i] / 2);
-    const double q0 = cr * cp * cy + sr * sp * sy, q1 = sr * cp * cy - cr * sp * sy,
-                 q2 = cr * sp * cy + sr * cp * sy, q3 = cr * cp * sy - sr * sp * cy;
+    const Eigen::Vector4d qa = detail::quaternion_from_euler_zyx(phi[i], theta[i], psi[i]);
+    const double q0 = qa[0], q1 = qa[1], q2 = qa[2], q3 = qa[3];
     w.data(att, ULogPayload().put(ts).put(float(q0)).put(float(q1)).put(float(-q2)).put(float(-q3)).str());
     const Eigen::Vector3d rates_frd = detail::flu_to_frd(Eigen::Vector3d(p[i], q[i], r[i]));
     w.data(rat, ULogPayload().put(ts).put(float(rates_frd.x())).put(float(rates_frd.y())).put(float(rates_frd.z())).str());

@@ -94,23 +94,25 @@ const UsdEvent* UsdLog::find_event(std::string_view name) const {
   return nullptr;
 }
 
-UsdLog parse_usd(std::span<const std::uint8_t> bytes, const std::string& source) {
+UsdLog parse_usd(std::span<const std::uint8_t> bytes, const std::string& source, const UsdReadOptions& opt) {
   if (bytes.size() < 4 + 5)
     throw InputError(fmt::format("{}: byte 0: expected a uSD log (header and CRC-32, at least 9 bytes), the file has {}",
                                  source, bytes.size()));
   // The CRC first: a corrupt file is reported as such, not as a parse error.
-  const std::size_t body = bytes.size() - 4;
+  std::size_t body = bytes.size() - 4;
   std::uint32_t stored;
   std::memcpy(&stored, bytes.data() + body, 4);
   const std::uint32_t computed = crc32(bytes.first(body));
-  if (stored != computed)
+  const bool cut = stored != computed && opt.allow_truncated;
+  if (cut) body = bytes.size();  // no CRC at the end of a cut file: every byte may be a record's
+  if (stored != computed && !cut)
     throw InputError(fmt::format("{}: byte {}: CRC-32 mismatch: stored {:08x}, computed {:08x} over bytes 0..{} "
                                  "(file truncated or corrupt)",
                                  source, body, stored, computed, body));
   Cursor c(bytes.first(body), source);
   if (c.get<std::uint8_t>("the magic byte 0xBC") != 0xBC) c.fail(0, "not a Crazyflie uSD log (expected 0xBC)");
   UsdLog log;
-  log.crc = stored;
+  log.crc = cut ? 0 : stored;
   log.version = c.get<std::uint16_t>("the format version");
   if (log.version != 1 && log.version != 2) c.fail(1, fmt::format("expected format version 1 or 2, found {}", log.version));
   const int n_events = c.get<std::uint16_t>("the number of event types");
@@ -139,6 +141,20 @@ UsdLog parse_usd(std::span<const std::uint8_t> bytes, const std::string& source)
   const std::size_t ts_size = log.version == 1 ? 4 : 8;
   while (c.left() > 0) {
     const std::size_t at = c.pos();
+    if (cut) {  // stop at the first record that is cut short or not a record
+      const std::size_t need = 2 + ts_size;
+      int k = -1;
+      if (c.left() >= need) {
+        std::uint16_t id;
+        std::memcpy(&id, bytes.data() + at, 2);
+        k = index_of[id];
+      }
+      if (k < 0 || c.left() < need + record_size[static_cast<std::size_t>(k)]) {
+        log.truncated_at = at;
+        log.truncated_bytes = c.left();
+        break;
+      }
+    }
     const auto id = c.get<std::uint16_t>("a record's event id");
     const int k = index_of[id];
     if (k < 0) c.fail(at, fmt::format("record of unknown event id {}", id));
@@ -157,9 +173,9 @@ UsdLog parse_usd(std::span<const std::uint8_t> bytes, const std::string& source)
   return log;
 }
 
-UsdLog read_usd(const std::filesystem::path& path) {
+UsdLog read_usd(const std::filesystem::path& path, const UsdReadOptions& opt) {
   const std::string bytes = read_file(path);
-  return parse_usd(detail::as_bytes(bytes), path.string());
+  return parse_usd(detail::as_bytes(bytes), path.string(), opt);
 }
 
 }  // namespace quadid::logs

@@ -375,14 +375,16 @@ std::vector<std::string> source_rate_findings(const logs::ImportReport& report,
     for (const auto& c : g.columns) {
       const auto it = report.column_sources.find(c);
       if (it == report.column_sources.end()) continue;
-      const auto& [topic, rate] = it->second;
+      const auto& [topic, rate, faster] = it->second;
       if (rate >= kMinRatePerCutoff * g.cutoff || std::find(seen.begin(), seen.end(), topic) != seen.end()) continue;
       seen.push_back(topic);
       out.push_back(fmt::format(
           "{} ({}) was logged at {:.1f} Hz: linear interpolation keeps its content up to about a quarter of that "
-          "({:.1f} Hz), but the rows it feeds use it up to {:g} Hz ({}); log it faster (PX4: the system-"
-          "identification or high-rate bit of SDLOG_PROFILE, or the logger's topics file) or lower {} to {:.2g} Hz",
-          topic, c, rate, rate / kMinRatePerCutoff, g.cutoff, g.option, g.option, rate / kMinRatePerCutoff));
+          "({:.1f} Hz), but the rows it feeds use it up to {:g} Hz ({}); log it faster ({}) or lower {} to {:.2g} Hz",
+          topic, c, rate, rate / kMinRatePerCutoff, g.cutoff, g.option,
+          faster.empty() ? "PX4: the system-identification or high-rate bit of SDLOG_PROFILE, or the logger's topics file"
+                         : faster,
+          g.option, rate / kMinRatePerCutoff));
     }
   return out;
 }
@@ -467,12 +469,48 @@ std::vector<std::string> identification_columns(const IdentifyRequest& req) {
 
 namespace {
 
+// A rotor model without its thrust coefficient (rotors.thrust_coefficient_unknown,
+// e.g. for an ArduPilot log, which carries none): from the weighed mass and the
+// hover balance, k = m g / mean(sum_i w_i |w_i| cos(phi) cos(theta)) over the
+// airborne part (the mean vertical acceleration of a flight that ends where it
+// began is ~0). The thrust scale estimated beside the inertia refines it.
+void calibrate_thrust_coefficient(const FlightLog& raw, IdentifyRequest& req, std::vector<std::string>& warnings) {
+  RotorModel& r = req.vehicle->rotors;
+  if (!req.real.known_mass)
+    throw InputError(fmt::format(
+        "{}: the vehicle file gives no thrust coefficient (rotors.kf, or rotors.thrust_max for commands), and the log "
+        "carries none (an ArduPilot log never does): give the weighed mass, --known-mass KG (the thrust coefficient "
+        "then follows from the flight's thrust scale), or rotors.kf in the vehicle file",
+        req.vehicle->source));
+  (r.input == RotorInput::kCommand ? r.thrust_max : r.kf) = 1.0;
+  const FlightLog w = with_rotor_wrench(raw, r);
+  const auto air = airborne_part(w);
+  const FlightLog a = air ? rows_in(w, air->window) : w;
+  const Eigen::ArrayXd tilt = a.column("phi").array().cos() * a.column("theta").array().cos();
+  const double mean = (a.column("Fz").array() * tilt).mean();
+  if (!(mean > 0.0) || !std::isfinite(mean))
+    throw InputError(fmt::format("the rotor columns {} give no thrust in the air: the thrust coefficient cannot be "
+                                 "calibrated from --known-mass",
+                                 fmt::join(r.columns, ", ")));
+  const double k = *req.real.known_mass * req.options.processing.g / mean;
+  (r.input == RotorInput::kCommand ? r.thrust_max : r.kf) = k;
+  r.thrust_coefficient_unknown = false;
+  warnings.push_back(fmt::format(
+      "rotors.{} = {:.6g} {} from --known-mass {:g} kg and the hover thrust (the vehicle file gives none); the "
+      "thrust scale refines it",
+      r.input == RotorInput::kCommand ? "thrust_max" : "kf", k,
+      r.input == RotorInput::kCommand ? "N" : r.input == RotorInput::kRpm ? "N/rpm^2" : "N/(rad/s)^2",
+      *req.real.known_mass));
+}
+
 // The wrench from a rotor model, with the checks of the rotor columns and the
 // timing estimated and applied (prepare_identification, for a file or arrays).
 IdentificationInput with_rotor_model(const FlightLog& raw, const logs::ImportReport& report, IdentifyRequest req,
                                      bool from_log, IdentificationInput in) {
   in.wrench_source = from_log ? req.vehicle->source : fmt::format("the rotor model of vehicle {}", req.vehicle->source);
   if (req.motor_time_constant) req.vehicle->rotors.time_constant = *req.motor_time_constant;
+  if (req.vehicle->rotors.thrust_coefficient_unknown) calibrate_thrust_coefficient(raw, req, in.warnings);
+  if (!report.truncated.empty()) in.warnings.push_back(report.truncated);
   const RotorModel& rotors = req.vehicle->rotors;
   // The airborne part, from the rotor model's thrust (a log whose rotor
   // columns the model refuses fails below, with the model's message).
@@ -557,7 +595,7 @@ IdentificationInput prepare_identification(const std::string& path, const Identi
   if (!req.vehicle && logs::detect_log_kind(path) == logs::LogKind::Ulog) {
     // No --vehicle: PX4's control-allocation parameters describe the rotors.
     try {
-      const logs::ULog u = logs::read_ulog(path);
+      const logs::ULog u = logs::read_ulog(path, {.allow_truncated = true});  // a crashed flight: its complete records
       if (u.parameter("CA_ROTOR_COUNT")) {
         try {
           req.vehicle = px4_vehicle(u, path);

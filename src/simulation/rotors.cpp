@@ -67,6 +67,11 @@ Eigen::VectorXd RotorActuators::logged() const {
 
 void configure_for_vehicle(SimulationOptions& o, const Vehicle& v) {
   v.validate();
+  if (v.rotors.thrust_coefficient_unknown)
+    throw std::invalid_argument(fmt::format(
+        "{}: the vehicle file gives neither rotors.kf nor rotors.thrust_max: a simulation needs the thrust "
+        "coefficient; give rotors.kf (identify alone can calibrate it from --known-mass)",
+        v.source));
   const RotorActuators check(v.rotors);  // thrust_max given, layout controllable
   (void)check;
   o.rotors = v.rotors;

@@ -61,7 +61,7 @@ void RotorModel::validate() const {
   nonneg("torque_ratio", torque_ratio);
   nonneg("time_constant", time_constant);
   nonneg("rotor_inertia", rotor_inertia);
-  if (input == RotorInput::kCommand && !(thrust_max > 0.0))
+  if (input == RotorInput::kCommand && !(thrust_max > 0.0) && !thrust_coefficient_unknown)
     throw std::invalid_argument("rotors.thrust_max must be > 0 when rotors.input = \"command\"");
   const auto [lo, hi] = command_range;
   if (!std::isfinite(lo) || !std::isfinite(hi) || lo < 0.0 || !(hi > lo))
@@ -71,7 +71,7 @@ void RotorModel::validate() const {
     throw std::invalid_argument(fmt::format(
         "rotors.command_range applies to rotors.input = \"command\" only (this vehicle's input is \"{}\")",
         to_string(input)));
-  if (input != RotorInput::kCommand && !(kf > 0.0))
+  if (input != RotorInput::kCommand && !(kf > 0.0) && !thrust_coefficient_unknown)
     throw std::invalid_argument(fmt::format("rotors.kf must be > 0 when rotors.input = \"{}\"", to_string(input)));
 }
 

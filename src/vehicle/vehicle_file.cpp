@@ -124,14 +124,19 @@ class Reader {
   std::string source_;
 };
 
-Params read_nominal(const Reader& r, const toml::table& t) {
+// moments_missing: none of Ixx, Iyy, Izz given (the caller fills them from
+// the rotor positions); a file that gives some must give all three.
+Params read_nominal(const Reader& r, const toml::table& t, bool& moments_missing) {
   r.only(t, "nominal.", {"m", "Ixx", "Ixy", "Ixz", "Iyy", "Iyz", "Izz"});
+  moments_missing = !t.contains("Ixx") && !t.contains("Iyy") && !t.contains("Izz");
   Theta th;
   for (size_t j = 0; j < 7; ++j) {
     const char* key = kThetaNames[j];
     const bool product = j == 2 || j == 3 || j == 5;
-    th(static_cast<Eigen::Index>(j)) = r.number(t, "nominal.", key, !product, !product).value_or(0.0);
+    const bool required = !product && !(j > 0 && moments_missing);
+    th(static_cast<Eigen::Index>(j)) = r.number(t, "nominal.", key, required, !product).value_or(0.0);
   }
+  if (moments_missing) th(1) = th(4) = th(6) = 1.0;  // placeholders, replaced from the rotor positions
   Params P = Params::from_theta(th);
   try {
     P.validate("nominal");
@@ -161,8 +166,11 @@ RotorModel read_rotors(const Reader& r, const toml::table& t) {
   }
   if (m.columns.empty()) r.fail(cols.source(), "rotors.columns", "must name at least one rotor column");
   const bool command = m.input == RotorInput::kCommand;
-  m.kf = r.number(t, "rotors.", "kf", !command, true).value_or(0.0);
-  m.thrust_max = r.number(t, "rotors.", "thrust_max", command, true).value_or(0.0);
+  // Neither kf nor thrust_max: the thrust coefficient comes from the weighed
+  // mass (identify --known-mass), as for an ArduPilot log, which carries none.
+  m.thrust_coefficient_unknown = !t.contains("kf") && !t.contains("thrust_max");
+  m.kf = r.number(t, "rotors.", "kf", !command && !m.thrust_coefficient_unknown, true).value_or(0.0);
+  m.thrust_max = r.number(t, "rotors.", "thrust_max", command && !m.thrust_coefficient_unknown, true).value_or(0.0);
   m.torque_ratio = *r.number(t, "rotors.", "torque_ratio", true, true);
   m.time_constant = r.number(t, "rotors.", "time_constant", false, true).value_or(0.0);
   m.rotor_inertia = r.number(t, "rotors.", "rotor_inertia", false, true).value_or(0.0);
@@ -387,8 +395,25 @@ Vehicle parse_vehicle(std::string_view text, const std::string& source) {
   v.source = source;
   v.name = *r.string(root, "", "name", true);
   if (v.name.empty()) r.fail(root.get("name")->source(), "name", "must not be empty");
-  v.nominal = read_nominal(r, *r.table(root, "nominal", true));
+  bool moments_missing = false;
+  v.nominal = read_nominal(r, *r.table(root, "nominal", true), moments_missing);
   v.rotors = read_rotors(r, *r.table(root, "rotors", true));
+  if (moments_missing) {
+    // The reference set's moments, when the file gives only the mass (an
+    // ArduPilot vehicle: positions, spins and the weighed mass): the mass
+    // spread at the rotors' mean squared radius r^2, Ixx = Iyy = m r^2 / 4,
+    // Izz = m r^2 / 2 (rough_nominal's rule). They only scale the regression
+    // and name the reference; identify estimates the inertia.
+    double r2 = 0.0;
+    for (const Vec3& p : v.rotors.positions) r2 += p.head<2>().squaredNorm();
+    r2 /= static_cast<double>(v.rotors.positions.size());
+    if (!(r2 > 0.0)) r.fail(root.source(), "nominal", "Ixx, Iyy and Izz are needed: the rotor positions are all at the centre");
+    const double m = v.nominal.m > 0.0 ? v.nominal.m : 1.0;
+    v.nominal.I = Mat3::Zero();
+    v.nominal.I(0, 0) = v.nominal.I(1, 1) = 0.25 * m * r2;
+    v.nominal.I(2, 2) = 0.5 * m * r2;
+    v.nominal_moments_guessed = true;
+  }
   if (const auto* c = r.table(root, "controller", false)) v.controller = read_controller(r, *c);
   if (const auto* s = r.table(root, "sensors", false)) v.sensors = read_sensors(r, *s);
   if (const auto* l = r.table(root, "limits", false)) v.limits = read_limits(r, *l);
