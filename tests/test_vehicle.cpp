@@ -300,7 +300,18 @@ TEST(VehicleFile, SpinMustBeCwOrCcw) {
 TEST(VehicleFile, MissingAndMistypedKeysAreNamed) {
   std::string e = error_of(replace(kGood, "torque_ratio = 0.02\n", ""));
   EXPECT_NE(e.find("rotors.torque_ratio: missing required key"), std::string::npos) << e;
-  e = error_of(replace(kGood, "kf = 1e-5\n", ""));  // speed input needs kf
+  // Neither kf nor thrust_max: the thrust coefficient is left to identify's
+  // --known-mass (an ArduPilot log carries none); simulate refuses it.
+  const Vehicle nk = parse_vehicle(replace(kGood, "kf = 1e-5\n", ""), "nk.toml");
+  EXPECT_TRUE(nk.rotors.thrust_coefficient_unknown);
+  SimulationOptions so;
+  try {
+    configure_for_vehicle(so, nk);
+    ADD_FAILURE() << "simulate accepted a vehicle without a thrust coefficient";
+  } catch (const std::invalid_argument& x) {
+    EXPECT_NE(std::string(x.what()).find("neither rotors.kf nor rotors.thrust_max"), std::string::npos) << x.what();
+  }
+  e = error_of(replace(kGood, "kf = 1e-5\n", "thrust_max = 5.0\n"));  // speed input with thrust_max: kf still needed
   EXPECT_NE(e.find("rotors.kf: missing required key"), std::string::npos) << e;
   e = error_of(replace(kGood, R"(input = "speed")", R"(input = "command")"));  // command needs thrust_max
   EXPECT_NE(e.find("rotors.thrust_max: missing required key"), std::string::npos) << e;

@@ -59,7 +59,7 @@ void run(const OptionValues& v) {
   lo.ulog.allow_truncated = a.allow_truncated;
   lo.check_required = false;
   if (logs::detect_log_kind(a.file) == logs::LogKind::Csv)
-    throw InputError(fmt::format("{}: byte 0: not an autopilot log (expected the ULog magic or the uSD byte 0xBC); a "
+    throw InputError(fmt::format("{}: byte 0: not an autopilot log (expected the ULog magic, the uSD byte 0xBC or DataFlash's 0xA3 0x95); a "
                                  "flight-log CSV needs no import: give it to identify as it is",
                                  a.file));
   check_grid_rate(a.opt, v.flag("allow-slow-rate"));
@@ -99,10 +99,11 @@ void run(const OptionValues& v) {
 void register_import(CLI::App& app) {
   auto* sub = app.add_subcommand(
       "import",
-      "an autopilot log (PX4 ULog or Crazyflie uSD, recognised by its first bytes) -> flight log CSV:\n"
-      "t x y z phi theta psi p q r (SI, z up, body FLU; PX4's NED/FRD converted) and the per-rotor signals under\n"
-      "the log's own names (actuator_motors.control[0].., esc_status.esc[0].esc_rpm.., rpm.m1..), on one uniform\n"
-      "grid (faster topics low-passed first). Gaps are reported; long ones split the log.");
+      "an autopilot log (PX4 ULog, Crazyflie uSD or ArduPilot DataFlash, recognised by its first bytes) -> flight\n"
+      "log CSV: t x y z phi theta psi p q r (SI, z up, body FLU; NED/FRD converted) and the per-rotor signals under\n"
+      "the log's own names (actuator_motors.control[0].., esc_status.esc[0].esc_rpm.., rpm.m1..; ArduPilot: motor1.pwm,\n"
+      "motor1.command, motor1.rpm..), on one uniform grid (faster topics low-passed first). Gaps are reported; long\n"
+      "ones split the log. A file cut mid-record (a crash) is read to its last complete record, with a warning.");
   auto given = add_table_options(sub, "import");
   sub->callback([given] { run(given->read()); });
 }

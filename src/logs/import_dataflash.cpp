@@ -110,7 +110,13 @@ std::string choice(const std::string& given, const char* px4_default, const char
 
 Series position_series(const DataFlashLog& log, const ImportOptions& opt, ImportReport& rep) {
   std::string pick = choice(opt.position_topic, "vehicle_local_position", "auto");
-  if (pick == "auto") pick = log.find("XKF1") && log.find("XKF1")->count() ? "XKF1" : "POS";
+  if (pick == "auto") {
+    const auto has = [&](const char* n) { return log.find(n) && log.find(n)->count() > 1; };
+    if (!has("XKF1") && !has("POS"))
+      throw InputError("the DataFlash log has no XKF1 or POS messages (the vehicle's position: EKF3's XKF1, logged "
+                       "unless EK3_LOG_LEVEL > 0, or POS); `quadid log-info` lists what it has");
+    pick = has("XKF1") ? "XKF1" : "POS";
+  }
   const auto [name, inst] = message_instance(pick);
   if (name == "XKF1" || name == "NKF1") {  // EKF3 (EKF2) core: PN PE PD, m, NED
     const auto& m = need(log, name, "the EKF's position; --position-topic POS takes the GPS-fused POS instead");

@@ -540,7 +540,7 @@ Defs reproduce_options() {
 Defs import_options() {
   const logs::ImportOptions o;
   return {
-      B("log", K::String, "ULog (.ulg) or Crazyflie uSD log").positional().required().cli(),
+      B("log", K::String, "PX4 ULog (.ulg), Crazyflie uSD or ArduPilot DataFlash (.bin) log").positional().required().cli(),
       B("out", K::String, "flight log CSV to write").shorthand("o").required().cli(),
       B("rate", K::Number, "grid rate; below 4 x identify's default cutoffs (32 Hz with rotor signals, 16 Hz "
                            "without) it is refused unless --allow-slow-rate")
@@ -553,15 +553,19 @@ Defs import_options() {
       B("gap-factor", K::Number, "a gap is longer than this x the topic's median period").def(o.gap_factor).cli(),
       B("on-gap", K::String, "a longer gap: longest (keep the longest part) or refuse")
           .def("longest").choices({"longest", "refuse"}).cli(),
-      B("position-topic", K::String, "PX4 position topic (NED)").def(o.position_topic).cli(),
-      B("attitude-topic", K::String, "PX4 attitude quaternion topic").def(o.attitude_topic).cli(),
-      B("rates-topic", K::String, "PX4 body-rate topic (FRD)").def(o.rates_topic).cli(),
+      B("position-topic", K::String, "PX4 position topic (NED); ArduPilot: XKF1 (the default), XKF1[CORE] or POS")
+          .def(o.position_topic).cli(),
+      B("attitude-topic", K::String, "PX4 attitude quaternion topic; ArduPilot: ATT (the default; ANG when it has "
+                                     "more records), ANG or XKF1").def(o.attitude_topic).cli(),
+      B("rates-topic", K::String, "PX4 body-rate topic (FRD); ArduPilot: IMU (the default) or IMU[INSTANCE]")
+          .def(o.rates_topic).cli(),
       B("motors", K::String, "PX4 rotor topic: auto (actuator_motors, else esc_status, else actuator_outputs), a "
                              "topic, or none")
           .def(o.motors_topic).cli(),
       B("pose", K::String, "Crazyflie pose: auto (mocap when logged), mocap or estimate")
           .def(o.crazyflie_pose).choices({"auto", "mocap", "estimate"}).cli(),
-      B("allow-truncated", K::Flag, "ULog: accept a last message cut short").cli(),
+      B("allow-truncated", K::Flag, "kept for old scripts: a file cut mid-record (a crash) is always read to its "
+                                    "last complete record, with a warning").cli(),
       json_flag("print the import report as JSON on stdout (nothing else there)"),
       quiet_flag(),
   };
@@ -569,7 +573,7 @@ Defs import_options() {
 
 Defs log_info_options() {
   return {
-      B("log", K::String, "ULog (.ulg) or Crazyflie uSD log").positional().required().cli(),
+      B("log", K::String, "PX4 ULog (.ulg), Crazyflie uSD or ArduPilot DataFlash (.bin) log").positional().required().cli(),
       B("verbose", K::Flag, "ULog: also perf_* info messages and the multi-info values").shorthand("v").cli(),
       B("allow-truncated", K::Flag, "ULog: accept a last message cut short (logger stopped by a power loss)").cli(),
       json_flag("print JSON on stdout (nothing else there)"),
