@@ -247,3 +247,33 @@ TEST_F(ArduPilotIdentify, TruncatedLogIsReadToItsLastRecordWithAWarning) {
   ASSERT_EQ(r.rc, 0) << r.err;
   EXPECT_NE(r.err.find("the file ends mid-record at byte"), std::string::npos) << r.err;
 }
+
+TEST_F(ArduPilotIdentify, CrashIsLeftOutOfTheWindow) {
+  // A flight that ends in a crash: a 12 g impact at 24 s, the log cut 0.2 s
+  // later mid-record. The window ends 1 s before the impact; the inertia is
+  // that of the flight before it.
+  const Vehicle v = ardupilot_vehicle(RotorInput::kCommand);
+  FlightLog f = fly(v, 30.0, 6);
+  const auto n = f.rows();
+  f.columns.insert(f.columns.end(), {"ax_b", "ay_b", "az_b"});
+  f.data.conservativeResize(Eigen::NoChange, f.data.cols() + 3);
+  f.data.rightCols(3).setZero();
+  f.data.col(f.data.cols() - 1).setConstant(9.81);
+  for (Eigen::Index i = 12000; i < 12005; ++i) f.data(i, f.data.cols() - 3) = -12.0 * 9.81;  // 24 s at 500 Hz
+  FlightLog cut = f;
+  cut.data = f.data.topRows(12100);
+  ASSERT_LT(cut.rows(), n);
+  std::string bytes = ardupilot_bytes(v, cut);
+  bytes.resize(bytes.size() - 11);
+  std::ofstream(path("crash.bin"), std::ios::binary) << bytes;
+  write("v.toml", vehicle_file(v));
+  const CliRun r = run("identify " + path("crash.bin") + " --vehicle " + path("v.toml") + " --known-mass 1.2 --json");
+  ASSERT_EQ(r.rc, 0) << r.err;
+  EXPECT_NE(r.err.find("the file ends mid-record"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("an impact at 24.0"), std::string::npos) << r.err;
+  const nlohmann::json j = nlohmann::json::parse(r.out);
+  EXPECT_LE(j.at("window").at("t1").get<double>(), 23.0 + 0.01) << j.at("window").dump();
+  const auto& e = j.at("estimates").at("LS");
+  EXPECT_NEAR(e.at("Ixx").get<double>(), v.nominal.I(0, 0), 0.05 * v.nominal.I(0, 0));
+  EXPECT_NEAR(e.at("Iyy").get<double>(), v.nominal.I(1, 1), 0.05 * v.nominal.I(1, 1));
+}

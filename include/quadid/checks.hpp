@@ -134,6 +134,21 @@ struct AirbornePart {
 /// no thrust at all.
 std::optional<AirbornePart> airborne_part(const FlightLog& log, const AirborneOptions& opt = {});
 
+/// An impact (a crash, a hard landing): the first sample whose specific force
+/// (ax_b ay_b az_b, when the log has them) exceeds max(4 g, 2 x its 99th
+/// percentile), or whose body rate (p q r) exceeds max(35 rad/s, a gyro's
+/// 2000 deg/s full scale, 3 x its 99th percentile). Flight does not reach
+/// either: a hover reads 1 g, an agile flight 2-3 g and its rates stay below
+/// a third of the threshold; a crash reads 5-50 g for milliseconds.
+struct Impact {
+  double t = 0.0;      // s from the log's start
+  double peak = 0.0;   // the exceeding value (m/s^2 or rad/s)
+  std::string signal;  // "specific force" or "body rate"
+  /// "an impact at 22.0 s (specific force 11.8 g)"
+  std::string describe() const;
+};
+std::optional<Impact> find_impact(const FlightLog& log);
+
 /// The rows of `log` whose time lies in `w` (seconds from the log's start).
 FlightLog rows_in(const FlightLog& log, const TimeWindow& w);
 

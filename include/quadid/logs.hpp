@@ -438,7 +438,7 @@ std::optional<ArduPilotFrame> ardupilot_frame(const DataFlashLog& log);
 
 /// A flight log (docs/file-formats.md columns, z up / FLU) as an ArduCopter
 /// DataFlash log: IMU (GyrX..Z rad/s and AccX..Z m/s^2, body FRD; the specific
-/// force from ax_b ay_b az_b when the log has them, else from the motion), ATT
+/// force from ax_b ay_b az_b (body FLU) when the log has them, else from the motion), ATT
 /// (Roll Pitch Yaw, centidegrees, FRD -> NED), XKF1 (PN PE PD, VN VE VD: NED),
 /// RCOU (C1..C14 pulse widths, from `command_columns` through `curve`, motor k
 /// on channel k), ESC (RPM per instance, from `rpm_columns`), BAT (Volt), and

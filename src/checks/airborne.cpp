@@ -89,6 +89,43 @@ std::optional<AirbornePart> airborne_part(const FlightLog& log, const AirborneOp
   return a;
 }
 
+namespace {
+
+// The first sample of `v` above max(floor, factor x its 99th percentile); -1 when none.
+Eigen::Index first_above(const Eigen::VectorXd& v, double floor, double factor) {
+  std::vector<double> s(v.data(), v.data() + v.size());
+  const auto p99 = s.begin() + static_cast<std::ptrdiff_t>(0.99 * static_cast<double>(s.size() - 1));
+  std::nth_element(s.begin(), p99, s.end());
+  const double limit = std::max(floor, factor * *p99);
+  for (Eigen::Index i = 0; i < v.size(); ++i)
+    if (v[i] > limit) return i;
+  return -1;
+}
+
+}  // namespace
+
+std::string Impact::describe() const {
+  return signal == "specific force" ? fmt::format("an impact at {:.3f} s (specific force {:.1f} g)", t, peak / 9.80665)
+                                    : fmt::format("an impact at {:.3f} s (body rate {:.0f} deg/s)", t, peak * 57.29578);
+}
+
+std::optional<Impact> find_impact(const FlightLog& log) {
+  if (!log.has("t") || log.rows() < 100) return std::nullopt;
+  const Eigen::VectorXd t = log.column("t");
+  std::optional<Impact> first;
+  auto consider = [&](const char* a, const char* b, const char* c, double floor, double factor, const char* what) {
+    if (!log.has(a) || !log.has(b) || !log.has(c)) return;
+    const Eigen::VectorXd n =
+        (log.column(a).array().square() + log.column(b).array().square() + log.column(c).array().square()).sqrt();
+    if (!n.allFinite()) return;
+    const Eigen::Index i = first_above(n, floor, factor);
+    if (i >= 0 && (!first || t(i) - t(0) < first->t)) first = Impact{t(i) - t(0), n(i), what};
+  };
+  consider("ax_b", "ay_b", "az_b", 4.0 * 9.80665, 2.0, "specific force");
+  consider("p", "q", "r", 35.0, 3.0, "body rate");
+  return first;
+}
+
 FlightLog rows_in(const FlightLog& log, const TimeWindow& w) {
   const Eigen::VectorXd t = log.column("t");
   Eigen::Index a = 0, b = t.size();

@@ -60,6 +60,11 @@ std::string ardupilot_log_from_flight_log(const FlightLog& log, const ArduPilotW
                         r = column_of(log, "r");
   const Eigen::VectorXd vx = derivative(t, x), vy = derivative(t, y), vz = derivative(t, z);
   const Eigen::VectorXd ax = derivative(t, vx), ay = derivative(t, vy), az = derivative(t, vz);
+  // The log's own specific force (ax_b ay_b az_b, body FLU) when it has one.
+  const bool has_f = log.has("ax_b") && log.has("ay_b") && log.has("az_b");
+  const Eigen::VectorXd fx = has_f ? column_of(log, "ax_b") : Eigen::VectorXd(),
+                        fy = has_f ? column_of(log, "ay_b") : Eigen::VectorXd(),
+                        fz = has_f ? column_of(log, "az_b") : Eigen::VectorXd();
   std::vector<Eigen::VectorXd> cmd, rpm;
   for (const auto& c : o.command_columns) cmd.push_back(column_of(log, c));
   for (const auto& c : o.rpm_columns) rpm.push_back(column_of(log, c));
@@ -80,7 +85,8 @@ std::string ardupilot_log_from_flight_log(const FlightLog& log, const ArduPilotW
     // Specific force in the body: R^T (a + g e_z) in FLU, then FRD.
     const Eigen::Vector4d qa = detail::quaternion_from_euler_zyx(phi[i], theta[i], psi[i]);
     const Eigen::Quaterniond qr(qa[0], qa[1], qa[2], qa[3]);
-    const Eigen::Vector3d f = qr.conjugate() * Eigen::Vector3d(ax[i], ay[i], az[i] + g);
+    const Eigen::Vector3d f = has_f ? Eigen::Vector3d(fx[i], fy[i], fz[i])
+                                    : Eigen::Vector3d(qr.conjugate() * Eigen::Vector3d(ax[i], ay[i], az[i] + g));
     const Eigen::Vector3d w_frd = detail::flu_to_frd(Eigen::Vector3d(p[i], q[i], r[i])), f_frd = detail::flu_to_frd(f);
     if (i % o.every_imu == 0) w.record(129, {us, 0, w_frd.x(), w_frd.y(), w_frd.z(), f_frd.x(), f_frd.y(), f_frd.z()});
     if (i % o.every_esc == 0)

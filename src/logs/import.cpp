@@ -502,8 +502,8 @@ namespace {
 // The file cut mid-record, in one sentence, first among the warnings.
 void note_truncation(ImportReport& rep, std::size_t at, std::size_t bytes, std::size_t size) {
   if (!bytes) return;
-  rep.truncated = fmt::format("the file ends mid-record at byte {} of {} (a crash or power loss cut it): every "
-                              "complete record before it is read",
+  rep.truncated = fmt::format("the file ends mid-record at byte {} of {} (cut by a crash, a power loss or the "
+                              "logger's last write): every complete record before it is read",
                               at, size);
   rep.warnings.insert(rep.warnings.begin(), rep.truncated);
 }

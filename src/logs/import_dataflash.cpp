@@ -43,6 +43,10 @@ std::string faster_text(const DataFlashLog& log, const std::string& message) {
   if (message == "ESC")
     return "ArduPilot logs ESC telemetry as it arrives: bidirectional DShot (SERVO_BLH_BDMASK) sends it every output "
            "frame, serial telemetry at SERVO_BLH_TRATE Hz (default 10 per ESC)";
+  if (message == "BAT")
+    return "ArduPilot writes BAT at 10 Hz (LOG_BITMASK bit 9 CURRENT); the voltage changes slowly and only scales "
+           "the motor commands" +
+           now;
   return "ArduPilot: LOG_BITMASK" + now;
 }
 

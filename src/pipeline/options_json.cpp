@@ -395,6 +395,33 @@ namespace {
 // cut to the airborne part, a given one that reaches the ground is warned
 // about, and a low-thrust stretch inside the flight is named. A default
 // error window (Tables 5-6) is the airborne part too.
+// A crash ends the flight: the window (and Tables 5-6's) ends 1 s before the
+// impact (the margin the take-off and touchdown get), or, when given, is
+// warned about.
+void end_before_impact(const FlightLog& log, bool given, IdentificationOptions& opt, std::vector<std::string>& warnings) {
+  const auto impact = find_impact(log);
+  if (!impact) return;
+  const double end = std::max(impact->t - AirborneOptions{}.margin_s, 0.0);
+  if (given) {
+    if (opt.window.t1 > end)
+      warnings.push_back(fmt::format("window {}: the log has {}; the window reaches past it (--window T0:{:.4g} ends "
+                                     "before it)",
+                                     opt.window.to_string(), impact->describe(), end));
+    return;
+  }
+  if (!(end > opt.window.t0))
+    throw InputError(fmt::format("the log has {}, and nothing of the window {} is left before it", impact->describe(),
+                                 opt.window.to_string()));
+  if (opt.window.t1 <= end) return;
+  opt.window.t1 = end;
+  TimeWindow ew = opt.error_window.value_or(opt.window);
+  ew.t1 = std::min(ew.t1, end);
+  opt.error_window = ew;
+  warnings.push_back(fmt::format("window {}: the log has {} (a crash?): the window ends {:g} s before it (--window "
+                                 "T0:T1 to choose)",
+                                 opt.window.to_string(), impact->describe(), AirborneOptions{}.margin_s));
+}
+
 void keep_to_the_air(const std::optional<AirbornePart>& air, bool given, IdentificationOptions& opt,
                      std::vector<std::string>& warnings) {
   if (!air) return;
@@ -457,6 +484,7 @@ void fit_windows(const FlightLog& log, const IdentifyRequest& req, Identificatio
     if (!note.empty()) warnings.push_back(note);
   }
   keep_to_the_air(airborne_part(log), req.real.window_given, opt, warnings);
+  end_before_impact(log, req.real.window_given, opt, warnings);
 }
 
 std::vector<std::string> identification_columns(const IdentifyRequest& req) {
@@ -538,6 +566,7 @@ IdentificationInput with_rotor_model(const FlightLog& raw, const logs::ImportRep
                                    "checks (--ignore-input-errors)",
                                    none->check, none->saw, none->action));
   keep_to_the_air(air, req.real.window_given, in.options, in.warnings);
+  end_before_impact(raw, req.real.window_given, in.options, in.warnings);
   // An autopilot log's topics at their own rates: one too slow for the
   // rows' cutoffs is an input error (the checks' rule: --ignore-input-errors
   // makes it a warning).
