@@ -79,14 +79,8 @@ void run(const OptionValues& v) {
       rep.warnings.push_back("too slow for identify's default cutoffs: " + f);
   }
   if (a.json) {
-    nlohmann::json j = {{"file", a.file}, {"out", a.out}, {"kind", rep.kind}, {"rate_hz", rep.rate_hz},
-                        {"rows", log.rows()}, {"t0_s", rep.t0}, {"duration_s", rep.duration},
-                        {"columns", log.columns}, {"sources", rep.sources}, {"warnings", rep.warnings}};
-    j["gaps"] = nlohmann::json::array();
-    for (const auto& g : rep.gaps)
-      j["gaps"].push_back({{"topic", g.topic}, {"t_s", g.gap.t}, {"duration_s", g.gap.duration}, {"bridged", g.bridged}});
-    j["dropouts"] = nlohmann::json::array();
-    for (const auto& d : rep.dropouts) j["dropouts"].push_back({{"t_s", d.t}, {"duration_s", d.duration}});
+    nlohmann::json j = {{"file", a.file}, {"out", a.out}, {"rows", log.rows()}, {"columns", log.columns}};
+    j.update(logs::import_report_json(rep));
     fmt::print("{}\n", j.dump(2));
     return;
   }

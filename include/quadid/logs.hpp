@@ -558,6 +558,10 @@ struct ImportReport {
   std::string summary() const;  // human-readable, one line per item
 };
 
+/// The report as `quadid import --json` prints it (kind, rate_hz, t0_s,
+/// duration_s, sources, warnings, truncated, gaps, dropouts).
+nlohmann::json import_report_json(const ImportReport& rep);
+
 FlightLog import_ulog(const ULog& log, const ImportOptions& opt = {}, ImportReport* report = nullptr);
 FlightLog import_usd(const UsdLog& log, const ImportOptions& opt = {}, ImportReport* report = nullptr);
 /// An ArduCopter log: p q r and ax_b ay_b az_b from IMU (instance 0; body FRD

@@ -186,6 +186,26 @@ py::dict read_log(const std::string& path, const std::vector<std::string>& map,
   return log_views(std::move(log));
 }
 
+// `quadid import FILE` as arrays: {"columns": {name: array}, "report": the import report}.
+py::dict import_log(const std::string& path, double rate_hz) {
+  quadid::logs::LoadOptions lo;
+  lo.import.rate_hz = rate_hz;
+  lo.import.validate();
+  lo.check_required = false;
+  quadid::logs::ImportReport rep;
+  quadid::FlightLog log;
+  {
+    py::gil_scoped_release nogil;
+    if (quadid::logs::detect_log_kind(path) == quadid::logs::LogKind::Csv)
+      throw quadid::InputError(path + ": byte 0: not an autopilot log (a flight-log CSV needs no import: read_log reads it)");
+    log = quadid::logs::load_any_log(path, lo, &rep);
+  }
+  py::dict out;
+  out["columns"] = log_views(std::move(log));
+  out["report"] = to_py(quadid::logs::import_report_json(rep));
+  return out;
+}
+
 py::dict identify(const py::object& log, const py::dict& opts) {
   const quadid::IdentifyRequest req = quadid::identify_options_from_json(options_json(opts));
   json j;
@@ -344,6 +364,7 @@ PYBIND11_MODULE(_quadid, m) {
   });
   m.def("read_log", &read_log, py::arg("path"), py::arg("map"), py::arg("period_tolerance"), py::arg("time_unit"));
   m.def("identify", &identify, py::arg("log"), py::arg("options"));
+  m.def("import_log", &import_log, py::arg("path"), py::arg("rate_hz"));
   m.def("simulate", &simulate, py::arg("options"), py::arg("truth"), py::arg("out"), py::arg("truth_out"));
   m.def("design", &design, py::arg("options"), py::arg("out"));
   m.def("check_trajectory", &check_trajectory, py::arg("trajectory"), py::arg("options"));
