@@ -277,3 +277,21 @@ TEST_F(ArduPilotIdentify, CrashIsLeftOutOfTheWindow) {
   EXPECT_NEAR(e.at("Ixx").get<double>(), v.nominal.I(0, 0), 0.05 * v.nominal.I(0, 0));
   EXPECT_NEAR(e.at("Iyy").get<double>(), v.nominal.I(1, 1), 0.05 * v.nominal.I(1, 1));
 }
+
+TEST_F(ArduPilotIdentify, RotorOrderOtherThanTheFramesIsRefused) {
+  // The log flew ArduPilot's quad X (FRAME_TYPE 1); a vehicle file whose
+  // motor 1 spins cw (and motor 3 ccw) describes another layout: refused.
+  const Vehicle v = ardupilot_vehicle(RotorInput::kCommand);
+  std::ofstream(path("flight.bin"), std::ios::binary) << ardupilot_bytes(v, fly(v, 12.0, 8));
+  std::string f = vehicle_file(v);
+  const std::string spins = "spin = [\"ccw\", \"ccw\", \"cw\", \"cw\"]";
+  f.replace(f.find(spins), spins.size(), "spin = [\"cw\", \"ccw\", \"ccw\", \"cw\"]");
+  write("v.toml", f);
+  const CliRun r = run("identify " + path("flight.bin") + " --vehicle " + path("v.toml") + " --known-mass 1.2");
+  EXPECT_NE(r.rc, 0);
+  EXPECT_NE(r.err.find("ArduPilot's quad X"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("motor 1 is at 45 degrees"), std::string::npos) << r.err;
+  // The fix (ArduPilot's order and spins) is the vehicle file of FromRcouPulseWidths, which passes.
+  write("v.toml", vehicle_file(v));
+  EXPECT_EQ(run("identify " + path("flight.bin") + " --vehicle " + path("v.toml") + " --known-mass 1.2").rc, 0);
+}

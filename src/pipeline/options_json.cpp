@@ -15,6 +15,8 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <numbers>
+#include <cstdio>
 #include <optional>
 #include <set>
 #include <stdexcept>
@@ -617,6 +619,35 @@ IdentificationInput with_rotor_model(const FlightLog& raw, const logs::ImportRep
 
 }  // namespace
 
+namespace {
+
+// An ArduCopter log's frame (FRAME_CLASS/TYPE) against the vehicle file's
+// rotors on motorK.* columns: each rotor's arm direction within 30 degrees of
+// motor K's and the same spin, else the file's order or spins are not the
+// flown frame's (a confident, wrong moment otherwise).
+void check_ardupilot_frame(const std::string& path, const RotorModel& r) {
+  const auto frame = logs::ardupilot_frame(logs::read_dataflash(path));
+  if (!frame) return;
+  for (int i = 0; i < r.count(); ++i) {
+    const std::string& c = r.columns[static_cast<std::size_t>(i)];
+    int k = 0;
+    if (std::sscanf(c.c_str(), "motor%d.", &k) != 1 || k < 1 || k > static_cast<int>(frame->angle_deg.size())) continue;
+    const Vec3& p = r.positions[static_cast<std::size_t>(i)];
+    const double angle = std::atan2(-p.y(), p.x()) * 180.0 / std::numbers::pi;  // clockwise from forward, FLU
+    const double want = frame->angle_deg[static_cast<std::size_t>(k - 1)];
+    const double off = std::abs(std::remainder(angle - want, 360.0));
+    const int spin = frame->spin[static_cast<std::size_t>(k - 1)];
+    if (off > 30.0 || r.spin[static_cast<std::size_t>(i)] != spin)
+      throw InputError(fmt::format(
+          "the log's frame is ArduPilot's {} (FRAME_CLASS/FRAME_TYPE), whose motor {} is at {:g} degrees from forward "
+          "(clockwise seen from above) and spins {}; the vehicle file's rotor on {} is at {:.0f} degrees, spin {}: "
+          "list rotors.positions and rotors.spin in ArduPilot's motor order (docs/ardupilot.md)",
+          frame->name, k, want, spin < 0 ? "ccw" : "cw", c, angle, r.spin[static_cast<std::size_t>(i)] < 0 ? "ccw" : "cw"));
+  }
+}
+
+}  // namespace
+
 IdentificationInput prepare_identification(const std::string& path, const IdentifyRequest& req_in) {
   IdentifyRequest req = req_in;
   IdentificationInput in;
@@ -640,6 +671,13 @@ IdentificationInput prepare_identification(const std::string& path, const Identi
       const std::string what = e.what();
       if (what.rfind(path, 0) == 0) throw;
       throw InputError(fmt::format("{}: {}", path, what));
+    }
+  }
+  if (req.vehicle && logs::detect_log_kind(path) == logs::LogKind::DataFlash) {
+    try {
+      check_ardupilot_frame(path, req.vehicle->rotors);
+    } catch (const InputError& e) {
+      throw InputError(fmt::format("{}: {}", path, e.what()));
     }
   }
   if (!req.vehicle) {
