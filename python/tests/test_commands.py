@@ -108,10 +108,9 @@ def test_validate_with_a_vehicle_judges_the_sets_with_their_terms(tmp_path):
     assert_same(res, cli, 1e-12)
 
 
-def test_log_info_equals_the_command_line(tmp_path):
-    """quadid.log_info on an ArduPilot DataFlash log and a PX4 ULog: the JSON of
-    `quadid log-info --json` (the real logs in ../shared; skipped without them,
-    as the C++ tests do)."""
+def shared_autopilot_logs(tmp_path):
+    """The real ArduPilot log (decompressed into tmp_path) and PX4's sample.ulg
+    from ../shared; skipped without them, as the C++ tests do."""
     import gzip
     import os
 
@@ -124,6 +123,14 @@ def test_log_info_equals_the_command_line(tmp_path):
         pytest.skip(f"{gz} absent")
     binf = tmp_path / "flight.bin"
     binf.write_bytes(gzip.decompress(open(gz, "rb").read()))
+    return binf, ulg
+
+
+def test_log_info_equals_the_command_line(tmp_path):
+    """quadid.log_info on an ArduPilot DataFlash log and a PX4 ULog: the JSON of
+    `quadid log-info --json` (the real logs in ../shared; skipped without them,
+    as the C++ tests do)."""
+    binf, ulg = shared_autopilot_logs(tmp_path)
     for path in (binf, ulg):
         got = quadid.log_info(path)
         want = cli_json("log-info", str(path))
@@ -141,20 +148,9 @@ def test_log_info_equals_the_command_line(tmp_path):
 def test_import_log_equals_the_command_line(tmp_path):
     """quadid.import_log on a real ArduPilot log and a PX4 ULog: the columns of
     `quadid import -o CSV` (to the CSV's printed precision) and its --json report."""
-    import gzip
-    import os
-
     import numpy as np
 
-    shared = os.path.join(os.path.dirname(__file__), "..", "..", "..", "shared", "data")
-    gz = os.path.join(shared, "ardupilot-real", "2023-07-06_10-12-18.bin.gz")
-    ulg = os.path.join(shared, "px4-ulog", "sample.ulg")
-    if not os.path.exists(gz):
-        if os.environ.get("QUADID_REQUIRE_SHARED") == "1":
-            pytest.fail(f"{gz} absent, and QUADID_REQUIRE_SHARED=1 says the shared data is here")
-        pytest.skip(f"{gz} absent")
-    binf = tmp_path / "flight.bin"
-    binf.write_bytes(gzip.decompress(open(gz, "rb").read()))
+    binf, ulg = shared_autopilot_logs(tmp_path)
     for path in (binf, ulg):
         got = quadid.import_log(path)
         csv = tmp_path / "out.csv"
