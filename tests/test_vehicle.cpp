@@ -224,7 +224,7 @@ TEST(Vehicle, WithRotorWrenchAppendsOrReplacesTheWrench) {
 
 TEST(Vehicle, BuiltinsCarryTheirSources) {
   const std::vector<std::string> names = builtin_vehicle_names();
-  EXPECT_EQ(names, (std::vector<std::string>{"qball2", "crazyflie21", "jmavsim-quad", "x500", "x500-gz"}));
+  EXPECT_EQ(names, (std::vector<std::string>{"qball2", "crazyflie21", "crazyflie21-pwm", "jmavsim-quad", "x500", "x500-gz"}));
   const Vehicle cf = load_vehicle("crazyflie21");
   EXPECT_EQ(cf.nominal.m, 0.0347);
   EXPECT_EQ(cf.rotors.kf, 2.2164e-10);
@@ -524,4 +524,61 @@ TEST(Vehicle, SignedRotorSpeedsNoiseAroundZeroIsNoFinding) {
   EXPECT_NE(f[0].text.find("'" + r.columns[2] + "'"), std::string::npos) << f[0].text;
   EXPECT_NE(f[0].text.find("wrong sign"), std::string::npos) << f[0].text;
   EXPECT_TRUE(f[0].mostly_negative);  // 90 % of the flight below 0: a sign convention
+}
+
+// Issue 38: the duty-cycle rotor input. rotor_inputs gives the applied voltage
+// d vbat; speeds() the straight line c0 + c1 V through the first-order lag
+// (closed form: a step from V0 to V1 at sample 0 reaches w1 + (w0 - w1) e^(-kT/tau)).
+TEST(Vehicle, DutyInputIsTheLaggedSpeedOfDutyTimesBatteryVoltage) {
+  const Vehicle v = load_vehicle("crazyflie21-pwm");
+  const RotorModel& r = v.rotors;
+  ASSERT_EQ(r.input, RotorInput::kDuty);
+  EXPECT_EQ(r.voltage_column, "pm.vbatMV");
+  FlightLog log;
+  log.columns = {"t", "pwm.m1_pwm", "pwm.m2_pwm", "pwm.m3_pwm", "pwm.m4_pwm", "pm.vbatMV"};
+  const int n = 50;
+  const double T = 0.002;
+  log.data.resize(n, 6);
+  for (int k = 0; k < n; ++k) {
+    const double duty = k == 0 ? 0.5 : 0.75;  // a step after the first sample
+    log.data.row(k) << k * T, duty * 65535, duty * 65535, duty * 65535, duty * 65535, 3700.0 - k;  // the battery sags
+  }
+  const Eigen::MatrixXd V = rotor_inputs(log, r);
+  EXPECT_DOUBLE_EQ(V(0, 0), 0.5 * 3.7);
+  EXPECT_DOUBLE_EQ(V(10, 2), 0.75 * 3.69);
+  const Eigen::MatrixXd w = r.speeds(V, T);
+  const double a = std::exp(-T / r.time_constant);
+  double expect = 8905.55 + 4240.37 * V(0, 0);  // steady at the first sample
+  EXPECT_NEAR(w(0, 0), expect, 1e-9 * expect);
+  for (int k = 1; k < n; ++k) {
+    const double target = 8905.55 + 4240.37 * V(k - 1, 0);
+    expect = target + (expect - target) * a;
+    EXPECT_NEAR(w(k, 3), expect, 1e-9 * expect) << k;
+  }
+  // A duty above command_range's top is not a duty.
+  log.data(3, 2) = 70000.0;
+  EXPECT_THROW((void)rotor_inputs(log, r), InputError);
+}
+
+TEST(Vehicle, DutyKeysBelongToTheDutyInputAndAreRequiredThere) {
+  std::string rpm(builtin_vehicle_text("crazyflie21"));
+  rpm.insert(rpm.find("[rotors]\n") + 9, "voltage_column = \"vbat\"\n");
+  try {
+    (void)parse_vehicle(rpm, "rpm.toml");
+    ADD_FAILURE() << "voltage_column on an rpm vehicle accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("rotors.voltage_column: applies to input = \"duty\" only"), std::string::npos)
+        << e.what();
+  }
+  std::string duty(builtin_vehicle_text("crazyflie21-pwm"));
+  const std::string line = "speed_of_voltage = [8905.55, 4240.37]\n";
+  ASSERT_NE(duty.find(line), std::string::npos);
+  duty.erase(duty.find(line), line.size());
+  try {
+    (void)parse_vehicle(duty, "duty.toml");
+    ADD_FAILURE() << "a duty vehicle without speed_of_voltage accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("rotors.speed_of_voltage: missing required key"), std::string::npos)
+        << e.what();
+  }
 }

@@ -77,8 +77,12 @@ class RotorActuators {
   Input applied() const;
   /// Rotor speeds w (vehicle.hpp units: rad/s, rpm, or speed / speed at command 1).
   const Eigen::VectorXd& speeds() const { return w_; }
-  /// What a log of this vehicle holds per rotor: the speeds (speed, rpm) or the commands (command).
+  /// What a log of this vehicle holds per rotor: the speeds (speed, rpm) or the commands (command,
+  /// duty), then for input = "duty" the battery voltage (in the log's units); named by logged_columns().
   Eigen::VectorXd logged() const;
+  std::vector<std::string> logged_columns() const;
+  /// input = "duty": the battery voltage now (V), with its sag under the rotors' present thrust.
+  double battery_voltage() const;
   /// Which rotors the last command() clipped (below 0 or above thrust_max).
   const std::vector<bool>& saturated() const { return sat_; }
   const RotorModel& model() const { return m_; }
@@ -86,8 +90,10 @@ class RotorActuators {
  private:
   RotorModel m_;
   Eigen::Matrix<double, Eigen::Dynamic, 4> mixer_;
-  Eigen::VectorXd thrust_cmd_, target_, w_;
+  Eigen::VectorXd thrust_cmd_, target_, w_, duty_;
   std::vector<bool> sat_;
+  double t_ = 0.0;     // s since the start (the battery's drain)
+  double vbat_ = 0.0;  // V, the battery voltage of the last command (duty)
   Input wrench_of(const Eigen::VectorXd& w) const;
 };
 

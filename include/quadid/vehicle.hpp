@@ -15,6 +15,12 @@
 //   input = "command" : w_i = speed / speed at command 1,  T_i = thrust_max w_i^2,
 //                       w_i -> sqrt(command) with the first-order lag time_constant
 //                       (steady state: T_i = thrust_max * command).
+//   input = "duty"    : the log holds each motor's duty cycle d_i (command_range maps it to 0..1)
+//                       and the battery voltage (voltage_column, times voltage_scale: V);
+//                       applied voltage V_i = d_i vbat (the battery's sag under load is in
+//                       the logged vbat), steady speed w*_i = c0 + c1 V_i in rev/min
+//                       (speed_of_voltage), w_i -> w*_i with the lag time_constant,
+//                       T_i = kf w_i^2 (kf in N/rpm^2). A brushed Crazyflie's PWM path.
 //   A command logged in other units (PWM microseconds, DShot steps) is mapped
 //   to 0..1 through command_range = [lo, hi] (command = (v - lo) / (hi - lo)).
 #pragma once
@@ -26,6 +32,7 @@
 #include <Eigen/Core>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <array>
 #include <optional>
 #include <cmath>
@@ -41,8 +48,9 @@ enum class RotorInput {
   kRpm,      // rotor speed, rev/min
   kCommand,  // normalized motor command 0..1 (before the motor lag)
   kSpeedCommand,  // commanded rotor speed, rad/s (before the motor lag), e.g. PX4's Gazebo bridge
+  kDuty,     // motor duty cycle with the battery voltage (brushed motors): speed from the applied voltage
 };
-std::string to_string(RotorInput k);  // "speed" | "rpm" | "command" | "speed-command"
+std::string to_string(RotorInput k);  // "speed" | "rpm" | "command" | "speed-command" | "duty"
 /// Throws std::invalid_argument listing the choices.
 RotorInput rotor_input_from_string(std::string_view s);
 
@@ -68,6 +76,16 @@ struct RotorModel {
   /// no thrust coefficient): identify calibrates it from the weighed mass
   /// (--known-mass) on the log's hover thrust, and the thrust scale refines it.
   bool thrust_coefficient_unknown = false;
+  /// input = "duty" only: the battery-voltage column, its unit (V per logged unit: 0.001 for mV),
+  /// and the steady rotor speed (rpm) of an applied voltage V: c0 + c1 V.
+  std::string voltage_column;
+  double voltage_scale = 1.0;
+  std::array<double, 2> speed_of_voltage = {0.0, 0.0};
+  /// input = "duty", `simulate` only: the battery, vbat = battery_voltage - battery_sag * sum T_i
+  /// - battery_drain * t (V, V per N of total thrust, V/s). 0 = not given (simulate refuses).
+  double battery_voltage = 0.0;
+  double battery_sag = 0.0;
+  double battery_drain = 0.0;
 
   int count() const { return static_cast<int>(columns.size()); }
   /// Throws std::invalid_argument naming the bad key (rotors.<key>).
@@ -75,7 +93,20 @@ struct RotorModel {
   /// The logged signal leads the rotor by the motor lag (command, speed-command):
   /// time_constant applies, and is estimated when 0 (timing.hpp). Measured
   /// speeds (speed, rpm) already lag.
-  bool input_leads_rotor() const { return input == RotorInput::kCommand || input == RotorInput::kSpeedCommand; }
+  bool input_leads_rotor() const {
+    return input == RotorInput::kCommand || input == RotorInput::kSpeedCommand || input == RotorInput::kDuty;
+  }
+  /// The logged signal is a command mapped through command_range (command, duty).
+  bool input_is_command() const { return input == RotorInput::kCommand || input == RotorInput::kDuty; }
+  /// Rotor speeds in rev/min (rpm, duty): the rotor-inertia term converts them to rad/s.
+  bool speed_in_rpm() const { return input == RotorInput::kRpm || input == RotorInput::kDuty; }
+  /// input = "duty": the steady rotor speed (rpm) of an applied voltage (V), c0 + c1 V, 0 without
+  /// voltage and never below 0 (below its fitted range the line is an extrapolation); and the
+  /// voltage that holds speed w (the line's inverse).
+  double speed_of_applied_voltage(double volts) const {
+    return volts > 0.0 ? std::max(0.0, speed_of_voltage[0] + speed_of_voltage[1] * volts) : 0.0;
+  }
+  double applied_voltage_of_speed(double w) const { return (w - speed_of_voltage[0]) / speed_of_voltage[1]; }
 
   /// k of T = k w^2: kf (speed, rpm) or thrust_max (command).
   double thrust_coefficient() const { return input == RotorInput::kCommand ? thrust_max : kf; }
@@ -107,8 +138,9 @@ struct RotorModel {
   /// [Fz, tau] from per-rotor thrusts (N).
   Input wrench(const Eigen::VectorXd& thrusts) const;
 
-  /// Rotor speeds w (samples x N) from the logged inputs (samples x N) at sample period T (s):
-  /// speed, rpm: the inputs themselves; command (c = command_of_logged(input)): w_0 = sqrt(c_0) (steady state at the first
+  /// Rotor speeds w (samples x N) from the logged inputs (samples x N, rotor_inputs()) at sample period T (s):
+  /// speed, rpm: the inputs themselves; duty: the inputs are applied voltages (V), target
+  /// speed_of_applied_voltage, then the lag as for a command; command (c = command_of_logged(input)): w_0 = sqrt(c_0) (steady state at the first
   /// sample), then the exact discretization of tau w' = sqrt(c) - w with c held between samples,
   ///   w_{k+1} = sqrt(c_k) + (w_k - sqrt(c_k)) exp(-T / tau)   (w_k = sqrt(c_k) when tau = 0).
   /// Throws InputError on a negative command, or a command above 1 (above command_range's
@@ -125,6 +157,11 @@ struct RotorModel {
   std::vector<SpeedFinding> speed_findings(const Eigen::MatrixXd& inputs) const;
   /// Per-sample wrench from rotor speeds (samples x N).
   WrenchSeries wrench_from_speeds(const Eigen::MatrixXd& speeds) const;
+
+ private:
+  void validate_duty() const;
+  /// The first-order lag of time_constant on target speeds, exact with each held for T (steady at the start).
+  Eigen::MatrixXd lagged(const Eigen::MatrixXd& target, double T) const;
 };
 
 /// Optional [controller] table: gains of eqs. (31)-(32) (diagonals, as PidGains) and the
@@ -195,6 +232,8 @@ nlohmann::json to_json(const RotorModel& m);
 RotorModel rotor_model_from_json(const nlohmann::json& j, const std::string& source);
 
 /// The vehicle's per-rotor columns of `log` (samples x N); InputError naming a missing column.
+/// input = "duty": the applied voltages d_i vbat (V), from the duty columns and voltage_column
+/// (InputError on a duty outside command_range or an implausible battery voltage, naming the unit).
 Eigen::MatrixXd rotor_inputs(const FlightLog& log, const RotorModel& rotors);
 /// The sample period of a log from its t column (first to last sample over rows - 1).
 double log_sample_period(const FlightLog& log);

@@ -474,6 +474,17 @@ FlightLog import_usd(const UsdLog& log, const ImportOptions& opt, ImportReport* 
   for (int i = 1; i <= 8; ++i)
     if (fixed->find(fmt::format("rpm.m{}", i)) >= 0) rpm.push_back(fmt::format("rpm.m{}", i));
   if (!rpm.empty()) series.push_back(series_of(*fixed, rpm, rpm, 1.0));
+  // A stock Crazyflie (no RPM deck): the motors' duty cycles and the battery
+  // voltage, as logged (0..65535, mV), for the rotor input "duty"
+  // (--vehicle crazyflie21-pwm), from whichever event holds them.
+  for (const auto& e : log.events) {
+    if (e.count() < 2) continue;
+    std::vector<std::string> duty;
+    for (int i = 1; i <= 8; ++i)
+      if (e.find(fmt::format("pwm.m{}_pwm", i)) >= 0) duty.push_back(fmt::format("pwm.m{}_pwm", i));
+    if (!duty.empty()) series.push_back(series_of(e, duty, duty, 1.0));
+    if (e.find("pm.vbatMV") >= 0) series.push_back(series_of(e, {"pm.vbatMV"}, {"pm.vbatMV"}, 1.0));
+  }
   if (fixed->find("acc.x") >= 0)  // specific force, g -> m/s^2
     series.push_back(series_of(*fixed, {"acc.x", "acc.y", "acc.z"}, {"ax_b", "ay_b", "az_b"}, opt.g));
   FlightLog out = assemble(std::move(series), opt, rep, "usd");

@@ -494,6 +494,7 @@ std::vector<std::string> identification_columns(const IdentifyRequest& req) {
   const auto& std_cols = standard_log_columns();  // t x y z phi theta psi p q r, then the wrench
   std::vector<std::string> c(std_cols.begin(), std_cols.begin() + 10);
   c.insert(c.end(), req.vehicle->rotors.columns.begin(), req.vehicle->rotors.columns.end());
+  if (!req.vehicle->rotors.voltage_column.empty()) c.push_back(req.vehicle->rotors.voltage_column);
   return c;
 }
 
@@ -529,14 +530,56 @@ void calibrate_thrust_coefficient(const FlightLog& raw, IdentifyRequest& req, st
       "rotors.{} = {:.6g} {} from --known-mass {:g} kg and the hover thrust (the vehicle file gives none); the "
       "thrust scale refines it",
       r.input == RotorInput::kCommand ? "thrust_max" : "kf", k,
-      r.input == RotorInput::kCommand ? "N" : r.input == RotorInput::kRpm ? "N/rpm^2" : "N/(rad/s)^2",
+      r.input == RotorInput::kCommand ? "N" : r.speed_in_rpm() ? "N/rpm^2" : "N/(rad/s)^2",
       *req.real.known_mass));
 }
 
 // The wrench from a rotor model, with the checks of the rotor columns and the
 // timing estimated and applied (prepare_identification, for a file or arrays).
+// A built-in vehicle whose rotor columns the log lacks, where a built-in
+// variant of it (NAME-...) finds all of its columns: that variant, said on
+// stderr (a stock Crazyflie logs PWM and battery voltage, not rpm).
+bool is_builtin(const Vehicle& v) { return v.source == "built-in " + v.name; }
+
+bool has_builtin_variant(const Vehicle& v) {
+  if (!is_builtin(v)) return false;
+  const auto names = builtin_vehicle_names();
+  return std::any_of(names.begin(), names.end(), [&](const std::string& n) { return n.rfind(v.name + "-", 0) == 0; });
+}
+
+void use_builtin_variant(const FlightLog& raw, IdentifyRequest& req, std::vector<std::string>& warnings) {
+  const Vehicle& v = *req.vehicle;
+  const auto has_all = [&raw](const RotorModel& r) {
+    for (const auto& c : r.columns)
+      if (!raw.has(c)) return false;
+    return r.voltage_column.empty() || raw.has(r.voltage_column);
+  };
+  if (!is_builtin(v) || has_all(v.rotors)) return;
+  for (const std::string& name : builtin_vehicle_names()) {
+    if (name.rfind(v.name + "-", 0) != 0) continue;
+    Vehicle alt = load_vehicle(name);
+    if (!has_all(alt.rotors)) continue;
+    warnings.push_back(fmt::format(
+        "the log has no {} (the rotor columns of --vehicle {}) but has {}{}: identified with the built-in {} "
+        "(rotors.input = \"{}\"); give --vehicle {} to choose it yourself",
+        fmt::join(v.rotors.columns, ", "), v.name, fmt::join(alt.rotors.columns, ", "),
+        alt.rotors.voltage_column.empty() ? std::string() : " and " + alt.rotors.voltage_column, name,
+        to_string(alt.rotors.input), name));
+    req.vehicle = std::move(alt);
+    return;
+  }
+}
+
 IdentificationInput with_rotor_model(const FlightLog& raw, const logs::ImportReport& report, IdentifyRequest req,
                                      bool from_log, IdentificationInput in) {
+  use_builtin_variant(raw, req, in.warnings);
+  if (req.vehicle->rotors.input == RotorInput::kDuty)
+    in.warnings.push_back(
+        "rotor speeds from duty cycle x battery voltage (rotors.input = \"duty\"), not measured: a motor's rpm per volt "
+        "drifts as it warms and the battery drains, and the torques, so the inertia, scale with it. On four real "
+        "flights of one Crazyflie 2.1 the PWM path's Ixx scattered 39 % between flights and its median was 17 % "
+        "below the same flights' rpm results (docs/crazyflie.md); the intervals below do not include this. For "
+        "inertia to a few percent, log rotor speeds (an RPM deck, ESC telemetry)");
   in.wrench_source = from_log ? req.vehicle->source : fmt::format("the rotor model of vehicle {}", req.vehicle->source);
   if (req.motor_time_constant) req.vehicle->rotors.time_constant = *req.motor_time_constant;
   if (req.vehicle->rotors.thrust_coefficient_unknown) calibrate_thrust_coefficient(raw, req, in.warnings);
@@ -689,6 +732,12 @@ IdentificationInput prepare_identification(const std::string& path, const Identi
   logs::LoadOptions load;
   load.csv = req.csv;
   load.csv.required = identification_columns(req);
+  if (has_builtin_variant(*req.vehicle)) {
+    // A log without this built-in's rotor columns may have a variant's
+    // (use_builtin_variant): keep every column, require the state only.
+    load.csv.required.resize(10);
+    load.csv.keep_extra_columns = true;
+  }
   load.check_required = false;  // an imported autopilot log has no wrench: the rotor model adds it
   logs::ImportReport report;
   const FlightLog raw = logs::load_any_log(path, load, &report);

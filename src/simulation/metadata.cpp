@@ -303,8 +303,11 @@ std::vector<std::string> simulation_log_comments(const Trajectory& traj, const S
                             o.rotors->input_leads_rotor() ? "commands" : "speeds",
                             o.rotors->input == RotorInput::kCommand        ? "0..1, before the motor lag"
                             : o.rotors->input == RotorInput::kSpeedCommand ? "speeds in rad/s, before the motor lag"
-                            : o.rotors->input == RotorInput::kRpm          ? "rev/min"
-                                                                           : "rad/s"));
+                            : o.rotors->input == RotorInput::kDuty
+                                ? fmt::format("duty cycles 0..{:g}, before the motor lag; {} = battery voltage",
+                                              o.rotors->command_range[1], o.rotors->voltage_column)
+                            : o.rotors->input == RotorInput::kRpm ? "rev/min"
+                                                                  : "rad/s"));
   else
     c.push_back("columns: x y z psi = motion capture (held between samples); phi theta p q r = IMU; "
                 "Fz tau_* = applied (saturated) commands; x_d y_d z_d psi_d = reference. SI units, radians");

@@ -15,11 +15,16 @@ RotorActuators::RotorActuators(const RotorModel& model) : m_(model) {
   m_.validate();
   if (!(m_.max_thrust() > 0.0))
     throw std::invalid_argument("rotors.thrust_max: the largest thrust of a rotor is needed to fly the vehicle");
+  if (m_.input == RotorInput::kDuty && !(m_.battery_voltage > 0.0))
+    throw std::invalid_argument(
+        "rotors.battery_voltage: a duty-cycle vehicle needs its battery (battery_voltage, battery_sag, battery_drain) "
+        "to be flown by simulate");
   mixer_ = m_.mixer();
   const Eigen::Index n = m_.count();
   thrust_cmd_ = Eigen::VectorXd::Zero(n);
   target_ = Eigen::VectorXd::Zero(n);
   w_ = Eigen::VectorXd::Zero(n);
+  duty_ = Eigen::VectorXd::Zero(n);
   sat_.assign(static_cast<size_t>(n), false);
 }
 
@@ -33,6 +38,27 @@ void RotorActuators::command(const Input& wrench) {
     sat_[static_cast<size_t>(i)] = T(i) < 0.0 || T(i) > Tmax;
     target_(i) = m_.speed_for_thrust(thrust_cmd_(i));  // steady-state speed: k w^2 = T
   }
+  if (m_.input != RotorInput::kDuty) return;
+  // The duty that applies the voltage of that speed at the battery's present
+  // voltage, clipped to 0..1; the speed it reaches is the target.
+  vbat_ = battery_voltage();  // logged with the duties: the voltage they were applied at
+  for (Eigen::Index i = 0; i < T.size(); ++i) {
+    const double d = thrust_cmd_(i) > 0.0 ? m_.applied_voltage_of_speed(target_(i)) / vbat_ : 0.0;
+    duty_(i) = std::clamp(d, 0.0, 1.0);
+    sat_[static_cast<size_t>(i)] = sat_[static_cast<size_t>(i)] || d > 1.0;
+    target_(i) = m_.speed_of_applied_voltage(duty_(i) * vbat_);
+  }
+}
+
+double RotorActuators::battery_voltage() const {
+  const double thrust = (m_.thrust_coefficient() * w_.cwiseAbs2()).sum();
+  return std::max(0.1, m_.battery_voltage - m_.battery_sag * thrust - m_.battery_drain * t_);
+}
+
+std::vector<std::string> RotorActuators::logged_columns() const {
+  std::vector<std::string> c = m_.columns;
+  if (m_.input == RotorInput::kDuty) c.push_back(m_.voltage_column);
+  return c;
 }
 
 void RotorActuators::settle() { w_ = target_; }
@@ -45,6 +71,7 @@ Input RotorActuators::applied() const { return wrench_of(w_); }
 
 void RotorActuators::step(double dt, Input& u0, Input& uh, Input& u1) {
   u0 = wrench_of(w_);
+  t_ += dt;
   const double tau = m_.time_constant;
   if (!(tau > 0.0)) {  // ideal motors: the speed follows the command at once
     w_ = target_;
@@ -60,6 +87,12 @@ void RotorActuators::step(double dt, Input& u0, Input& uh, Input& u1) {
 
 Eigen::VectorXd RotorActuators::logged() const {
   if (m_.input == RotorInput::kSpeedCommand) return target_;  // the speed the motors were told, before their lag
+  if (m_.input == RotorInput::kDuty) {
+    Eigen::VectorXd out(duty_.size() + 1);
+    for (Eigen::Index i = 0; i < duty_.size(); ++i) out(i) = m_.logged_of_command(duty_(i));
+    out(duty_.size()) = vbat_ / m_.voltage_scale;
+    return out;
+  }
   if (m_.input != RotorInput::kCommand) return w_;
   // The command the motors were given, in the log's units (command_range).
   return (thrust_cmd_ / m_.thrust_max).unaryExpr([this](double c) { return m_.logged_of_command(c); });

@@ -163,9 +163,9 @@ SimulationResult simulate(const Trajectory& traj, const SimulationOptions& opt) 
   const Eigen::Index rows = static_cast<Eigen::Index>(tm.ticks + 1);
   res.log.comments = simulation_log_comments(traj, opt);
   res.log.columns = log_columns();
-  const Eigen::Index n_rotors = rotors ? rotors->model().count() : 0;
-  if (rotors)
-    res.log.columns.insert(res.log.columns.end(), opt.rotors->columns.begin(), opt.rotors->columns.end());
+  const std::vector<std::string> rotor_logged = rotors ? rotors->logged_columns() : std::vector<std::string>{};
+  const Eigen::Index n_rotors = static_cast<Eigen::Index>(rotor_logged.size());
+  res.log.columns.insert(res.log.columns.end(), rotor_logged.begin(), rotor_logged.end());
   res.log.data.resize(rows, static_cast<Eigen::Index>(log_columns().size()) + n_rotors);
   if (opt.record_truth) {
     res.truth.comments = res.log.comments;
@@ -182,7 +182,7 @@ SimulationResult simulate(const Trajectory& traj, const SimulationOptions& opt) 
   sum.Fz_max = -sum.Fz_min;
   if (rotors) {
     sum.rotor_columns = opt.rotors->columns;
-    sum.rotor_saturated.assign(static_cast<size_t>(n_rotors), 0);
+    sum.rotor_saturated.assign(static_cast<size_t>(rotors->model().count()), 0);
   }
   Stats st;
 

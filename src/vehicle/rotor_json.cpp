@@ -13,11 +13,20 @@ nlohmann::json to_json(const RotorModel& m) {
   nlohmann::json pos = nlohmann::json::array(), spin = nlohmann::json::array();
   for (const Vec3& p : m.positions) pos.push_back({p(0), p(1), p(2)});
   for (int s : m.spin) spin.push_back(s > 0 ? "cw" : "ccw");
-  return {{"input", to_string(m.input)},   {"columns", m.columns},
+  nlohmann::json j = {{"input", to_string(m.input)},   {"columns", m.columns},
           {"kf", m.kf},                    {"thrust_max", m.thrust_max},
           {"torque_ratio", m.torque_ratio}, {"time_constant", m.time_constant},
           {"rotor_inertia", m.rotor_inertia}, {"positions", pos},
           {"spin", spin},                  {"command_range", m.command_range}};
+  if (m.input == RotorInput::kDuty) {
+    j["voltage_column"] = m.voltage_column;
+    j["voltage_scale"] = m.voltage_scale;
+    j["speed_of_voltage"] = m.speed_of_voltage;
+    j["battery_voltage"] = m.battery_voltage;
+    j["battery_sag"] = m.battery_sag;
+    j["battery_drain"] = m.battery_drain;
+  }
+  return j;
 }
 
 RotorModel rotor_model_from_json(const nlohmann::json& j, const std::string& source) {
@@ -25,8 +34,10 @@ RotorModel rotor_model_from_json(const nlohmann::json& j, const std::string& sou
     if (!j.is_object()) throw std::invalid_argument("rotors: must be an object");
     for (const auto& [k, v] : j.items()) {
       (void)v;
-      static const char* kKeys[] = {"input", "columns", "kf", "thrust_max", "torque_ratio",
-                                    "time_constant", "rotor_inertia", "positions", "spin", "command_range"};
+      static const char* kKeys[] = {"input",          "columns",         "kf",           "thrust_max",
+                                    "torque_ratio",   "time_constant",   "rotor_inertia", "positions",
+                                    "spin",           "command_range",   "voltage_column", "voltage_scale",
+                                    "speed_of_voltage", "battery_voltage", "battery_sag", "battery_drain"};
       if (std::find(std::begin(kKeys), std::end(kKeys), k) == std::end(kKeys))
         throw std::invalid_argument(fmt::format("rotors.{}: unknown key", k));
     }
@@ -39,6 +50,12 @@ RotorModel rotor_model_from_json(const nlohmann::json& j, const std::string& sou
     m.time_constant = j.value("time_constant", 0.0);
     m.rotor_inertia = j.value("rotor_inertia", 0.0);
     if (j.contains("command_range")) m.command_range = j.at("command_range").get<std::array<double, 2>>();
+    m.voltage_column = j.value("voltage_column", std::string());
+    m.voltage_scale = j.value("voltage_scale", 1.0);
+    if (j.contains("speed_of_voltage")) m.speed_of_voltage = j.at("speed_of_voltage").get<std::array<double, 2>>();
+    m.battery_voltage = j.value("battery_voltage", 0.0);
+    m.battery_sag = j.value("battery_sag", 0.0);
+    m.battery_drain = j.value("battery_drain", 0.0);
     for (const auto& p : j.at("positions")) {
       const auto v = p.get<std::vector<double>>();
       if (v.size() != 3) throw std::invalid_argument("rotors.positions: each must be [x, y, z]");

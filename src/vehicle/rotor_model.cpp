@@ -23,6 +23,7 @@ std::string to_string(RotorInput k) {
     case RotorInput::kRpm: return "rpm";
     case RotorInput::kCommand: return "command";
     case RotorInput::kSpeedCommand: return "speed-command";
+    case RotorInput::kDuty: return "duty";
   }
   return "?";
 }
@@ -32,7 +33,9 @@ RotorInput rotor_input_from_string(std::string_view s) {
   if (s == "rpm") return RotorInput::kRpm;
   if (s == "command") return RotorInput::kCommand;
   if (s == "speed-command") return RotorInput::kSpeedCommand;
-  throw std::invalid_argument(fmt::format("'{}' is not a rotor input kind (speed, rpm, command or speed-command)", s));
+  if (s == "duty") return RotorInput::kDuty;
+  throw std::invalid_argument(
+      fmt::format("'{}' is not a rotor input kind (speed, rpm, command, speed-command or duty)", s));
 }
 
 void RotorModel::validate() const {
@@ -67,12 +70,39 @@ void RotorModel::validate() const {
   if (!std::isfinite(lo) || !std::isfinite(hi) || lo < 0.0 || !(hi > lo))
     throw std::invalid_argument(
         fmt::format("rotors.command_range = [{}, {}] must be two finite numbers with 0 <= low < high", lo, hi));
-  if (input != RotorInput::kCommand && has_command_range())
+  if (!input_is_command() && has_command_range())
     throw std::invalid_argument(fmt::format(
-        "rotors.command_range applies to rotors.input = \"command\" only (this vehicle's input is \"{}\")",
+        "rotors.command_range applies to rotors.input = \"command\" or \"duty\" only (this vehicle's input is \"{}\")",
         to_string(input)));
+  validate_duty();
   if (input != RotorInput::kCommand && !(kf > 0.0) && !thrust_coefficient_unknown)
     throw std::invalid_argument(fmt::format("rotors.kf must be > 0 when rotors.input = \"{}\"", to_string(input)));
+}
+
+void RotorModel::validate_duty() const {
+  const bool duty = input == RotorInput::kDuty;
+  if (!duty) {
+    if (!voltage_column.empty() || speed_of_voltage != std::array<double, 2>{0.0, 0.0} || battery_voltage != 0.0)
+      throw std::invalid_argument(fmt::format(
+          "rotors.voltage_column, speed_of_voltage and battery_*: apply to rotors.input = \"duty\" only (this "
+          "vehicle's input is \"{}\")",
+          to_string(input)));
+    return;
+  }
+  if (voltage_column.empty())
+    throw std::invalid_argument("rotors.voltage_column: rotors.input = \"duty\" needs the log's battery-voltage column");
+  if (!std::isfinite(voltage_scale) || !(voltage_scale > 0.0))
+    throw std::invalid_argument(fmt::format("rotors.voltage_scale = {} must be > 0 (V per logged unit: 0.001 for mV)",
+                                            voltage_scale));
+  const auto [c0, c1] = speed_of_voltage;
+  if (!std::isfinite(c0) || !std::isfinite(c1) || !(c1 > 0.0))
+    throw std::invalid_argument(fmt::format(
+        "rotors.speed_of_voltage = [{}, {}] must be [c0, c1] with c1 > 0: steady rotor speed (rpm) = c0 + c1 * V",
+        c0, c1));
+  for (const auto& [key, v] : {std::pair{"battery_voltage", battery_voltage}, {"battery_sag", battery_sag},
+                               {"battery_drain", battery_drain}})
+    if (!std::isfinite(v) || v < 0.0)
+      throw std::invalid_argument(fmt::format("rotors.{} = {} must be a finite number >= 0", key, v));
 }
 
 double RotorModel::speed_for_thrust(double T) const { return std::sqrt(std::max(T, 0.0) / thrust_coefficient()); }
@@ -128,6 +158,8 @@ Input RotorModel::wrench(const Eigen::VectorXd& thrusts) const {
 Eigen::MatrixXd RotorModel::speeds(const Eigen::MatrixXd& in, double T) const {
   if (in.cols() != count())
     throw std::invalid_argument(fmt::format("rotor inputs: {} columns for {} rotors", in.cols(), count()));
+  if (input == RotorInput::kDuty)
+    return lagged(in.unaryExpr([this](double v) { return speed_of_applied_voltage(v); }), T);
   const bool command = input == RotorInput::kCommand;
   Eigen::MatrixXd c = in;  // command: 0..1
   for (Eigen::Index i = 0; i < in.cols(); ++i)
@@ -149,7 +181,10 @@ Eigen::MatrixXd RotorModel::speeds(const Eigen::MatrixXd& in, double T) const {
   // The speed the rotor tends to: the commanded speed itself, or for a
   // normalized command w = sqrt(c) (T = thrust_max c in steady state); then
   // the first-order lag on w.
-  const Eigen::MatrixXd target = command ? Eigen::MatrixXd(c.cwiseMin(1.0).cwiseSqrt()) : in;
+  return lagged(command ? Eigen::MatrixXd(c.cwiseMin(1.0).cwiseSqrt()) : in, T);
+}
+
+Eigen::MatrixXd RotorModel::lagged(const Eigen::MatrixXd& target, double T) const {
   if (!(time_constant > 0.0)) return target;
   if (!(T > 0.0)) throw std::invalid_argument("rotor speeds: the sample period must be > 0");
   const double a = std::exp(-T / time_constant);  // exact over one sample with the command held
@@ -172,7 +207,7 @@ Eigen::MatrixXd RotorModel::thrusts(const Eigen::MatrixXd& w) const {
 
 std::vector<RotorModel::SpeedFinding> RotorModel::speed_findings(const Eigen::MatrixXd& in) const {
   std::vector<SpeedFinding> out;
-  if (input == RotorInput::kCommand || in.rows() < 3) return out;
+  if (input_is_command() || in.rows() < 3) return out;
   const auto median = [](std::vector<double> v) {
     std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
     return v[v.size() / 2];
@@ -226,6 +261,43 @@ std::vector<std::string> rotor_like_columns(const FlightLog& log) {
 
 }  // namespace
 
+namespace {
+
+// input = "duty": V_i = d_i vbat, the duty d_i in 0..1 through command_range. The
+// battery voltage is checked for its unit: a 1S to 14S pack holds 3 to 60 V.
+Eigen::MatrixXd applied_voltages(const FlightLog& log, const RotorModel& r, const Eigen::MatrixXd& duty_logged) {
+  if (!log.has(r.voltage_column))
+    throw InputError(fmt::format("the log has no battery-voltage column '{}' (rotors.voltage_column): the duty-cycle "
+                                 "rotor input needs it, as the speed follows duty x battery voltage",
+                                 r.voltage_column));
+  const Eigen::VectorXd vbat = log.column(r.voltage_column) * r.voltage_scale;
+  std::vector<double> sorted(vbat.data(), vbat.data() + vbat.size());
+  std::sort(sorted.begin(), sorted.end());
+  const double median = sorted.empty() ? 0.0 : sorted[sorted.size() / 2];
+  if (!vbat.allFinite() || !(median >= 2.5 && median <= 60.0))
+    throw InputError(fmt::format(
+        "battery-voltage column '{}' times rotors.voltage_scale = {:g} gives a median of {:.4g} V: not a battery "
+        "(2.5 to 60 V){}",
+        r.voltage_column, r.voltage_scale, median,
+        median > 60.0 && median * 1e-3 >= 2.5 && median * 1e-3 <= 60.0
+            ? fmt::format("; the column looks like millivolts: give rotors.voltage_scale = {:g}", r.voltage_scale * 1e-3)
+            : std::string()));
+  Eigen::MatrixXd V(duty_logged.rows(), duty_logged.cols());
+  for (Eigen::Index i = 0; i < V.cols(); ++i)
+    for (Eigen::Index k = 0; k < V.rows(); ++k) {
+      const double raw = duty_logged(k, i), d = r.command_of_logged(raw);
+      if (!std::isfinite(raw) || raw < 0.0 || d > 1.0 + 1e-9)
+        throw InputError(fmt::format("rotor column '{}', sample {}: {} is not a duty cycle (expected 0..{:g}, "
+                                     "rotors.command_range = [{:g}, {:g}])",
+                                     r.columns[static_cast<size_t>(i)], k, raw, r.command_range[1],
+                                     r.command_range[0], r.command_range[1]));
+      V(k, i) = d * vbat(k);
+    }
+  return V;
+}
+
+}  // namespace
+
 Eigen::MatrixXd rotor_inputs(const FlightLog& log, const RotorModel& rotors) {
   Eigen::MatrixXd in(log.rows(), rotors.count());
   for (int i = 0; i < rotors.count(); ++i) {
@@ -245,6 +317,7 @@ Eigen::MatrixXd rotor_inputs(const FlightLog& log, const RotorModel& rotors) {
     }
     in.col(i) = log.column(c);
   }
+  if (rotors.input == RotorInput::kDuty) return applied_voltages(log, rotors, in);
   return in;
 }
 
@@ -263,7 +336,7 @@ FlightLog with_rotor_wrench(const FlightLog& log, const RotorModel& rotors) {
   // along +z body) = -s_i: the rotor-inertia term of the real-flight
   // regression (extended.hpp). rpm -> rad/s; commands give the normalised
   // speed, so the rotor-inertia estimate is then J_r times the speed at command 1.
-  const double to_rad_s = rotors.input == RotorInput::kRpm ? 2.0 * std::numbers::pi / 60.0 : 1.0;
+  const double to_rad_s = rotors.speed_in_rpm() ? 2.0 * std::numbers::pi / 60.0 : 1.0;
   Eigen::VectorXd omega_r = Eigen::VectorXd::Zero(w.rows());
   for (int i = 0; i < rotors.count(); ++i) omega_r -= static_cast<double>(rotors.spin[static_cast<size_t>(i)]) * to_rad_s * w.col(i);
   FlightLog out = log;

@@ -146,10 +146,31 @@ Params read_nominal(const Reader& r, const toml::table& t, bool& moments_missing
   return P;
 }
 
+// input = "duty": the battery-voltage column and the map from applied voltage
+// to rotor speed (docs/vehicles.md); the keys are refused for other inputs.
+void read_duty(const Reader& r, const toml::table& t, RotorModel& m) {
+  const bool duty = m.input == RotorInput::kDuty;
+  for (const char* key : {"voltage_column", "voltage_scale", "speed_of_voltage", "battery_voltage", "battery_sag",
+                          "battery_drain"})
+    if (!duty && t.contains(key))
+      r.fail(t.get(key)->source(), fmt::format("rotors.{}", key),
+             fmt::format("applies to input = \"duty\" only (this vehicle's input is \"{}\")", to_string(m.input)));
+  if (!duty) return;
+  m.voltage_column = *r.string(t, "rotors.", "voltage_column", true);
+  m.voltage_scale = r.number(t, "rotors.", "voltage_scale", false, true).value_or(1.0);
+  (void)r.array(t, "rotors.", "speed_of_voltage");  // required: fails naming the key when absent
+  m.speed_of_voltage = *r.numbers<2>(t, "rotors.", "speed_of_voltage", false,
+                                     "must be [c0, c1]: steady rotor speed (rpm) = c0 + c1 * applied voltage (V)");
+  m.battery_voltage = r.number(t, "rotors.", "battery_voltage", false, true).value_or(0.0);
+  m.battery_sag = r.number(t, "rotors.", "battery_sag", false, true).value_or(0.0);
+  m.battery_drain = r.number(t, "rotors.", "battery_drain", false, true).value_or(0.0);
+}
+
 RotorModel read_rotors(const Reader& r, const toml::table& t) {
   r.only(t, "rotors.",
          {"input", "columns", "kf", "thrust_max", "torque_ratio", "time_constant", "rotor_inertia", "positions",
-          "spin", "command_range"});
+          "spin", "command_range", "voltage_column", "voltage_scale", "speed_of_voltage", "battery_voltage",
+          "battery_sag", "battery_drain"});
   RotorModel m;
   const std::string input = *r.string(t, "rotors.", "input", true);
   try {
@@ -166,6 +187,7 @@ RotorModel read_rotors(const Reader& r, const toml::table& t) {
   }
   if (m.columns.empty()) r.fail(cols.source(), "rotors.columns", "must name at least one rotor column");
   const bool command = m.input == RotorInput::kCommand;
+  read_duty(r, t, m);
   // Neither kf nor thrust_max: the thrust coefficient comes from the weighed
   // mass (identify --known-mass), as for an ArduPilot log, which carries none.
   m.thrust_coefficient_unknown = !t.contains("kf") && !t.contains("thrust_max");
@@ -178,9 +200,9 @@ RotorModel read_rotors(const Reader& r, const toml::table& t) {
                                       "must be [low, high]: the logged values that mean command 0 and command 1 (e.g. "
                                       "[1000, 2000] for PWM in microseconds)")) {
     m.command_range = *range;
-    if (!command)
+    if (!m.input_is_command())
       r.fail(t.get("command_range")->source(), "rotors.command_range",
-             fmt::format("applies to input = \"command\" only (this vehicle's input is \"{}\")", input));
+             fmt::format("applies to input = \"command\" or \"duty\" only (this vehicle's input is \"{}\")", input));
   }
 
   const toml::array& pos = r.array(t, "rotors.", "positions");

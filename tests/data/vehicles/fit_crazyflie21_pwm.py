@@ -1,0 +1,140 @@
+#!/usr/bin/python3
+"""Fit of the built-in `crazyflie21-pwm` rotor input (src/vehicle/builtin_vehicles.cpp)
+on the real Crazyflie 2.1 flights of ../shared/data/crazyflie-usd, which log both the
+motor PWM (pwm.mK_pwm, 0..65535), the battery voltage (pm.vbatMV) and the rotor speed
+(rpm.mK, RPM deck). Independent of quadid: its own uSD parser (format in that folder's
+README.md), numpy and scipy.
+
+Model (docs/vehicles.md, input = "duty"):
+  V_i   = pwm_i / 65535 * vbat                (applied voltage, V; vbat sags under load)
+  w*_i  = c0 + c1 V_i                         (steady rotor speed, rpm)
+  tau w_i' = w*_i - w_i                       (first-order motor lag, exact with w* held)
+one set of (c0, c1, tau) for all four motors and flights. A quadratic map fits
+0.1-0.7 points better but is not monotone below 0.76 V (it would give a duty of 0
+more speed than a duty of 0.2), so the built-in keeps the straight line; both are
+printed, with a fit that ignores the battery sag for comparison. Also fitted, for
+`simulate` only: the battery, vbat = v0_f - sag * sum_i kf rpm_i^2 - drain * t
+(v0 per flight; sag in V per N of total thrust, drain in V/s).
+
+usage: /usr/bin/python3 tests/data/vehicles/fit_crazyflie21_pwm.py [DATA_DIR]
+Output (committed beside it): fit_crazyflie21_pwm.txt
+"""
+import struct
+import sys
+from pathlib import Path
+
+import numpy as np
+from scipy.optimize import least_squares
+
+KF = 2.2164e-10  # N/rpm^2, the data set's README (Bitcraze thrust stand)
+
+
+def parse(data):
+    body = data[:-4]
+    version, n = struct.unpack_from('<HH', body, 1)
+    pos, events = 5, {}
+    for _ in range(n):
+        eid, = struct.unpack_from('<H', body, pos)
+        pos += 2
+        end = body.index(b'\0', pos)
+        name = body[pos:end].decode()
+        pos = end + 1
+        nv, = struct.unpack_from('<H', body, pos)
+        pos += 2
+        fmt, names = '<', []
+        for _ in range(nv):
+            end = body.index(b'\0', pos)
+            s = body[pos:end].decode()
+            fmt += s[-2]
+            names.append(s[:-3])
+            pos = end + 1
+        events[eid] = (name, fmt, names, [])
+    tfmt = '<I' if version == 1 else '<Q'
+    while pos < len(body):
+        eid, = struct.unpack_from('<H', body, pos)
+        pos += 2
+        t, = struct.unpack_from(tfmt, body, pos)
+        pos += struct.calcsize(tfmt)
+        _, fmt, _, rows = events[eid]
+        rows.append((t,) + struct.unpack_from(fmt, body, pos))
+        pos += struct.calcsize(fmt)
+    return {e[0]: (e[2], np.array(e[3], dtype=float)) for e in events.values()}
+
+
+def load(folder):
+    flights = {}
+    for f in sorted(Path(folder).glob('jana*')):
+        names, a = parse(f.read_bytes())['fixedFrequency']
+        col = lambda n: a[:, 1 + names.index(n)]
+        t = a[:, 0] * 1e-6
+        pwm = np.stack([col(f'pwm.m{i}_pwm') for i in range(1, 5)], 1)
+        rpm = np.stack([col(f'rpm.m{i}') for i in range(1, 5)], 1)
+        flights[f.name] = (t - t[0], pwm, rpm, col('pm.vbatMV') * 1e-3)
+    return flights
+
+
+def lagged(tau, t, target):
+    w = np.empty_like(target)
+    w[0] = target[0]
+    a = np.exp(-np.diff(t) / max(tau, 1e-6))
+    for k in range(len(t) - 1):
+        w[k + 1] = target[k] + (w[k] - target[k]) * a[k]
+    return w
+
+
+def predict(p, t, volts):
+    tau, c0, c1 = p[:3]
+    c2 = p[3] if len(p) > 3 else 0.0
+    return lagged(tau, t, c0 + c1 * volts + c2 * volts ** 2)
+
+
+def main():
+    folder = sys.argv[1] if len(sys.argv) > 1 else str(Path(__file__).resolve().parents[4] / 'shared' / 'data' / 'crazyflie-usd')
+    flights = load(folder)
+
+    def residuals(p, with_battery=True):
+        r = []
+        for t, pwm, rpm, vb in flights.values():
+            v = vb if with_battery else np.full_like(vb, np.median(vb))
+            for i in range(4):
+                r.append(predict(p, t, pwm[:, i] / 65535 * v) - rpm[:, i])
+        return np.concatenate(r)
+
+    fits = {}
+    cases = (('measured vbat, straight line (the model)', True, [0.05, 4000, 9000]),
+             ('measured vbat, quadratic', True, [0.05, 4000, 9000, 0]),
+             ('vbat held at its median (no sag), straight line', False, [0.05, 4000, 9000]))
+    for label, wb, p0 in cases:
+        fits[label] = least_squares(lambda p: residuals(p, wb), p0, x_scale='jac').x
+    p = fits[cases[0][0]]
+    print('rotor input fit (all four flights, four motors, one parameter set)')
+    print(f'  time_constant = {p[0]:.5f} s')
+    print(f'  speed_of_voltage = [{p[1]:.6g}, {p[2]:.6g}]  (rpm = c0 + c1 V)')
+    print(f'  quadratic, for comparison: {fits[cases[1][0]]}')
+    for label, q in fits.items():
+        print(f'rms rpm error, % of mean rpm, per flight and motor; {label}:')
+        for name, (t, pwm, rpm, vb) in flights.items():
+            v = vb if label.startswith('measured') else np.full_like(vb, np.median(vb))
+            e = [np.sqrt(np.mean((predict(q, t, pwm[:, i] / 65535 * v) - rpm[:, i]) ** 2)) / np.mean(rpm[:, i]) * 100
+                 for i in range(4)]
+            print(f'  {name}: ' + ' '.join(f'{x:5.2f}' for x in e))
+    # Battery, for simulate: vbat = v0_f - sag * total thrust - drain * t.
+    rows, rhs = [], []
+    names = list(flights)
+    for j, (t, pwm, rpm, vb) in enumerate(flights.values()):
+        T = KF * (rpm ** 2).sum(1)
+        A = np.zeros((len(t), len(names) + 2))
+        A[:, j] = 1.0
+        A[:, -2] = -T
+        A[:, -1] = -t
+        rows.append(A)
+        rhs.append(vb)
+    x, *_ = np.linalg.lstsq(np.vstack(rows), np.concatenate(rhs), rcond=None)
+    res = np.concatenate(rhs) - np.vstack(rows) @ x
+    print('battery (simulate only): vbat = v0 - sag * sum(T) - drain * t')
+    print('  v0 per flight: ' + ', '.join(f'{n} {v:.3f} V' for n, v in zip(names, x[:-2])))
+    print(f'  sag = {x[-2]:.4f} V/N, drain = {x[-1]:.5f} V/s, rms residual {np.sqrt(np.mean(res ** 2)) * 1e3:.1f} mV')
+
+
+if __name__ == '__main__':
+    main()
