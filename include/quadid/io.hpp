@@ -81,6 +81,9 @@ double parse_time_unit(std::string_view name);
 /// problem (missing column, NaN or text in a number, non-increasing or
 /// non-uniform time, too few rows).
 FlightLog read_flight_log(const std::filesystem::path& path, const CsvReadOptions& opt = {});
+/// The header line's column names of a CSV flight log (comments skipped), as
+/// read_flight_log splits them; empty for a file without one.
+std::vector<std::string> read_csv_header(const std::filesystem::path& path);
 /// Columns `names` of `log` read at t + delay (s; linear interpolation in t,
 /// clamped at the log's ends): the one shift of a late stream (--gyro-delay).
 void read_columns_later(FlightLog& log, const std::vector<std::string>& names, double delay);

@@ -43,6 +43,8 @@ namespace quadid {
 /// The real-flight choices of `quadid identify` as given (unset = default).
 struct RealFlightArgs {
   std::string vehicle;                 // --vehicle NAME|FILE
+  std::string force_from = "auto";     // --force-from auto|position|accelerometer
+  std::string accel_bias_z = "auto";   // --accel-bias-z auto|M/S^2
   std::optional<double> known_mass;    // --known-mass KG
   std::string terms = "auto";          // --terms auto|paper|real|LIST
   std::string cutoffs = "auto";        // --cutoffs auto|held-out|fixed

@@ -76,8 +76,27 @@ struct ProcessingOptions {
   /// pool that already keeps every core busy, as montecarlo does), 2 = two.
   /// The results are the same bits whatever the value.
   int threads = 0;
+  /// Where the force row's body acceleration w_dot + c (eq. 7) comes from:
+  /// kPosition (the paper's): the motion's position differentiated twice and
+  /// rotated; kAccelerometer: the accelerometer's specific force along body z,
+  /// az_b (m/s^2, the log's ax_b ay_b az_b), which is w_dot + c itself,
+  /// corrected to the centre of mass for the IMU's position imu_position (body
+  /// FLU, m, from the centre of mass: az_cm = az_b - (omega_dot x r)_z -
+  /// (omega x (omega x r))_z) and its bias accel_bias_z (m/s^2, subtracted).
+  /// The log's x y z are then not used (w = 0: the terms that need the body
+  /// velocity are refused). --force-from.
+  enum class ForceSource { kPosition, kAccelerometer };
+  ForceSource force_source = ForceSource::kPosition;
+  Vec3 imu_position = Vec3::Zero();
+  double accel_bias_z = 0.0;
   void validate() const;
 };
+
+/// The body-z specific force at the centre of mass from the accelerometer's
+/// (ProcessingOptions::force_source): az_b - (omega_dot x r)_z - (omega x (omega x r))_z,
+/// omega_dot by central differences of p, q, r (eq. 33), minus accel_bias_z.
+/// Throws InputError naming ax_b ay_b az_b when the log lacks them.
+Eigen::VectorXd specific_force_z_at_com(const FlightLog& log, const Vec3& imu_position, double accel_bias_z);
 
 /// What processing found and used, for the report.
 struct ProcessingSummary {

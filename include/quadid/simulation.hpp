@@ -181,6 +181,10 @@ struct SimulationOptions {
   /// With rotors: standard deviation of the white noise added to each logged rotor column, in
   /// its unit (rad/s or rpm; only measured speeds, not commands). Only the log sees it.
   double rotor_noise = 0.0;
+  /// Given: the log gains the accelerometer's specific force ax_b ay_b az_b (m/s^2,
+  /// body FLU, at the centre of mass: the applied thrust / m along body z, as the
+  /// plant has no drag) with white noise of this standard deviation (--sigma-accel).
+  std::optional<double> accelerometer_noise;
 
   /// Flies at a log rate of `hz`: controller.rate = hz, each sensor rate capped at
   /// hz (a sensor cannot be logged faster than the log), and the RK4 step nearest

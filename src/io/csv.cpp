@@ -746,6 +746,25 @@ class CsvRead {
 
 }  // namespace
 
+std::vector<std::string> read_csv_header(const std::filesystem::path& path) {
+  LineReader in(path);
+  std::string_view line;
+  std::vector<std::string> out;
+  while (in.next(line)) {
+    if (trim(line).empty() || line.front() == '#') continue;
+    const char delim = header_delimiter(line);
+    size_t start = 0;
+    while (true) {
+      const size_t end = line.find(delim, start);
+      out.emplace_back(unquote(line.substr(start, end == std::string_view::npos ? line.npos : end - start)));
+      if (end == std::string_view::npos) break;
+      start = end + 1;
+    }
+    break;
+  }
+  return out;
+}
+
 FlightLog read_flight_log(const std::filesystem::path& path, const CsvReadOptions& opt) {
   validate_read_options(opt);
   return CsvRead(path, opt).run();

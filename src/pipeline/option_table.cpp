@@ -243,6 +243,20 @@ Defs identify_options() {
                "and read out when determined (a controller's log holds each command from its time stamp: half a "
                "period); 0 = as logged; or a value in seconds. The paper's model only (docs/identify.md)")
                  .def("auto").choices({"auto"}).or_number().unit("s").range(-0.05, 0.05),
+             B("force-from", K::String,
+               "the force row's body acceleration: position (the motion differentiated twice, the paper's), "
+               "accelerometer (the IMU's specific force az_b: for a log without motion capture or EKF position), "
+               "or auto (accelerometer when the log has az_b but no x y z) (docs/identify.md)")
+                 .def("auto").choices({"auto", "position", "accelerometer"}),
+             B("imu-position", K::String,
+               "with --force-from accelerometer: the IMU's position from the centre of mass, X,Y,Z in m, body FLU "
+               "(its rotation then adds to the specific force, and is taken out)")
+                 .def("0,0,0").unit("m"),
+             B("accel-bias-z", K::String,
+               "with --force-from accelerometer: the accelerometer's z bias, m/s^2, subtracted: auto = measured on "
+               "the ground before take-off when the log has 0.5 s of it (else 0, and the mass carries it), or a "
+               "value")
+                 .def("auto").choices({"auto"}).or_number().unit("m/s^2").range(-5, 5),
              B("motor-time-constant", K::String,
                "motor time constant, s (first-order lag of the rotor speed behind a command): auto = the rotor "
                "model's, estimated from the flight when the log holds commands and the model gives none (PX4 does "
@@ -359,6 +373,10 @@ Defs simulate_options() {
       B("sigma-rotor", K::Number,
         "with --vehicle: noise std on the logged rotor speeds, rad/s or rpm (overrides [sensors] rotor_noise)")
           .text("the vehicle's [sensors] rotor_noise").at_least(0),
+      B("sigma-accel", K::Number,
+        "log the accelerometer too: ax_b ay_b az_b (specific force, body FLU, at the centre of mass) with this "
+        "noise std (e.g. 0.03), for --force-from accelerometer")
+          .unit("m/s^2").text("no accelerometer columns").at_least(0),
       B("vehicle", K::String,
         "fly a vehicle with rotor-level actuation: a vehicle file or built-in (" + builtin_vehicle_list() +
             "); plant and controller model = its [nominal], gains scaled to it (docs/vehicles.md); the log gains "

@@ -45,6 +45,29 @@ void validate_as(const OptionValues& r, F&& f) {
 }
 
 /// The processing group (--filter ... --map).
+// "X,Y,Z": three finite numbers (std::invalid_argument otherwise; with_option names the flag).
+Vec3 parse_vec3(const std::string& text) {
+  Vec3 v;
+  std::size_t at = 0;
+  for (int i = 0; i < 3; ++i) {
+    const std::size_t end = i < 2 ? text.find(',', at) : text.size();
+    if (end == std::string::npos) throw std::invalid_argument(fmt::format("'{}': expected X,Y,Z in metres", text));
+    const std::string item = text.substr(at, end - at);
+    std::size_t used = 0;
+    double x = 0.0;
+    try {
+      x = std::stod(item, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used == 0 || used != item.size() || !std::isfinite(x))
+      throw std::invalid_argument(fmt::format("'{}': '{}' is not a number; expected X,Y,Z in metres", text, item));
+    v(i) = x;
+    at = end + 1;
+  }
+  return v;
+}
+
 struct Processing {
   ProcessingOptions processing;
   double lambda = 30.0;
@@ -200,6 +223,9 @@ IdentifyRequest identify_request(const OptionValues& r) {
   req.csv.keep_extra_columns = false;  // identification uses the 14 standard columns (and the rotor columns) only
   RealFlightArgs rf;
   rf.vehicle = r.string("vehicle").value_or("");
+  rf.force_from = *r.string("force-from");
+  rf.accel_bias_z = *r.string("accel-bias-z");
+  opt.processing.imu_position = r.with_option("imu-position", [&] { return parse_vec3(*r.string("imu-position")); });
   rf.known_mass = r.number("known-mass");
   rf.terms = *r.string("terms");
   rf.cutoffs = *r.string("cutoffs");
@@ -297,16 +323,39 @@ void apply_real_flight(IdentifyRequest& req, const RealFlightArgs& a) {
   else throw std::invalid_argument(fmt::format("--cutoffs {}: expected auto, held-out or fixed", a.cutoffs));
 }
 
+// A CSV log whose force row will come from the accelerometer (--force-from
+// accelerometer, or auto on a header with az_b and no x): ax_b ay_b az_b
+// required in place of x y z (choose_force_source decides on the loaded log).
+void require_force_row_columns(const std::string& path, const IdentifyRequest& req, std::vector<std::string>& required) {
+  const std::string& from = req.real.force_from;
+  if (logs::detect_log_kind(path) != logs::LogKind::Csv) return;
+  if (from != "accelerometer") {
+    const std::vector<std::string> header = read_csv_header(path);
+    const auto has = [&](const std::string& c) {
+      const auto m = req.csv.map.find(c);
+      const std::string name = m == req.csv.map.end() ? c : m->second;
+      return std::find(header.begin(), header.end(), name) != header.end() ||
+             std::find(header.begin(), header.end(), "-" + name) != header.end();
+    };
+    if (has("x") || !has("az_b")) return;
+    if (from == "position")
+      throw InputError(fmt::format("{}: --force-from position: the log has no position x y z, but it has the "
+                                   "accelerometer's specific force (ax_b ay_b az_b): give --force-from accelerometer "
+                                   "(or leave --force-from at auto)",
+                                   path));
+  }
+  std::erase_if(required, [](const std::string& c) { return c == "x" || c == "y" || c == "z"; });
+  for (const char* c : {"ax_b", "ay_b", "az_b"}) required.emplace_back(c);
+}
+
 FlightLog load_identification_log(const std::string& path, const IdentifyRequest& req) {
   logs::LoadOptions load;
   load.csv = req.csv;
   if (req.vehicle) {  // the rotor columns instead of the wrench
-    const auto& std_cols = standard_log_columns();  // t x y z phi theta psi p q r, then the wrench
-    load.csv.required.assign(std_cols.begin(), std_cols.begin() + 10);
-    const auto& rc = req.vehicle->rotors.columns;
-    load.csv.required.insert(load.csv.required.end(), rc.begin(), rc.end());
+    load.csv.required = identification_columns(req);
     load.check_required = false;  // an imported autopilot log has no wrench: the rotor model adds it
   }
+  require_force_row_columns(path, req, load.csv.required);
   FlightLog log = logs::load_any_log(path, load);
   if (!req.vehicle) return log;
   try {
@@ -478,8 +527,51 @@ TimeWindow fit_paper_window(const TimeWindow& paper, const FlightLog& log, std::
   return fit_paper_window(paper, duration, duration / static_cast<double>(t.size() - 1), note);
 }
 
+// --force-from: the accelerometer's specific force for the force row when
+// asked, or (auto) when the log has az_b but no position; then the terms that
+// need the body velocity are left out and the accelerometer's z bias is
+// measured on the ground before take-off (ProcessingOptions::force_source).
+void choose_force_source(const FlightLog& log, const IdentifyRequest& req, IdentificationOptions& opt,
+                         std::vector<std::string>& warnings) {
+  const bool has_position = log.has("x") && log.has("y") && log.has("z");
+  const std::string& from = req.real.force_from;
+  if (from == "position" || (from == "auto" && (has_position || !log.has("az_b")))) return;
+  opt.processing.force_source = ProcessingOptions::ForceSource::kAccelerometer;
+  (void)specific_force_z_at_com(log, Vec3::Zero(), 0.0);  // names ax_b ay_b az_b when absent
+  std::vector<std::string> dropped;
+  if (opt.terms.flapping) dropped.emplace_back("flapping");
+  if (opt.terms.wind) dropped.emplace_back("wind");
+  if (opt.terms.force_drag) dropped.emplace_back("drag");
+  opt.terms.flapping = opt.terms.wind = opt.terms.force_drag = false;
+  std::string bias_note;
+  if (req.real.accel_bias_z != "auto") {
+    opt.processing.accel_bias_z = whole_number(req.real.accel_bias_z);
+  } else if (const auto air = airborne_part(log); air && air->ground_before >= 0.7) {
+    // The ground before take-off, clear of the take-off itself (0.2 s): there
+    // the specific force along body z is g cos(phi) cos(theta).
+    const Eigen::VectorXd t = log.column("t"), az = log.column("az_b"), ph = log.column("phi"), th = log.column("theta");
+    double sum = 0.0;
+    Eigen::Index n = 0;
+    for (Eigen::Index k = 0; k < log.rows() && t(k) - t(0) < air->ground_before - 0.2; ++k, ++n)
+      sum += az(k) - opt.processing.g * std::cos(ph(k)) * std::cos(th(k));
+    opt.processing.accel_bias_z = sum / static_cast<double>(n);
+    bias_note = fmt::format("its z bias, {:+.4f} m/s^2, measured on the {:.1f} s of ground before take-off",
+                            opt.processing.accel_bias_z, t(n - 1) - t(0));
+  } else {
+    bias_note = "its z bias not known (no ground before take-off in the log: give --accel-bias-z): the mass, or "
+                "with --known-mass the thrust scale, carries bias / g";
+  }
+  warnings.push_back(fmt::format(
+      "{}: the force row from the accelerometer's specific force az_b (--force-from accelerometer), {}{}{}",
+      has_position ? "as asked" : "the log has no position (x y z)", bias_note,
+      opt.processing.imu_position.isZero() ? "; the IMU taken at the centre of mass (--imu-position X,Y,Z)" : "",
+      dropped.empty() ? std::string()
+                      : fmt::format("; left out the terms that need the body velocity: {}", fmt::join(dropped, ", "))));
+}
+
 void fit_windows(const FlightLog& log, const IdentifyRequest& req, IdentificationOptions& opt,
                  std::vector<std::string>& warnings) {
+  choose_force_source(log, req, opt, warnings);
   if (!req.real.window_given) {  // an error would only ask for the obvious: the paper's window fitted
     std::string note;
     opt.window = fit_paper_window(opt.window, log, &note);
@@ -610,6 +702,7 @@ IdentificationInput with_rotor_model(const FlightLog& raw, const logs::ImportRep
       throw InputError(fmt::format("the log fails the input checks: {}: {} ({}); if the log is right, ignore the "
                                    "checks (--ignore-input-errors)",
                                    none->check, none->saw, none->action));
+  choose_force_source(wrench ? *wrench : raw, req, in.options, in.warnings);
   keep_to_the_air(air, req.real.window_given, in.options, in.warnings);
   end_before_impact(raw, req.real.window_given, in.options, in.warnings);
   // An autopilot log's topics at their own rates: one too slow for the
@@ -732,10 +825,14 @@ IdentificationInput prepare_identification(const std::string& path, const Identi
   logs::LoadOptions load;
   load.csv = req.csv;
   load.csv.required = identification_columns(req);
+  require_force_row_columns(path, req, load.csv.required);
   if (has_builtin_variant(*req.vehicle)) {
     // A log without this built-in's rotor columns may have a variant's
     // (use_builtin_variant): keep every column, require the state only.
-    load.csv.required.resize(10);
+    const RotorModel& r = req.vehicle->rotors;
+    std::erase_if(load.csv.required, [&](const std::string& c) {
+      return c == r.voltage_column || std::find(r.columns.begin(), r.columns.end(), c) != r.columns.end();
+    });
     load.csv.keep_extra_columns = true;
   }
   load.check_required = false;  // an imported autopilot log has no wrench: the rotor model adds it
@@ -853,6 +950,7 @@ SimulateRequest simulate_request(const OptionValues& r) {
       fail(r, "--actuator-tau cannot be used with --vehicle (the vehicle's rotors.time_constant is the lag)");
   }
   if (const auto sr = r.number("sigma-rotor")) o.rotor_noise = *sr;
+  o.accelerometer_noise = r.number("sigma-accel");
   n.position = r.number("sigma-position").value_or(n.position);
   n.yaw = r.number("sigma-yaw").value_or(n.yaw);
   n.attitude = r.number("sigma-attitude").value_or(n.attitude);

@@ -55,6 +55,10 @@ void ProcessingOptions::validate() const {
     throw std::invalid_argument(fmt::format("--period-tolerance = {:g} must be in [0, 0.5)", period_tolerance));
   if (threads < 0 || threads > 2)
     throw std::invalid_argument(fmt::format("ProcessingOptions: threads={} must be 0 (automatic), 1 or 2", threads));
+  if (!imu_position.allFinite())
+    throw std::invalid_argument("--imu-position: the IMU's position from the centre of mass must be 3 finite numbers (m)");
+  if (!std::isfinite(accel_bias_z))
+    throw std::invalid_argument(fmt::format("--accel-bias-z = {:g} m/s^2 must be finite", accel_bias_z));
   // lowpass is validated against the log's sample rate in process_log.
 }
 
@@ -62,16 +66,21 @@ namespace {
 
 using SignalColumns = Eigen::Matrix<double, Eigen::Dynamic, RegressionSignals::kCols>;
 
-// The log's columns of the standard names, in their order; every one must be there.
-std::vector<int> standard_columns(const FlightLog& log) {
+// The log's columns of the standard names, in their order; every one must be
+// there, but x y z when the force row comes from the accelerometer (-1 then).
+std::vector<int> standard_columns(const FlightLog& log, bool need_position) {
   const auto& names = standard_log_columns();  // t x y z phi theta psi p q r Fz tau_phi tau_theta tau_psi
   std::vector<int> col(names.size());
   std::vector<std::string> missing;
   for (size_t i = 0; i < names.size(); ++i)
-    if ((col[i] = log.find(names[i])) < 0) missing.push_back(names[i]);
+    if ((col[i] = log.find(names[i])) < 0 && (need_position || i < 1 || i > 3)) missing.push_back(names[i]);
   if (!missing.empty())
-    throw InputError(fmt::format("flight log: missing column(s) {} (has: {})", fmt::join(missing, ", "),
-                                 fmt::join(log.columns, ",")));
+    throw InputError(fmt::format("flight log: missing column(s) {} (has: {}){}", fmt::join(missing, ", "),
+                                 fmt::join(log.columns, ","),
+                                 need_position && log.has("az_b")
+                                     ? "; without a position the force row can come from the accelerometer: "
+                                       "--force-from accelerometer"
+                                     : ""));
   return col;
 }
 
@@ -83,7 +92,7 @@ double checked_period(const FlightLog& log, const std::vector<int>& col, const P
   if (n < 3) throw InputError(fmt::format("flight log: {} sample(s); identification needs a long log", n));
   const auto t = log.data.col(col[0]);
   for (size_t i = 0; i < names.size(); ++i)
-    if (!log.data.col(col[i]).allFinite())
+    if (col[i] >= 0 && !log.data.col(col[i]).allFinite())
       throw InputError(fmt::format("flight log: column '{}' contains NaN or infinite values", names[i]));
   const signal::SamplePeriodCheck chk = signal::check_sample_period(t, opt.period_tolerance);
   if (!chk.ok()) {
@@ -195,6 +204,10 @@ std::array<signal::HeldSamples, 6> filter_and_differentiate(const FlightLog& log
   // equal values equal).
   std::array<signal::HeldSamples, 6> held{};
   auto pose_into = [&](int log_col, int x_col, size_t i) {
+    if (log_col < 0) {  // no position (the force row from the accelerometer): zeros, never used
+      X.col(x_col).setZero();
+      return;
+    }
     X.col(x_col) = log.data.col(log_col);
     if (x_col == 10 && opt.unwrap_yaw) signal::unwrap(X.col(10).data(), n);
     if (opt.interpolate_held) held[i] = signal::interpolate_held_samples(X.col(x_col).data(), n);
@@ -268,7 +281,8 @@ void body_signals(const ProcessingOptions& opt, RegressionSignals& out) {
 std::shared_ptr<const RegressionSignals> process_log(const FlightLog& log, const ProcessingOptions& opt,
                                                      ProcessingSummary* summary) {
   opt.validate();
-  const std::vector<int> col = standard_columns(log);
+  const bool accel = opt.force_source == ProcessingOptions::ForceSource::kAccelerometer;
+  const std::vector<int> col = standard_columns(log, !accel);
   const Eigen::Index n = log.rows();
   const double T = checked_period(log, col, opt);
   const double fs = 1.0 / T;
@@ -291,7 +305,41 @@ std::shared_ptr<const RegressionSignals> process_log(const FlightLog& log, const
   if (summary) summarize_held(held, n, T, *summary);
   body_signals(opt, *out);
   if (opt.filter_products) out->x.middleCols<6>(5) = products;  // the rate products, pre-filtered as formed
+  if (accel) {
+    // w_dot + c measured: w = 0 (its derivative adds nothing) and c = the
+    // pre-filtered specific force along body z at the centre of mass.
+    Eigen::VectorXd az = specific_force_z_at_com(log, opt.imu_position, opt.accel_bias_z);
+    double* cols[1] = {az.data()};
+    zf.apply(cols, 1, n);
+    out->x.col(0).setZero();
+    out->x.col(4) = az;
+  }
   return out;
+}
+
+Eigen::VectorXd specific_force_z_at_com(const FlightLog& log, const Vec3& r, double bias) {
+  for (const char* c : {"ax_b", "ay_b", "az_b"})
+    if (!log.has(c))
+      throw InputError(fmt::format(
+          "the force row from the accelerometer (--force-from accelerometer) needs the specific force ax_b ay_b az_b "
+          "(m/s^2, body FLU: az_b = +9.81 at rest level); the log has no '{}'",
+          c));
+  const Eigen::Index n = log.rows();
+  Eigen::VectorXd az = log.column("az_b");
+  if (r.isZero()) return az.array() - bias;
+  const Eigen::VectorXd t = log.column("t");
+  const double T = (t(n - 1) - t(0)) / static_cast<double>(n - 1);
+  Eigen::VectorXd pd = log.column("p"), qd = log.column("q");
+  signal::central_difference_inplace(pd.data(), n, T);  // eq. (33)
+  signal::central_difference_inplace(qd.data(), n, T);
+  const Eigen::VectorXd p = log.column("p"), q = log.column("q"), w = log.column("r");
+  for (Eigen::Index k = 0; k < n; ++k) {
+    const Vec3 om(p(k), q(k), w(k)), om_dot(pd(k), qd(k), 0.0);  // r_dot does not reach the z component
+    const double tangential = om_dot.cross(r)(2);
+    const double centripetal = om.cross(om.cross(r))(2);
+    az(k) -= tangential + centripetal + bias;
+  }
+  return az;
 }
 
 TermProcessing process_with_terms(const FlightLog& log, const ProcessingOptions& force, const ProcessingOptions& moment,

@@ -72,6 +72,8 @@ void SimulationOptions::validate() const {
   }
   if (!std::isfinite(rotor_noise) || rotor_noise < 0.0)
     throw std::invalid_argument(fmt::format("--sigma-rotor = {} must be finite and >= 0", rotor_noise));
+  if (accelerometer_noise && (!std::isfinite(*accelerometer_noise) || *accelerometer_noise < 0.0))
+    throw std::invalid_argument(fmt::format("--sigma-accel = {} must be finite and >= 0", *accelerometer_noise));
   if (rotor_noise > 0.0 && (!rotors || rotors->input_leads_rotor()))
     throw std::invalid_argument(
         "rotor_noise applies to logged rotor speeds (a vehicle with rotors.input = speed or rpm), not to commands");
@@ -166,7 +168,10 @@ SimulationResult simulate(const Trajectory& traj, const SimulationOptions& opt) 
   const std::vector<std::string> rotor_logged = rotors ? rotors->logged_columns() : std::vector<std::string>{};
   const Eigen::Index n_rotors = static_cast<Eigen::Index>(rotor_logged.size());
   res.log.columns.insert(res.log.columns.end(), rotor_logged.begin(), rotor_logged.end());
-  res.log.data.resize(rows, static_cast<Eigen::Index>(log_columns().size()) + n_rotors);
+  const Eigen::Index n_accel = opt.accelerometer_noise ? 3 : 0;
+  if (n_accel) res.log.columns.insert(res.log.columns.end(), {"ax_b", "ay_b", "az_b"});
+  detail::Rng accel_rng(opt.sensors.seed, 5);  // its own stream: the other sensors' noise is unchanged
+  res.log.data.resize(rows, static_cast<Eigen::Index>(log_columns().size()) + n_rotors + n_accel);
   if (opt.record_truth) {
     res.truth.comments = res.log.comments;
     res.truth.comments.push_back("true state (not what the sensors saw); Fz and tau = actuator output");
@@ -207,10 +212,18 @@ SimulationResult simulate(const Trajectory& traj, const SimulationOptions& opt) 
     auto L = res.log.data.row(row);
     L.head(18) << t, rd.p(0), rd.p(1), rd.p(2), rd.phi, rd.theta, rd.psi, rd.gyro(0), rd.gyro(1), rd.gyro(2),
         logged.Fz, logged.tau(0), logged.tau(1), logged.tau(2), d(kX, 0), d(kY, 0), d(kZ, 0), d(kPsi, 0);
+    const Eigen::Index rotor_at = static_cast<Eigen::Index>(log_columns().size());
     if (rotors) {
-      L.tail(n_rotors) = rotors->logged().transpose();
+      L.segment(rotor_at, n_rotors) = rotors->logged().transpose();
       if (opt.rotor_noise > 0.0)
-        for (Eigen::Index i = 0; i < n_rotors; ++i) L(L.size() - n_rotors + i) += opt.rotor_noise * rotor_rng.normal();
+        for (Eigen::Index i = 0; i < n_rotors; ++i) L(rotor_at + i) += opt.rotor_noise * rotor_rng.normal();
+    }
+    if (n_accel) {
+      const double s = *opt.accelerometer_noise;
+      const Eigen::Index a = rotor_at + n_rotors;
+      L(a) = s * accel_rng.normal();
+      L(a + 1) = s * accel_rng.normal();
+      L(a + 2) = applied.Fz / opt.plant.m + s * accel_rng.normal();
     }
     if (opt.record_truth) {
       const State::Vector xd = plant.derivative(x, applied);
