@@ -3,6 +3,7 @@
 // IMU's lever arm and its z bias. References: closed forms of the rigid body's
 // kinematics, and the simulator's truth (the vehicle's [nominal]).
 #include "cli_fixture.hpp"
+#include "px4_sim_log.hpp"
 #include "quadid/io.hpp"
 #include "quadid/regression.hpp"
 
@@ -10,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include <cmath>
+#include <fstream>
 #include <string>
 #include <vector>
 
@@ -104,6 +106,36 @@ TEST_F(ForceSourceCli, TheBiasIsMeasuredOnTheGroundBeforeTakeOff) {
   const CliRun r = run("identify " + log + " --vehicle crazyflie21 --json");
   EXPECT_NE(r.err.find("its z bias, +0.1000 m/s^2, measured on the"), std::string::npos) << r.err;
   EXPECT_NEAR(mass_of(r), 0.0347, 0.003 * 0.0347);
+}
+
+// A PX4 flight without vehicle_local_position (no GPS, no vision): the ULog
+// holds vehicle_acceleration (FRD), import keeps it as ax_b ay_b az_b and says
+// there is no position, and identify (rotor model from CA_ROTOR*) takes the
+// force row from the accelerometer. Issue 11's figures: mass 0.5 %, moments 2 %.
+TEST_F(ForceSourceCli, Px4LogWithoutPositionIdentifiesFromTheAccelerometer) {
+  const quadid::Vehicle v = quadid::testing::px4_test_vehicle();
+  quadid::SimulationOptions so;
+  so.duration = 20.0;
+  quadid::configure_for_vehicle(so, v);
+  so.accelerometer_noise = 0.05;
+  const FlightLog log = quadid::simulate(quadid::FourierTrajectory::table2(), so).log;
+  quadid::logs::Px4UlogWriteOptions wo;
+  wo.motor_columns = v.rotors.columns;
+  wo.geometry = quadid::px4_geometry(v.rotors);
+  wo.write_position = false;
+  std::ofstream(path("nopos.ulg"), std::ios::binary) << quadid::logs::px4_ulog_from_flight_log(log, wo);
+  const CliRun imp = run("import " + path("nopos.ulg") + " -o " + path("nopos.csv"));
+  ASSERT_EQ(imp.rc, 0) << imp.err;
+  EXPECT_NE(imp.out.find("no 'vehicle_local_position'"), std::string::npos) << imp.out;
+  const CliRun r = run("identify " + path("nopos.ulg") + " --json");
+  ASSERT_EQ(r.rc, 0) << r.err;
+  EXPECT_NE(r.err.find("the log has no position (x y z)"), std::string::npos) << r.err;
+  const nlohmann::json j = nlohmann::json::parse(r.out);
+  ASSERT_TRUE(j.at("estimates").is_object() && j.at("estimates").contains("FMLS")) << r.out.substr(0, 3000);
+  const auto& e = j.at("estimates").at("FMLS");
+  EXPECT_NEAR(e.at("m").get<double>(), 1.6, 0.005 * 1.6);
+  for (const auto& [key, i] : {std::pair{"Ixx", 0}, {"Iyy", 1}, {"Izz", 2}})
+    EXPECT_NEAR(e.at(key).get<double>(), v.nominal.I(i, i), 0.02 * v.nominal.I(i, i)) << key;
 }
 
 }  // namespace

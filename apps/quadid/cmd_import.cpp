@@ -74,7 +74,11 @@ void run(const OptionValues& v) {
     std::vector<std::string> rotor_like;
     const auto& standard = standard_log_columns();
     for (const auto& c : log.columns)
-      if (std::find(standard.begin(), standard.end(), c) == standard.end()) rotor_like.push_back(c);
+      if (std::find(standard.begin(), standard.end(), c) == standard.end() && c != "ax_b" && c != "ay_b" &&
+          c != "az_b")
+        rotor_like.push_back(c);
+    // Without a position, identify's force row comes from the accelerometer.
+    if (!log.has("x")) io.processing.force_source = ProcessingOptions::ForceSource::kAccelerometer;
     for (const auto& f : source_rate_findings(rep, rotor_like, io))
       rep.warnings.push_back("too slow for identify's default cutoffs: " + f);
   }

@@ -244,6 +244,9 @@ struct Px4UlogWriteOptions {
   /// Further int32 parameters, e.g. {"SIM_GZ_EN", 1} for a Gazebo simulation.
   std::vector<std::pair<std::string, std::int32_t>> int_parameters;
   std::uint64_t start_timestamp_us = 1'000'000;  // log clock of the first row
+  /// false: no vehicle_local_position (a flight without GPS or vision). The log's
+  /// ax_b ay_b az_b, when it has them, are always written as vehicle_acceleration (FRD).
+  bool write_position = true;
 };
 std::string px4_ulog_from_flight_log(const FlightLog& log, const Px4UlogWriteOptions& opt = {});
 

@@ -226,20 +226,23 @@ def check_trajectory(trajectory="table2", **options) -> dict:
     return _quadid.check_trajectory(_path(trajectory), _options("check-trajectory", options))
 
 
-def import_log(log=None, *, rate: float = 250.0, **kwargs) -> dict:
+def import_log(log=None, *, rate: float = 250.0, vehicle=None, **kwargs) -> dict:
     """`quadid import LOG` as arrays: {"columns": {name: 1-D float64 numpy array},
     "report": the import report of `quadid import --json` (kind, sources,
     warnings, truncated, gaps, ...)}.
 
     LOG is a PX4 ULog, a Crazyflie uSD log or an ArduPilot DataFlash .bin; the
-    columns are t x y z phi theta psi p q r (SI, z up, body FLU) and the rotor
-    signals under the log's names, on one grid of `rate` Hz. A file cut
-    mid-record is read to its last complete record (report["truncated"]).
+    columns are t x y z phi theta psi p q r (SI, z up, body FLU), ax_b ay_b az_b
+    when the log has an accelerometer, and the rotor signals under the log's
+    names, on one grid of `rate` Hz. With `vehicle` (a built-in name or a vehicle
+    file), also the wrench its rotor model gives: Fz tau_phi tau_theta tau_psi
+    and Omega_r, as identify computes them. A file cut mid-record is read to
+    its last complete record (report["truncated"]).
     """
     log = _log_argument(log, kwargs, "import_log")
     if kwargs:
         raise TypeError(f"import_log: unexpected keyword arguments {', '.join(kwargs)}")
-    return _quadid.import_log(_path(log), float(rate))
+    return _quadid.import_log(_path(log), float(rate), _path(vehicle) if vehicle else "")
 
 
 def log_info(log=None, *, allow_truncated: bool = False, **kwargs) -> dict:

@@ -187,7 +187,7 @@ py::dict read_log(const std::string& path, const std::vector<std::string>& map,
 }
 
 // `quadid import FILE` as arrays: {"columns": {name: array}, "report": the import report}.
-py::dict import_log(const std::string& path, double rate_hz) {
+py::dict import_log(const std::string& path, double rate_hz, const std::string& vehicle) {
   quadid::logs::LoadOptions lo;
   lo.import.rate_hz = rate_hz;
   lo.import.validate();
@@ -199,6 +199,8 @@ py::dict import_log(const std::string& path, double rate_hz) {
     if (quadid::logs::detect_log_kind(path) == quadid::logs::LogKind::Csv)
       throw quadid::InputError(path + ": byte 0: not an autopilot log (a flight-log CSV needs no import: read_log reads it)");
     log = quadid::logs::load_any_log(path, lo, &rep);
+    // With a vehicle: its rotor model's wrench too (Fz, tau_*, Omega_r), as identify computes it.
+    if (!vehicle.empty()) log = quadid::with_rotor_wrench(log, quadid::load_vehicle(vehicle).rotors);
   }
   py::dict out;
   out["columns"] = log_views(std::move(log));
@@ -364,7 +366,7 @@ PYBIND11_MODULE(_quadid, m) {
   });
   m.def("read_log", &read_log, py::arg("path"), py::arg("map"), py::arg("period_tolerance"), py::arg("time_unit"));
   m.def("identify", &identify, py::arg("log"), py::arg("options"));
-  m.def("import_log", &import_log, py::arg("path"), py::arg("rate_hz"));
+  m.def("import_log", &import_log, py::arg("path"), py::arg("rate_hz"), py::arg("vehicle"));
   m.def("simulate", &simulate, py::arg("options"), py::arg("truth"), py::arg("out"), py::arg("truth_out"));
   m.def("design", &design, py::arg("options"), py::arg("out"));
   m.def("check_trajectory", &check_trajectory, py::arg("trajectory"), py::arg("options"));

@@ -172,3 +172,22 @@ def test_import_log_equals_the_command_line(tmp_path):
         bad = tmp_path / "x.csv"
         bad.write_text("t,x\n0,1\n")
         quadid.import_log(bad)
+
+
+def test_import_log_with_a_vehicle_adds_its_rotor_wrench(tmp_path):
+    """import_log(path, vehicle=...) on a simulated PX4 ULog: the columns of the
+    plain import plus Fz and the torques of the vehicle's rotor model, which are
+    the simulator's own wrench to the ULog's float32 precision and the 250 Hz grid."""
+    import numpy as np
+
+    ulg = tmp_path / "sim.ulg"
+    run_cli("simulate", "--vehicle", "jmavsim-quad", "--trajectory", "table2", "--duration", "10", "--ulog", str(ulg))
+    plain = quadid.import_log(ulg)
+    got = quadid.import_log(ulg, vehicle="jmavsim-quad")
+    for name in plain["columns"]:
+        np.testing.assert_array_equal(got["columns"][name], plain["columns"][name], err_msg=name)
+    assert {"Fz", "tau_phi", "tau_theta", "tau_psi", "Omega_r"} <= set(got["columns"])
+    # Hover thrust of the 0.8 kg jmavsim-quad: m g within 1 % on average (the flight is level on average).
+    assert abs(np.mean(got["columns"]["Fz"]) / (0.8 * 9.81) - 1.0) < 0.01
+    with pytest.raises(ValueError, match="neither a built-in vehicle"):
+        quadid.import_log(ulg, vehicle="no-such-vehicle")

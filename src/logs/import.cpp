@@ -238,6 +238,7 @@ void join_blocks(const std::vector<Eigen::MatrixXd>& blocks, const std::vector<S
     c += b.cols();
   }
   std::vector<std::string> order = {"t", "x", "y", "z", "phi", "theta", "psi", "p", "q", "r"};
+  if (!out.has("x")) order.erase(order.begin() + 1, order.begin() + 4);  // no position: the accelerometer's force row
   for (const auto& n : out.columns)
     if (std::find(order.begin(), order.end(), n) == order.end()) order.push_back(n);
   Eigen::MatrixXd sorted(rows, cols);
@@ -363,8 +364,23 @@ FlightLog import_ulog(const ULog& log, const ImportOptions& opt, ImportReport* r
   for (const auto& d : log.dropouts)
     rep.dropouts.push_back({static_cast<double>(d.timestamp) * 1e-6, d.duration_ms * 1e-3});
   std::vector<Series> series;
-  // NED -> z up: positions (x, -y, -z) (docs/import.md).
-  series.push_back(from_topic(log, opt.position_topic, {"x", "y", "z"}, {"x", "y", "z"}, detail::kFrdToFluSigns));
+  // NED -> z up: positions (x, -y, -z) (docs/import.md). A log without one
+  // (no GPS, no vision) keeps the accelerometer for the force row
+  // (identify --force-from accelerometer).
+  if (log.find_topic(opt.position_topic))
+    series.push_back(from_topic(log, opt.position_topic, {"x", "y", "z"}, {"x", "y", "z"}, detail::kFrdToFluSigns));
+  else
+    rep.warnings.push_back(fmt::format("no '{}': no position columns (identify takes the force row from the "
+                                       "accelerometer, --force-from accelerometer)",
+                                       opt.position_topic));
+  // The specific force, body FRD -> FLU (x, -y, -z): +9.8 m/s^2 on z at rest.
+  if (log.find_topic("vehicle_acceleration"))
+    series.push_back(from_topic(log, "vehicle_acceleration", {"xyz[0]", "xyz[1]", "xyz[2]"}, {"ax_b", "ay_b", "az_b"},
+                                detail::kFrdToFluSigns));
+  else if (const ULogTopic* sc = log.find_topic("sensor_combined"); sc && sc->find("accelerometer_m_s2[0]"))
+    series.push_back(from_topic(log, "sensor_combined",
+                                {"accelerometer_m_s2[0]", "accelerometer_m_s2[1]", "accelerometer_m_s2[2]"},
+                                {"ax_b", "ay_b", "az_b"}, detail::kFrdToFluSigns));
   // Quaternion FRD->NED to FLU->ENU-like z-up: (q0, q1, -q2, -q3).
   Series q = from_topic(log, opt.attitude_topic, {"q[0]", "q[1]", "q[2]", "q[3]"}, {"q0", "q1", "q2", "q3"},
                         detail::kFrdToFluQuaternionSigns);

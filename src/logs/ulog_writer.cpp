@@ -129,8 +129,9 @@ void ULogWriter::write(const std::filesystem::path& path) const { write_file_ato
 namespace quadid::logs {
 
 std::string px4_ulog_from_flight_log(const FlightLog& log, const Px4UlogWriteOptions& opt) {
-  for (const char* c : {"t", "x", "y", "z", "phi", "theta", "psi", "p", "q", "r"})
-    if (!log.has(c)) throw InputError(fmt::format("px4_ulog_from_flight_log: the flight log has no column '{}'", c));
+  for (const std::string c : {"t", "x", "y", "z", "phi", "theta", "psi", "p", "q", "r"})
+    if (!log.has(c) && (opt.write_position || (c != "x" && c != "y" && c != "z")))
+      throw InputError(fmt::format("px4_ulog_from_flight_log: the flight log has no column '{}'", c));
   if (opt.motor_columns.size() > 12)
     throw std::invalid_argument(fmt::format("{} motor columns: actuator_motors holds at most 12", opt.motor_columns.size()));
   if (opt.output_columns.size() > 16)
@@ -142,6 +143,7 @@ std::string px4_ulog_from_flight_log(const FlightLog& log, const Px4UlogWriteOpt
   w.format("vehicle_attitude:uint64_t timestamp;float[4] q;");
   w.format("vehicle_angular_velocity:uint64_t timestamp;float[3] xyz;uint8_t[4] _padding0;");
   w.format("actuator_motors:uint64_t timestamp;float[12] control;");
+  w.format("vehicle_acceleration:uint64_t timestamp;float[3] xyz;uint8_t[4] _padding0;");
   w.format("actuator_outputs:uint64_t timestamp;uint32_t noutputs;float[16] output;");
   for (const auto& [name, value] : opt.int_parameters) w.parameter(name, value);
   const RotorGeometry& g = opt.geometry;
@@ -159,22 +161,34 @@ std::string px4_ulog_from_flight_log(const FlightLog& log, const Px4UlogWriteOpt
         w.parameter(fmt::format("CA_ROTOR{}_KM", i), static_cast<float>(g.spin[k] == "cw" ? -g.km[k] : g.km[k]));
     }
   }
-  const auto pos = w.subscribe("vehicle_local_position");
+  const bool accel = log.has("ax_b") && log.has("ay_b") && log.has("az_b");
+  const std::uint16_t pos = opt.write_position ? w.subscribe("vehicle_local_position") : 0;
+  const std::uint16_t acc = accel ? w.subscribe("vehicle_acceleration") : 0;
   const auto att = w.subscribe("vehicle_attitude");
   const auto rat = w.subscribe("vehicle_angular_velocity");
   const std::uint16_t mot = opt.motor_columns.empty() ? 0 : w.subscribe("actuator_motors");
   const std::uint16_t outs = opt.output_columns.empty() ? 0 : w.subscribe("actuator_outputs");
   const auto col = [&log](std::string_view c) { return log.column(c); };
-  const Eigen::VectorXd t = col("t"), x = col("x"), y = col("y"), z = col("z"), phi = col("phi"),
-                        theta = col("theta"), psi = col("psi"), p = col("p"), q = col("q"), r = col("r");
+  const auto col_or_zero = [&log](std::string_view c) {
+    return log.has(c) ? log.column(c) : Eigen::VectorXd(Eigen::VectorXd::Zero(log.rows()));
+  };
+  const Eigen::VectorXd t = col("t"), x = col_or_zero("x"), y = col_or_zero("y"), z = col_or_zero("z"),
+                        phi = col("phi"), theta = col("theta"), psi = col("psi"), p = col("p"), q = col("q"),
+                        r = col("r"), ax = col_or_zero("ax_b"), ay = col_or_zero("ay_b"), az = col_or_zero("az_b");
   std::vector<Eigen::VectorXd> motors;
   for (const auto& c : opt.motor_columns) motors.push_back(col(c));
   std::vector<Eigen::VectorXd> outputs;
   for (const auto& c : opt.output_columns) outputs.push_back(col(c));
   for (Eigen::Index i = 0; i < t.size(); ++i) {
     const auto ts = opt.start_timestamp_us + static_cast<std::uint64_t>(std::llround((t[i] - t[0]) * 1e6));
-    const Eigen::Vector3d p_ned = detail::flu_to_frd(Eigen::Vector3d(x[i], y[i], z[i]));
-    w.data(pos, ULogPayload().put(ts).put(float(p_ned.x())).put(float(p_ned.y())).put(float(p_ned.z())).str());
+    if (opt.write_position) {
+      const Eigen::Vector3d p_ned = detail::flu_to_frd(Eigen::Vector3d(x[i], y[i], z[i]));
+      w.data(pos, ULogPayload().put(ts).put(float(p_ned.x())).put(float(p_ned.y())).put(float(p_ned.z())).str());
+    }
+    if (accel) {
+      const Eigen::Vector3d a_frd = detail::flu_to_frd(Eigen::Vector3d(ax[i], ay[i], az[i]));
+      w.data(acc, ULogPayload().put(ts).put(float(a_frd.x())).put(float(a_frd.y())).put(float(a_frd.z())).str());
+    }
     // ZYX Euler -> quaternion (body FLU -> world z up), then (q0, q1, -q2, -q3).
     const Eigen::Vector4d qa = detail::quaternion_from_euler_zyx(phi[i], theta[i], psi[i]);
     const double q0 = qa[0], q1 = qa[1], q2 = qa[2], q3 = qa[3];

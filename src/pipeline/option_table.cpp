@@ -183,6 +183,26 @@ B reference_option(const std::string& what) {
 
 // --- The commands -------------------------------------------------------------------
 
+// Where the force row's acceleration comes from (identify): issue 38, section 5.
+Defs force_row_group() {
+  return {
+      B("force-from", K::String,
+        "the force row's body acceleration: position (the motion differentiated twice, the paper's), "
+        "accelerometer (the IMU's specific force az_b: for a log without motion capture or EKF position), "
+        "or auto (accelerometer when the log has az_b but no x y z) (docs/identify.md)")
+          .def("auto").choices({"auto", "position", "accelerometer"}),
+      B("imu-position", K::String,
+        "with --force-from accelerometer: the IMU's position from the centre of mass, X,Y,Z in m, body FLU "
+        "(its rotation then adds to the specific force, and is taken out)")
+          .def("0,0,0").unit("m"),
+      B("accel-bias-z", K::String,
+        "with --force-from accelerometer: the accelerometer's z bias, m/s^2, subtracted: auto = measured on "
+        "the ground before take-off when the log has 0.5 s of it (else 0, and the mass carries it), or a "
+        "value")
+          .def("auto").choices({"auto"}).or_number().unit("m/s^2").range(-5, 5),
+  };
+}
+
 Defs identify_options() {
   return Defs{
              B("log", K::String,
@@ -243,20 +263,6 @@ Defs identify_options() {
                "and read out when determined (a controller's log holds each command from its time stamp: half a "
                "period); 0 = as logged; or a value in seconds. The paper's model only (docs/identify.md)")
                  .def("auto").choices({"auto"}).or_number().unit("s").range(-0.05, 0.05),
-             B("force-from", K::String,
-               "the force row's body acceleration: position (the motion differentiated twice, the paper's), "
-               "accelerometer (the IMU's specific force az_b: for a log without motion capture or EKF position), "
-               "or auto (accelerometer when the log has az_b but no x y z) (docs/identify.md)")
-                 .def("auto").choices({"auto", "position", "accelerometer"}),
-             B("imu-position", K::String,
-               "with --force-from accelerometer: the IMU's position from the centre of mass, X,Y,Z in m, body FLU "
-               "(its rotation then adds to the specific force, and is taken out)")
-                 .def("0,0,0").unit("m"),
-             B("accel-bias-z", K::String,
-               "with --force-from accelerometer: the accelerometer's z bias, m/s^2, subtracted: auto = measured on "
-               "the ground before take-off when the log has 0.5 s of it (else 0, and the mass carries it), or a "
-               "value")
-                 .def("auto").choices({"auto"}).or_number().unit("m/s^2").range(-5, 5),
              B("motor-time-constant", K::String,
                "motor time constant, s (first-order lag of the rotor speed behind a command): auto = the rotor "
                "model's, estimated from the flight when the log holds commands and the model gives none (PX4 does "
@@ -305,7 +311,8 @@ Defs identify_options() {
                  .shorthand("v").cli(),
              json_flag(),
              quiet_flag(),
-         };
+         } +
+         force_row_group();
 }
 
 Defs simulate_options() {

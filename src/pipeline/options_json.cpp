@@ -420,9 +420,12 @@ std::vector<std::string> source_rate_findings(const logs::ImportReport& report,
                                      {{"p", "q", "r"}, moment, "--cutoff-moment"},
                                      {{"x", "y", "z"}, force, "--cutoff-force"},
                                      {{"phi", "theta", "psi"}, force, "--cutoff-force"}};
+  std::vector<Group> all = groups;
+  if (opt.processing.force_source == ProcessingOptions::ForceSource::kAccelerometer)
+    all.push_back({{"ax_b", "ay_b", "az_b"}, force, "--cutoff-force"});  // the force row's acceleration
   std::vector<std::string> out;
   std::vector<std::string> seen;  // topics already named
-  for (const Group& g : groups)
+  for (const Group& g : all)
     for (const auto& c : g.columns) {
       const auto it = report.column_sources.find(c);
       if (it == report.column_sources.end()) continue;

@@ -144,6 +144,28 @@ struct Stats {
   long long n = 0;
 };
 
+// The log's columns after the standard 18 at `row`: the rotors' logged signals
+// (with their noise), then the accelerometer's specific force at the centre of
+// mass (the plant has no drag: the applied thrust / m along body z).
+void log_rotors_and_accelerometer(Eigen::MatrixXd& data, Eigen::Index row, const SimulationOptions& opt,
+                                  const RotorActuators* rotors, double Fz_applied, detail::Rng& rotor_rng,
+                                  detail::Rng& accel_rng) {
+  auto L = data.row(row);
+  Eigen::Index at = static_cast<Eigen::Index>(log_columns().size());
+  if (rotors) {
+    const Eigen::VectorXd v = rotors->logged();
+    L.segment(at, v.size()) = v.transpose();
+    if (opt.rotor_noise > 0.0)
+      for (Eigen::Index i = 0; i < v.size(); ++i) L(at + i) += opt.rotor_noise * rotor_rng.normal();
+    at += v.size();
+  }
+  if (!opt.accelerometer_noise) return;
+  const double s = *opt.accelerometer_noise;
+  L(at) = s * accel_rng.normal();
+  L(at + 1) = s * accel_rng.normal();
+  L(at + 2) = Fz_applied / opt.plant.m + s * accel_rng.normal();
+}
+
 }  // namespace
 
 SimulationResult simulate(const Trajectory& traj, const SimulationOptions& opt) {
@@ -212,19 +234,7 @@ SimulationResult simulate(const Trajectory& traj, const SimulationOptions& opt) 
     auto L = res.log.data.row(row);
     L.head(18) << t, rd.p(0), rd.p(1), rd.p(2), rd.phi, rd.theta, rd.psi, rd.gyro(0), rd.gyro(1), rd.gyro(2),
         logged.Fz, logged.tau(0), logged.tau(1), logged.tau(2), d(kX, 0), d(kY, 0), d(kZ, 0), d(kPsi, 0);
-    const Eigen::Index rotor_at = static_cast<Eigen::Index>(log_columns().size());
-    if (rotors) {
-      L.segment(rotor_at, n_rotors) = rotors->logged().transpose();
-      if (opt.rotor_noise > 0.0)
-        for (Eigen::Index i = 0; i < n_rotors; ++i) L(rotor_at + i) += opt.rotor_noise * rotor_rng.normal();
-    }
-    if (n_accel) {
-      const double s = *opt.accelerometer_noise;
-      const Eigen::Index a = rotor_at + n_rotors;
-      L(a) = s * accel_rng.normal();
-      L(a + 1) = s * accel_rng.normal();
-      L(a + 2) = applied.Fz / opt.plant.m + s * accel_rng.normal();
-    }
+    log_rotors_and_accelerometer(res.log.data, row, opt, rotors ? &*rotors : nullptr, applied.Fz, rotor_rng, accel_rng);
     if (opt.record_truth) {
       const State::Vector xd = plant.derivative(x, applied);
       const Vec3 vi = rotation(x.eta) * x.v;

@@ -1,8 +1,8 @@
 // libFuzzer target for the autopilot-log readers (docs/log-info.md, "Fuzzing").
 // Any input must parse or end in an InputError: a crash, a sanitizer report,
 // a hang or another exception is a bug. The first byte picks the reader:
-// % 3 == 0 -> ULog (parse, then import), 1 -> Crazyflie uSD, 2 -> ArduPilot
-// DataFlash (parse, then its listing).
+// % 3 == 0 -> ULog (parse, then import), 1 -> Crazyflie uSD (parse, listing,
+// import), 2 -> ArduPilot DataFlash (parse, listing, import).
 #include "quadid/logs.hpp"
 
 #include <cstddef>
@@ -17,6 +17,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       const auto log = quadid::logs::parse_dataflash(bytes, "fuzz");
       (void)quadid::logs::format_dataflash_info(log, true);
       (void)quadid::logs::dataflash_info_json(log).dump();
+      (void)quadid::logs::import_dataflash(log);
     } else if (data[0] % 3 == 0) {
       const auto log = quadid::logs::parse_ulog(bytes, "fuzz");
       (void)quadid::logs::format_ulog_info(log, true);
@@ -27,6 +28,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     } else {
       const auto log = quadid::logs::parse_usd(bytes, "fuzz");
       (void)quadid::logs::format_usd_info(log);
+      (void)quadid::logs::import_usd(log);
     }
   } catch (const quadid::InputError&) {
   }
