@@ -367,17 +367,21 @@ FlightLog import_ulog(const ULog& log, const ImportOptions& opt, ImportReport* r
   // NED -> z up: positions (x, -y, -z) (docs/import.md). A log without one
   // (no GPS, no vision) keeps the accelerometer for the force row
   // (identify --force-from accelerometer).
-  if (log.find_topic(opt.position_topic))
+  const bool position = log.find_topic(opt.position_topic) != nullptr;
+  if (position)
     series.push_back(from_topic(log, opt.position_topic, {"x", "y", "z"}, {"x", "y", "z"}, detail::kFrdToFluSigns));
   else
     rep.warnings.push_back(fmt::format("no '{}': no position columns (identify takes the force row from the "
                                        "accelerometer, --force-from accelerometer)",
                                        opt.position_topic));
-  // The specific force, body FRD -> FLU (x, -y, -z): +9.8 m/s^2 on z at rest.
-  if (log.find_topic("vehicle_acceleration"))
+  // The specific force, body FRD -> FLU (x, -y, -z): +9.8 m/s^2 on z at rest;
+  // only without a position (the force row's then), so that the grid of a log
+  // with one (the span every series covers) stays as it was.
+  const ULogTopic* sc = log.find_topic("sensor_combined");
+  if (!position && log.find_topic("vehicle_acceleration"))
     series.push_back(from_topic(log, "vehicle_acceleration", {"xyz[0]", "xyz[1]", "xyz[2]"}, {"ax_b", "ay_b", "az_b"},
                                 detail::kFrdToFluSigns));
-  else if (const ULogTopic* sc = log.find_topic("sensor_combined"); sc && sc->find("accelerometer_m_s2[0]"))
+  else if (!position && sc && sc->find("accelerometer_m_s2[0]"))
     series.push_back(from_topic(log, "sensor_combined",
                                 {"accelerometer_m_s2[0]", "accelerometer_m_s2[1]", "accelerometer_m_s2[2]"},
                                 {"ax_b", "ay_b", "az_b"}, detail::kFrdToFluSigns));
