@@ -604,7 +604,7 @@ TEST_F(CliVehicle, BatteryVoltageInTheWrongUnitNamesTheScaleThatFits) {
 // The PWM path on the real flights (which log PWM, battery and rpm): it runs on
 // each, recommends a physical set, and warns how far its inertia can be trusted.
 // Measured against the same flights' rpm results (docs/crazyflie.md): Ixx median
-// -17 %, CV 39 % (rpm: 6.5 %), so the bound here is a guard, not the target.
+// -21 %, CV 29 % (rpm: 6.5 %), so the bound here is a guard, not the target.
 TEST_F(CliVehicle, RealCrazyflieFlightsFromPwmArePhysicalAndCarryTheirWarning) {
 #ifdef QUADID_SHARED_DATA
   const std::filesystem::path dir = std::filesystem::path(QUADID_SHARED_DATA) / "crazyflie-usd";

@@ -527,7 +527,7 @@ TEST(Vehicle, SignedRotorSpeedsNoiseAroundZeroIsNoFinding) {
 }
 
 // Issue 38: the duty-cycle rotor input. rotor_inputs gives the applied voltage
-// d vbat; speeds() the straight line c0 + c1 V through the first-order lag
+// d vbat; speeds() the map c0 + c1 V + c2 V^2 through the first-order lag
 // (closed form: a step from V0 to V1 at sample 0 reaches w1 + (w0 - w1) e^(-kT/tau)).
 TEST(Vehicle, DutyInputIsTheLaggedSpeedOfDutyTimesBatteryVoltage) {
   const Vehicle v = load_vehicle("crazyflie21-pwm");
@@ -548,10 +548,11 @@ TEST(Vehicle, DutyInputIsTheLaggedSpeedOfDutyTimesBatteryVoltage) {
   EXPECT_DOUBLE_EQ(V(10, 2), 0.75 * 3.69);
   const Eigen::MatrixXd w = r.speeds(V, T);
   const double a = std::exp(-T / r.time_constant);
-  double expect = 8905.55 + 4240.37 * V(0, 0);  // steady at the first sample
+  const auto map = [](double v) { return 15870.1 - 2138.6 * v + 1412.95 * v * v; };
+  double expect = map(V(0, 0));  // steady at the first sample
   EXPECT_NEAR(w(0, 0), expect, 1e-9 * expect);
   for (int k = 1; k < n; ++k) {
-    const double target = 8905.55 + 4240.37 * V(k - 1, 0);
+    const double target = map(V(k - 1, 0));
     expect = target + (expect - target) * a;
     EXPECT_NEAR(w(k, 3), expect, 1e-9 * expect) << k;
   }
@@ -571,7 +572,7 @@ TEST(Vehicle, DutyKeysBelongToTheDutyInputAndAreRequiredThere) {
         << e.what();
   }
   std::string duty(builtin_vehicle_text("crazyflie21-pwm"));
-  const std::string line = "speed_of_voltage = [8905.55, 4240.37]\n";
+  const std::string line = "speed_of_voltage = [15870.1, -2138.6, 1412.95]\n";
   ASSERT_NE(duty.find(line), std::string::npos);
   duty.erase(duty.find(line), line.size());
   try {

@@ -77,10 +77,10 @@ struct RotorModel {
   /// (--known-mass) on the log's hover thrust, and the thrust scale refines it.
   bool thrust_coefficient_unknown = false;
   /// input = "duty" only: the battery-voltage column, its unit (V per logged unit: 0.001 for mV),
-  /// and the steady rotor speed (rpm) of an applied voltage V: c0 + c1 V.
+  /// and the steady rotor speed (rpm) of an applied voltage V: c0 + c1 V + c2 V^2 (c2 optional, 0).
   std::string voltage_column;
   double voltage_scale = 1.0;
-  std::array<double, 2> speed_of_voltage = {0.0, 0.0};
+  std::array<double, 3> speed_of_voltage = {0.0, 0.0, 0.0};
   /// input = "duty", `simulate` only: the battery, vbat = battery_voltage - battery_sag * sum T_i
   /// - battery_drain * t (V, V per N of total thrust, V/s). 0 = not given (simulate refuses).
   double battery_voltage = 0.0;
@@ -100,13 +100,12 @@ struct RotorModel {
   bool input_is_command() const { return input == RotorInput::kCommand || input == RotorInput::kDuty; }
   /// Rotor speeds in rev/min (rpm, duty): the rotor-inertia term converts them to rad/s.
   bool speed_in_rpm() const { return input == RotorInput::kRpm || input == RotorInput::kDuty; }
-  /// input = "duty": the steady rotor speed (rpm) of an applied voltage (V), c0 + c1 V, 0 without
-  /// voltage and never below 0 (below its fitted range the line is an extrapolation); and the
-  /// voltage that holds speed w (the line's inverse).
-  double speed_of_applied_voltage(double volts) const {
-    return volts > 0.0 ? std::max(0.0, speed_of_voltage[0] + speed_of_voltage[1] * volts) : 0.0;
-  }
-  double applied_voltage_of_speed(double w) const { return (w - speed_of_voltage[0]) / speed_of_voltage[1]; }
+  /// input = "duty": the steady rotor speed (rpm) of an applied voltage (V), c0 + c1 V + c2 V^2 on
+  /// its increasing branch (held at the vertex beyond it), 0 without voltage and never below 0
+  /// (outside its fitted range the map is an extrapolation); and the voltage that holds speed w
+  /// (the map's inverse on that branch).
+  double speed_of_applied_voltage(double volts) const;
+  double applied_voltage_of_speed(double w) const;
 
   /// k of T = k w^2: kf (speed, rpm) or thrust_max (command).
   double thrust_coefficient() const { return input == RotorInput::kCommand ? thrust_max : kf; }

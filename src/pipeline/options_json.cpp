@@ -672,7 +672,7 @@ IdentificationInput with_rotor_model(const FlightLog& raw, const logs::ImportRep
     in.warnings.push_back(
         "rotor speeds from duty cycle x battery voltage (rotors.input = \"duty\"), not measured: a motor's rpm per volt "
         "drifts as it warms and the battery drains, and the torques, so the inertia, scale with it. On four real "
-        "flights of one Crazyflie 2.1 the PWM path's Ixx scattered 39 % between flights and its median was 17 % "
+        "flights of one Crazyflie 2.1 the PWM path's Ixx scattered 29 % between flights and its median was 21 % "
         "below the same flights' rpm results (docs/crazyflie.md); the intervals below do not include this. For "
         "inertia to a few percent, log rotor speeds (an RPM deck, ESC telemetry)");
   in.wrench_source = from_log ? req.vehicle->source : fmt::format("the rotor model of vehicle {}", req.vehicle->source);

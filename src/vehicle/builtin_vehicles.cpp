@@ -186,11 +186,12 @@ constexpr std::string_view kCrazyflie21PwmHeader = R"toml(# Bitcraze Crazyflie 2
 # (pwm.m1_pwm .. pwm.m4_pwm, 0..65535) and the battery voltage (pm.vbatMV) of the
 # stock firmware's log, instead of rotor speeds. The rotor speed follows the applied
 # voltage, duty x battery voltage (its sag under load is in the logged voltage),
-# through the motors' lag: rpm = 8905.55 + 4240.37 V, time_constant 0.06764 s; and
-# the battery for `simulate`: 4.0 V at the start, 1.505 V of sag per N of total
-# thrust, 0.00171 V/s of drain. Source: a least-squares fit on the four real flights
-# of ../shared/data/crazyflie-usd, which log PWM, battery and RPM together
-# (tests/data/vehicles/fit_crazyflie21_pwm.py and its output beside it: 0.8 to 4.6 %
+# through the motors' lag: rpm = 15870.1 - 2138.6 V + 1412.95 V^2 (held at its
+# vertex below 0.76 V), time_constant 0.07366 s; and the battery for `simulate`:
+# 4.0 V at the start, 1.505 V of sag per N of total thrust, 0.00171 V/s of drain.
+# Source: a least-squares fit on the four real flights of
+# ../shared/data/crazyflie-usd, which log PWM, battery and RPM together
+# (tests/data/vehicles/fit_crazyflie21_pwm.py and its output beside it: 0.4 to 3.5 %
 # rms rpm error per motor and flight, one parameter set for all). Everything else
 # is crazyflie21's, below.
 )toml";
@@ -207,9 +208,9 @@ std::string crazyflie21_pwm_text() {
   replace("input = \"rpm\"\ncolumns = [\"rpm.m1\", \"rpm.m2\", \"rpm.m3\", \"rpm.m4\"]",
           "input = \"duty\"\ncolumns = [\"pwm.m1_pwm\", \"pwm.m2_pwm\", \"pwm.m3_pwm\", \"pwm.m4_pwm\"]\n"
           "command_range = [0, 65535]\nvoltage_column = \"pm.vbatMV\"\nvoltage_scale = 0.001\n"
-          "speed_of_voltage = [8905.55, 4240.37]\nbattery_voltage = 4.0\nbattery_sag = 1.505\n"
+          "speed_of_voltage = [15870.1, -2138.6, 1412.95]\nbattery_voltage = 4.0\nbattery_sag = 1.505\n"
           "battery_drain = 0.00171");
-  replace("time_constant = 0.06\n", "time_constant = 0.06764\n");
+  replace("time_constant = 0.06\n", "time_constant = 0.07366\n");
   return t;
 }
 

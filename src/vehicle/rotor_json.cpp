@@ -52,7 +52,11 @@ RotorModel rotor_model_from_json(const nlohmann::json& j, const std::string& sou
     if (j.contains("command_range")) m.command_range = j.at("command_range").get<std::array<double, 2>>();
     m.voltage_column = j.value("voltage_column", std::string());
     m.voltage_scale = j.value("voltage_scale", 1.0);
-    if (j.contains("speed_of_voltage")) m.speed_of_voltage = j.at("speed_of_voltage").get<std::array<double, 2>>();
+    if (j.contains("speed_of_voltage")) {
+      const auto c = j.at("speed_of_voltage").get<std::vector<double>>();
+      if (c.size() != 2 && c.size() != 3) throw std::invalid_argument("rotors.speed_of_voltage: must be [c0, c1] or [c0, c1, c2]");
+      for (std::size_t i = 0; i < c.size(); ++i) m.speed_of_voltage[i] = c[i];
+    }
     m.battery_voltage = j.value("battery_voltage", 0.0);
     m.battery_sag = j.value("battery_sag", 0.0);
     m.battery_drain = j.value("battery_drain", 0.0);

@@ -82,7 +82,7 @@ void RotorModel::validate() const {
 void RotorModel::validate_duty() const {
   const bool duty = input == RotorInput::kDuty;
   if (!duty) {
-    if (!voltage_column.empty() || speed_of_voltage != std::array<double, 2>{0.0, 0.0} || battery_voltage != 0.0)
+    if (!voltage_column.empty() || speed_of_voltage != std::array<double, 3>{0.0, 0.0, 0.0} || battery_voltage != 0.0)
       throw std::invalid_argument(fmt::format(
           "rotors.voltage_column, speed_of_voltage and battery_*: apply to rotors.input = \"duty\" only (this "
           "vehicle's input is \"{}\")",
@@ -94,15 +94,41 @@ void RotorModel::validate_duty() const {
   if (!std::isfinite(voltage_scale) || !(voltage_scale > 0.0))
     throw std::invalid_argument(fmt::format("rotors.voltage_scale = {} must be > 0 (V per logged unit: 0.001 for mV)",
                                             voltage_scale));
-  const auto [c0, c1] = speed_of_voltage;
-  if (!std::isfinite(c0) || !std::isfinite(c1) || !(c1 > 0.0))
+  const auto [c0, c1, c2] = speed_of_voltage;
+  // Increasing at 1 V (a brushed motor's lowest working voltage): a map that
+  // falls there is a sign slip, not a motor.
+  if (!std::isfinite(c0) || !std::isfinite(c1) || !std::isfinite(c2) || !(c1 + 2.0 * c2 > 0.0))
     throw std::invalid_argument(fmt::format(
-        "rotors.speed_of_voltage = [{}, {}] must be [c0, c1] with c1 > 0: steady rotor speed (rpm) = c0 + c1 * V",
-        c0, c1));
+        "rotors.speed_of_voltage = [{}, {}, {}] must be [c0, c1] or [c0, c1, c2] with the speed increasing at 1 V "
+        "(c1 + 2 c2 > 0): steady rotor speed (rpm) = c0 + c1 V + c2 V^2",
+        c0, c1, c2));
   for (const auto& [key, v] : {std::pair{"battery_voltage", battery_voltage}, {"battery_sag", battery_sag},
                                {"battery_drain", battery_drain}})
     if (!std::isfinite(v) || v < 0.0)
       throw std::invalid_argument(fmt::format("rotors.{} = {} must be a finite number >= 0", key, v));
+}
+
+namespace {
+// The vertex of c0 + c1 V + c2 V^2 (c2 != 0): where its increasing branch ends.
+double vertex(const std::array<double, 3>& c) { return -c[1] / (2.0 * c[2]); }
+}  // namespace
+
+double RotorModel::speed_of_applied_voltage(double volts) const {
+  if (!(volts > 0.0)) return 0.0;  // a motor without voltage stands still
+  const auto& c = speed_of_voltage;
+  double V = volts;
+  if (c[2] > 0.0) V = std::max(V, vertex(c));
+  if (c[2] < 0.0) V = std::min(V, vertex(c));
+  return std::max(0.0, c[0] + (c[1] + c[2] * V) * V);
+}
+
+double RotorModel::applied_voltage_of_speed(double w) const {
+  const auto& c = speed_of_voltage;
+  // The root on the increasing branch, in the form that stays exact as c2 -> 0:
+  // V = 2 (w - c0) / (c1 + sqrt(c1^2 + 4 c2 (w - c0))).
+  const double d = c[1] * c[1] + 4.0 * c[2] * (w - c[0]);
+  if (d < 0.0) return vertex(c);  // beyond the map's range: its vertex
+  return 2.0 * (w - c[0]) / (c[1] + std::sqrt(d));
 }
 
 double RotorModel::speed_for_thrust(double T) const { return std::sqrt(std::max(T, 0.0) / thrust_coefficient()); }

@@ -158,9 +158,14 @@ void read_duty(const Reader& r, const toml::table& t, RotorModel& m) {
   if (!duty) return;
   m.voltage_column = *r.string(t, "rotors.", "voltage_column", true);
   m.voltage_scale = r.number(t, "rotors.", "voltage_scale", false, true).value_or(1.0);
-  (void)r.array(t, "rotors.", "speed_of_voltage");  // required: fails naming the key when absent
-  m.speed_of_voltage = *r.numbers<2>(t, "rotors.", "speed_of_voltage", false,
-                                     "must be [c0, c1]: steady rotor speed (rpm) = c0 + c1 * applied voltage (V)");
+  const char* what = "must be [c0, c1] or [c0, c1, c2]: steady rotor speed (rpm) = c0 + c1 V + c2 V^2 (V: applied volts)";
+  const toml::array& map = r.array(t, "rotors.", "speed_of_voltage");  // required: fails naming the key when absent
+  if (map.size() == 3) {
+    m.speed_of_voltage = *r.numbers<3>(t, "rotors.", "speed_of_voltage", false, what);
+  } else {
+    const auto two = *r.numbers<2>(t, "rotors.", "speed_of_voltage", false, what);
+    m.speed_of_voltage = {two[0], two[1], 0.0};
+  }
   m.battery_voltage = r.number(t, "rotors.", "battery_voltage", false, true).value_or(0.0);
   m.battery_sag = r.number(t, "rotors.", "battery_sag", false, true).value_or(0.0);
   m.battery_drain = r.number(t, "rotors.", "battery_drain", false, true).value_or(0.0);

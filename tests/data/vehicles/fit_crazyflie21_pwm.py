@@ -7,12 +7,13 @@ README.md), numpy and scipy.
 
 Model (docs/vehicles.md, input = "duty"):
   V_i   = pwm_i / 65535 * vbat                (applied voltage, V; vbat sags under load)
-  w*_i  = c0 + c1 V_i                         (steady rotor speed, rpm)
+  w*_i  = c0 + c1 V_i + c2 V_i^2              (steady rotor speed, rpm; quadid holds it
+                                               at the vertex below V = -c1 / (2 c2))
   tau w_i' = w*_i - w_i                       (first-order motor lag, exact with w* held)
-one set of (c0, c1, tau) for all four motors and flights. A quadratic map fits
-0.1-0.7 points better but is not monotone below 0.76 V (it would give a duty of 0
-more speed than a duty of 0.2), so the built-in keeps the straight line; both are
-printed, with a fit that ignores the battery sag for comparison. Also fitted, for
+one set of (c0, c1, c2, tau) for all four motors and flights. A straight line
+fits 0.1-0.7 points worse and makes the torques' gain vary more between flights
+(docs/crazyflie.md); it is printed for comparison, with a fit that ignores the
+battery sag. Also fitted, for
 `simulate` only: the battery, vbat = v0_f - sag * sum_i kf rpm_i^2 - drain * t
 (v0 per flight; sag in V per N of total thrust, drain in V/s).
 
@@ -85,6 +86,8 @@ def lagged(tau, t, target):
 def predict(p, t, volts):
     tau, c0, c1 = p[:3]
     c2 = p[3] if len(p) > 3 else 0.0
+    if c2 > 0:  # the increasing branch only, as quadid's RotorModel::speed_of_applied_voltage
+        volts = np.maximum(volts, -c1 / (2 * c2))
     return lagged(tau, t, c0 + c1 * volts + c2 * volts ** 2)
 
 
@@ -101,16 +104,16 @@ def main():
         return np.concatenate(r)
 
     fits = {}
-    cases = (('measured vbat, straight line (the model)', True, [0.05, 4000, 9000]),
-             ('measured vbat, quadratic', True, [0.05, 4000, 9000, 0]),
-             ('vbat held at its median (no sag), straight line', False, [0.05, 4000, 9000]))
+    cases = (('measured vbat, quadratic (the model)', True, [0.05, 4000, 9000, 0]),
+             ('measured vbat, straight line', True, [0.05, 4000, 9000]),
+             ('vbat held at its median (no sag), quadratic', False, [0.05, 4000, 9000, 0]))
     for label, wb, p0 in cases:
         fits[label] = least_squares(lambda p: residuals(p, wb), p0, x_scale='jac').x
     p = fits[cases[0][0]]
     print('rotor input fit (all four flights, four motors, one parameter set)')
     print(f'  time_constant = {p[0]:.5f} s')
-    print(f'  speed_of_voltage = [{p[1]:.6g}, {p[2]:.6g}]  (rpm = c0 + c1 V)')
-    print(f'  quadratic, for comparison: {fits[cases[1][0]]}')
+    print(f'  speed_of_voltage = [{p[1]:.6g}, {p[2]:.6g}, {p[3]:.6g}]  (rpm = c0 + c1 V + c2 V^2)')
+    print(f'  straight line, for comparison: {fits[cases[1][0]]}')
     for label, q in fits.items():
         print(f'rms rpm error, % of mean rpm, per flight and motor; {label}:')
         for name, (t, pwm, rpm, vb) in flights.items():
