@@ -44,6 +44,15 @@ quadid::FlightLog drop_wrench(const quadid::FlightLog& log) {
   return out;
 }
 
+// The real Crazyflie flights of ../shared (a path that does not exist without them).
+std::filesystem::path crazyflie_flights() {
+#ifdef QUADID_SHARED_DATA
+  return std::filesystem::path(QUADID_SHARED_DATA) / "crazyflie-usd";
+#else
+  return "/nonexistent";
+#endif
+}
+
 class CliVehicle : public quadid::testing::CliTest {
  protected:
   // 30 s of table2 flown by the crazyflie21 (default noise): its log with the
@@ -150,11 +159,7 @@ TEST_F(CliVehicle, PwmCommandsThroughTheCommandRange) {
 // inertia or damping would be as unphysical as a negative moment), and a set
 // whose terms break their signs is reported as such.
 TEST_F(CliVehicle, RealCrazyflieFlightsRecommendASetPhysicalInBodyAndTerms) {
-#ifdef QUADID_SHARED_DATA
-  const std::filesystem::path dir = std::filesystem::path(QUADID_SHARED_DATA) / "crazyflie-usd";
-#else
-  const std::filesystem::path dir = "/nonexistent";
-#endif
+  const std::filesystem::path dir = crazyflie_flights();
   QUADID_REQUIRE_SHARED_FILE(dir / "jana00");
   for (const char* flight : {"jana00", "jana01", "jana04", "jana06"}) {
     SCOPED_TRACE(flight);
@@ -510,11 +515,7 @@ TEST_F(CliVehicle, GroundAtTheEndsOfTheLogIsLeftOutOfTheWindow) {
 // deviation to about +-40 %), Ixy within 2.5x (its 0.7 % is the smallest
 // scatter of the products, which share one level).
 TEST_F(CliVehicle, RealisticPrecisionIsWithinTwiceTheScatterOfRealFlights) {
-#ifdef QUADID_SHARED_DATA
-  const std::filesystem::path dir = std::filesystem::path(QUADID_SHARED_DATA) / "crazyflie-usd";
-#else
-  const std::filesystem::path dir = "/nonexistent";
-#endif
+  const std::filesystem::path dir = crazyflie_flights();
   QUADID_REQUIRE_SHARED_FILE(dir / "jana00");
   std::vector<quadid::Theta> ls;
   for (const char* flight : {"jana00", "jana01", "jana04", "jana06"}) {
@@ -606,11 +607,7 @@ TEST_F(CliVehicle, BatteryVoltageInTheWrongUnitNamesTheScaleThatFits) {
 // Measured against the same flights' rpm results (docs/crazyflie.md): Ixx median
 // -21 %, CV 29 % (rpm: 6.5 %), so the bound here is a guard, not the target.
 TEST_F(CliVehicle, RealCrazyflieFlightsFromPwmArePhysicalAndCarryTheirWarning) {
-#ifdef QUADID_SHARED_DATA
-  const std::filesystem::path dir = std::filesystem::path(QUADID_SHARED_DATA) / "crazyflie-usd";
-#else
-  const std::filesystem::path dir = "/nonexistent";
-#endif
+  const std::filesystem::path dir = crazyflie_flights();
   QUADID_REQUIRE_SHARED_FILE(dir / "jana00");
   std::vector<double> ixx;
   for (const char* flight : {"jana00", "jana01", "jana04", "jana06"}) {

@@ -224,6 +224,19 @@ struct FileCloser {
 // Lines of a file; a line is valid until the next call. A regular file is
 // mapped into memory (no copy through a buffer: the copy cost as much as
 // finding the lines, issue 13), anything else (a pipe) read in chunks.
+// The header line's names, split at `delim` and unquoted (the one split of a header).
+std::vector<std::string> split_header(std::string_view line, char delim) {
+  std::vector<std::string> out;
+  size_t start = 0;
+  while (true) {
+    const size_t end = line.find(delim, start);
+    out.emplace_back(unquote(line.substr(start, end == std::string_view::npos ? line.npos : end - start)));
+    if (end == std::string_view::npos) break;
+    start = end + 1;
+  }
+  return out;
+}
+
 class LineReader {
  public:
   explicit LineReader(const std::filesystem::path& path) : file_(path.string()) {
@@ -512,13 +525,7 @@ class CsvRead {
         continue;
       }
       delim_ = header_delimiter(line);
-      size_t start = 0;
-      while (true) {
-        const size_t comma = line.find(delim_, start);
-        header_.emplace_back(unquote(line.substr(start, comma == std::string_view::npos ? line.npos : comma - start)));
-        if (comma == std::string_view::npos) break;
-        start = comma + 1;
-      }
+      header_ = split_header(line, delim_);
       have_header = true;
       break;
     }
@@ -752,15 +759,7 @@ std::vector<std::string> read_csv_header(const std::filesystem::path& path) {
   std::vector<std::string> out;
   while (in.next(line)) {
     if (trim(line).empty() || line.front() == '#') continue;
-    const char delim = header_delimiter(line);
-    size_t start = 0;
-    while (true) {
-      const size_t end = line.find(delim, start);
-      out.emplace_back(unquote(line.substr(start, end == std::string_view::npos ? line.npos : end - start)));
-      if (end == std::string_view::npos) break;
-      start = end + 1;
-    }
-    break;
+    return split_header(line, header_delimiter(line));
   }
   return out;
 }

@@ -3,6 +3,9 @@
 // of every figure are in the comments. docs/vehicles.md lists them.
 #include "builtin_vehicles.hpp"
 
+#include <fmt/format.h>
+
+#include <initializer_list>
 #include <stdexcept>
 #include <string>
 
@@ -164,20 +167,30 @@ constexpr std::string_view kX500GzHeader = R"toml(# PX4's Gazebo x500 in a SITL 
 # 30 s Table 2 flight (session 14).
 )toml";
 
-std::string x500_gz_text() {
-  std::string t(kX500GzHeader);
-  t += kX500;
-  auto replace = [&t](std::string_view from, std::string_view to) {
+// A built-in made from another's text: `header`, then `base` with each (from,
+// to) replaced once (one definition of the vehicle, not two); a `from` that is
+// no longer in `base` is a logic error naming `name`.
+using Edit = std::pair<std::string_view, std::string_view>;
+std::string variant_text(std::string_view name, std::string_view header, std::string_view base,
+                         std::initializer_list<Edit> edits) {
+  std::string t(header);
+  t += base;
+  for (const auto& [from, to] : edits) {
     const auto at = t.find(from);
-    if (at == std::string::npos) throw std::logic_error("builtin x500-gz: x500's text changed");
+    if (at == std::string::npos)
+      throw std::logic_error(fmt::format("builtin {}: the text it is made from changed ('{}')", name, from));
     t.replace(at, from.size(), to);
-  };
-  replace("name = \"x500\"", "name = \"x500-gz\"");
-  replace("input = \"speed\"", "input = \"speed-command\"");
-  replace("columns = [\"w1\", \"w2\", \"w3\", \"w4\"]",
-          "columns = [\"actuator_outputs.output[0]\", \"actuator_outputs.output[1]\", \"actuator_outputs.output[2]\", "
-          "\"actuator_outputs.output[3]\"]");
+  }
   return t;
+}
+
+std::string x500_gz_text() {
+  return variant_text("x500-gz", kX500GzHeader, kX500,
+                      {{"name = \"x500\"", "name = \"x500-gz\""},
+                       {"input = \"speed\"", "input = \"speed-command\""},
+                       {"columns = [\"w1\", \"w2\", \"w3\", \"w4\"]",
+                        "columns = [\"actuator_outputs.output[0]\", \"actuator_outputs.output[1]\", "
+                        "\"actuator_outputs.output[2]\", \"actuator_outputs.output[3]\"]"}});
 }
 
 // A stock Crazyflie 2.1 (no RPM deck): crazyflie21's text with the PWM rotor
@@ -197,21 +210,15 @@ constexpr std::string_view kCrazyflie21PwmHeader = R"toml(# Bitcraze Crazyflie 2
 )toml";
 
 std::string crazyflie21_pwm_text() {
-  std::string t(kCrazyflie21PwmHeader);
-  t += kCrazyflie21;
-  auto replace = [&t](std::string_view from, std::string_view to) {
-    const auto at = t.find(from);
-    if (at == std::string::npos) throw std::logic_error("builtin crazyflie21-pwm: crazyflie21's text changed");
-    t.replace(at, from.size(), to);
-  };
-  replace("name = \"crazyflie21\"", "name = \"crazyflie21-pwm\"");
-  replace("input = \"rpm\"\ncolumns = [\"rpm.m1\", \"rpm.m2\", \"rpm.m3\", \"rpm.m4\"]",
-          "input = \"duty\"\ncolumns = [\"pwm.m1_pwm\", \"pwm.m2_pwm\", \"pwm.m3_pwm\", \"pwm.m4_pwm\"]\n"
-          "command_range = [0, 65535]\nvoltage_column = \"pm.vbatMV\"\nvoltage_scale = 0.001\n"
-          "speed_of_voltage = [15870.1, -2138.6, 1412.95]\nbattery_voltage = 4.0\nbattery_sag = 1.505\n"
-          "battery_drain = 0.00171");
-  replace("time_constant = 0.06\n", "time_constant = 0.07366\n");
-  return t;
+  return variant_text(
+      "crazyflie21-pwm", kCrazyflie21PwmHeader, kCrazyflie21,
+      {{"name = \"crazyflie21\"", "name = \"crazyflie21-pwm\""},
+       {"input = \"rpm\"\ncolumns = [\"rpm.m1\", \"rpm.m2\", \"rpm.m3\", \"rpm.m4\"]",
+        "input = \"duty\"\ncolumns = [\"pwm.m1_pwm\", \"pwm.m2_pwm\", \"pwm.m3_pwm\", \"pwm.m4_pwm\"]\n"
+        "command_range = [0, 65535]\nvoltage_column = \"pm.vbatMV\"\nvoltage_scale = 0.001\n"
+        "speed_of_voltage = [15870.1, -2138.6, 1412.95]\nbattery_voltage = 4.0\nbattery_sag = 1.505\n"
+        "battery_drain = 0.00171"},
+       {"time_constant = 0.06\n", "time_constant = 0.07366\n"}});
 }
 
 }  // namespace

@@ -2,8 +2,9 @@
 """Fit of the built-in `crazyflie21-pwm` rotor input (src/vehicle/builtin_vehicles.cpp)
 on the real Crazyflie 2.1 flights of ../shared/data/crazyflie-usd, which log both the
 motor PWM (pwm.mK_pwm, 0..65535), the battery voltage (pm.vbatMV) and the rotor speed
-(rpm.mK, RPM deck). Independent of quadid: its own uSD parser (format in that folder's
-README.md), numpy and scipy.
+(rpm.mK, RPM deck). Independent of quadid: the uSD parser of the reader's test
+(tests/data/logs/usd_reference.py, from the format in that folder's README.md),
+numpy and scipy.
 
 Model (docs/vehicles.md, input = "duty"):
   V_i   = pwm_i / 65535 * vbat                (applied voltage, V; vbat sags under load)
@@ -20,46 +21,22 @@ battery sag. Also fitted, for
 usage: /usr/bin/python3 tests/data/vehicles/fit_crazyflie21_pwm.py [DATA_DIR]
 Output (committed beside it): fit_crazyflie21_pwm.txt
 """
-import struct
 import sys
 from pathlib import Path
 
 import numpy as np
 from scipy.optimize import least_squares
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / 'logs'))
+import usd_reference  # noqa: E402  the independent uSD parser of the reader's test
+
 KF = 2.2164e-10  # N/rpm^2, the data set's README (Bitcraze thrust stand)
 
 
 def parse(data):
-    body = data[:-4]
-    version, n = struct.unpack_from('<HH', body, 1)
-    pos, events = 5, {}
-    for _ in range(n):
-        eid, = struct.unpack_from('<H', body, pos)
-        pos += 2
-        end = body.index(b'\0', pos)
-        name = body[pos:end].decode()
-        pos = end + 1
-        nv, = struct.unpack_from('<H', body, pos)
-        pos += 2
-        fmt, names = '<', []
-        for _ in range(nv):
-            end = body.index(b'\0', pos)
-            s = body[pos:end].decode()
-            fmt += s[-2]
-            names.append(s[:-3])
-            pos = end + 1
-        events[eid] = (name, fmt, names, [])
-    tfmt = '<I' if version == 1 else '<Q'
-    while pos < len(body):
-        eid, = struct.unpack_from('<H', body, pos)
-        pos += 2
-        t, = struct.unpack_from(tfmt, body, pos)
-        pos += struct.calcsize(tfmt)
-        _, fmt, _, rows = events[eid]
-        rows.append((t,) + struct.unpack_from(fmt, body, pos))
-        pos += struct.calcsize(fmt)
-    return {e[0]: (e[2], np.array(e[3], dtype=float)) for e in events.values()}
+    """{event name: (variable names, records as an array: timestamp first)}."""
+    _, _, events = usd_reference.parse(data, values=True)
+    return {name: (names, np.array(rows, dtype=float)) for name, _, _, names, rows in events.values()}
 
 
 def load(folder):
