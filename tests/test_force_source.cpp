@@ -89,6 +89,9 @@ TEST_F(ForceSourceCli, WithoutAPositionTheAccelerometerGivesTheMass) {
   const CliRun p = run("identify " + log + " --vehicle crazyflie21 --force-from position");
   EXPECT_NE(p.rc, 0);
   EXPECT_NE(p.err.find("--force-from accelerometer"), std::string::npos) << p.err;
+  // The advice applied: the same mass as auto chose.
+  const CliRun a = run("identify " + log + " --vehicle crazyflie21 --force-from accelerometer --json");
+  EXPECT_EQ(mass_of(a), mass_of(r));
 }
 
 TEST_F(ForceSourceCli, AnUnknownBiasIsNamedAndTheAdvisedOptionRemovesIt) {
