@@ -16,6 +16,8 @@
 
 namespace quadid {
 
+struct LongRunCovariance;
+
 /// Running sums of eq. (40): A = sum Gamma^T Gamma, b = sum Gamma^T Upsilon,
 /// and sum |Upsilon|^2 (for the residual). O(1) memory, one rank-4 update per sample.
 class LeastSquaresAccumulator {
@@ -124,6 +126,14 @@ struct Estimate {
   Theta rigid_body() const;
   /// Their covariance (7x7 top-left block).
   Mat7 rigid_body_covariance() const;
+  /// The first n parameters: names, values, errors, intervals and the n x n
+  /// block of the covariance; the scalar figures (samples, correlation time,
+  /// dof, quantiles) and the determinedness lists as they are.
+  Estimate head(Eigen::Index n) const;
+  /// Takes a long-run (HAC) covariance's figures: covariance, white standard
+  /// errors, correlation time, frequencies, dof and quantile (the one place
+  /// an estimator copies them).
+  void set_long_run(const LongRunCovariance& lr);
   /// The inertia tensor I (body FLU, kg m^2) of entries 1..6, symmetric 3x3.
   Mat3 inertia_tensor() const;
 };

@@ -450,6 +450,29 @@ Mat7 Estimate::rigid_body_covariance() const {
 
 Mat3 Estimate::inertia_tensor() const { return Params::from_theta(rigid_body()).I; }
 
+Estimate Estimate::head(Eigen::Index n) const {
+  if (n < 0 || n > size()) throw std::logic_error(fmt::format("Estimate::head({}): the estimate has {} parameters", n, size()));
+  Estimate u = *this;
+  u.names.resize(static_cast<size_t>(n));
+  // An empty vector (not filled by this estimator) stays empty.
+  for (Eigen::VectorXd* v : {&u.value, &u.std_error, &u.white_std_error, &u.ci_low, &u.ci_high, &u.jackknife_std_error,
+                             &u.hac_std_error, &u.model_disagreement})
+    if (v->size() >= n) v->conservativeResize(n);
+  if (u.covariance.rows() >= n && u.covariance.cols() >= n) u.covariance = covariance.topLeftCorner(n, n);
+  return u;
+}
+
+void Estimate::set_long_run(const LongRunCovariance& lr) {
+  covariance = lr.covariance;
+  white_std_error = lr.white_covariance.diagonal().cwiseSqrt();
+  correlation_time = lr.correlation_time;
+  correlation_time_capped = lr.correlation_time_capped;
+  frequencies = lr.frequencies;
+  end_values_separated = lr.end_values_separated;
+  dof = lr.dof;
+  quantile = lr.quantile;
+}
+
 Estimate InfluenceAccumulator::finish(const UncertaintyOptions& opt) const {
   opt.validate();
   Estimate u = Estimate::unfilled({kThetaNames.begin(), kThetaNames.end()});
@@ -457,16 +480,8 @@ Estimate InfluenceAccumulator::finish(const UncertaintyOptions& opt) const {
   const long n = count();
   u.samples = n;
   if (n < 8 || !theta_.allFinite()) return u;
-  const LongRunCovariance r = long_run_covariance(psi_, 7, opt);
-  u.correlation_time = r.correlation_time;
-  u.correlation_time_capped = r.correlation_time_capped;
-  u.frequencies = r.frequencies;
-  u.end_values_separated = r.end_values_separated;
-  u.covariance = r.covariance;
-  u.white_std_error = r.white_covariance.diagonal().cwiseSqrt();
+  u.set_long_run(long_run_covariance(psi_, 7, opt));
   u.std_error = u.covariance.diagonal().cwiseSqrt();
-  u.dof = r.dof;
-  u.quantile = r.quantile;
   u.ci_low = theta_ - u.quantile * u.std_error;
   u.ci_high = theta_ + u.quantile * u.std_error;
   u.computed = true;

@@ -4,6 +4,7 @@
 #include "quadid/identification/extended.hpp"
 
 #include "quadid/estimation/qr_least_squares.hpp"
+#include "quadid/estimation/row_least_squares.hpp"
 #include "quadid/identification/timing.hpp"
 
 #include <fmt/format.h>
@@ -49,7 +50,6 @@ void ExtendedOptions::validate() const {
 
 namespace {
 
-using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
 
 // The signals of one processing at two cutoffs (force row at one, moment
 // rows at the other) with the terms' signals (process_with_terms).
@@ -106,26 +106,8 @@ std::pair<Eigen::Index, Eigen::Index> window_range(const RawSignals& r, Regressi
   return {reg.begin(), reg.end()};
 }
 
-// The regression rows of every sample, assembled once: G (4 x P), Y (4) and
-// the column of a known rotor inertia (Y - known_jr J is the right-hand side),
-// so that the roll and pitch rows can be high-passed as a whole (a linear
-// filter applied to every column and the output keeps G x = Y) and the passes
-// of the weighted fit, the influences and the jackknife read them back.
-struct RowCache {
-  Eigen::Index P = 0;
-  RowMajor M;  // n x 4 (P + 2): per row r, G_r (P), Y_r, J_r
-  Eigen::Index stride() const { return P + 2; }
-  void get(Eigen::Index k, double known_jr, Eigen::Matrix<double, 4, Eigen::Dynamic>& G, Vec4& Y) const {
-    const double* m = M.row(k).data();
-    for (int r = 0; r < 4; ++r, m += stride()) {
-      for (Eigen::Index j = 0; j < P; ++j) G(r, j) = m[j];
-      Y(r) = m[P] - known_jr * m[P + 1];
-    }
-  }
-};
-
-RowCache build_rows(const RawSignals& raw, RegressionModel model, const ExtendedOptions& opt, const Unknowns& u) {
-  RowCache c;
+RegressionRows build_rows(const RawSignals& raw, RegressionModel model, const ExtendedOptions& opt, const Unknowns& u) {
+  RegressionRows c;
   c.P = u.P;
   const Eigen::Index n = raw.sig->size();
   c.M.resize(n, 4 * c.stride());
@@ -144,7 +126,7 @@ RowCache build_rows(const RawSignals& raw, RegressionModel model, const Extended
 // High-passes the roll and pitch rows (every column and the output) at f_hz:
 // x - the zero-phase Butterworth low-pass of x, whose squared magnitude is
 // exactly the zero-phase Butterworth high-pass's (1 - 1/(1 + (f/fc)^2N)).
-void highpass_rows(RowCache& c, double f_hz, double fs_hz, int order) {
+void highpass_rows(RegressionRows& c, double f_hz, double fs_hz, int order) {
   const Eigen::Index n = c.M.rows(), w = 2 * c.stride();
   Eigen::MatrixXd cols = c.M.middleCols(c.stride(), w);  // rows 1 and 2, column-major copy
   Eigen::MatrixXd low = cols;
@@ -155,86 +137,10 @@ void highpass_rows(RowCache& c, double f_hz, double fs_hz, int order) {
   c.M.middleCols(c.stride(), w) = cols - low;
 }
 
-struct Fit {
-  QRSolution sol;
-  Vec4 w = Vec4::Ones();
-  Vec4 res_rms = Vec4::Zero();
-};
-
-// Weighted least squares over samples [k0, k1); with weight_rows, three
-// passes, each weighting the rows by the inverse of the last pass's residual RMS.
-Fit fit(const RowCache& c, Eigen::Index k0, Eigen::Index k1, double known_jr, const Eigen::VectorXd& prior,
-        const ExtendedOptions& opt) {
-  const Eigen::Index P = c.P;
-  Eigen::Matrix<double, 4, Eigen::Dynamic> G(4, P);
-  Vec4 Y;
-  Fit f;
-  Vec4 out_ss = Vec4::Zero();
-  for (Eigen::Index k = k0; k < k1; ++k) {
-    c.get(k, known_jr, G, Y);
-    out_ss += Y.cwiseAbs2();
-  }
-  const Vec4 out_rms = (out_ss / static_cast<double>(k1 - k0)).cwiseSqrt();
-  // Pass 0 weights: the inverse RMS of each row's output (N, N m), so that the
-  // rows count alike whatever the vehicle's size.
-  if (opt.terms.weight_rows)
-    for (int r = 0; r < 4; ++r) f.w(r) = out_rms(r) > 0.0 ? 1.0 / out_rms(r) : 1.0;
-  const int passes = opt.terms.weight_rows ? 3 : 1;
-  for (int pass = 0; pass < passes; ++pass) {
-    StreamingQR qr(P);
-    for (Eigen::Index k = k0; k < k1; ++k) {
-      c.get(k, known_jr, G, Y);
-      for (int r = 0; r < 4; ++r) qr.add_row(f.w(r) * G.row(r).transpose(), f.w(r) * Y(r));
-    }
-    f.sol = solve_qr(qr.factor(), qr.rows(), prior, opt.ls.rank_tolerance);
-    Vec4 ss = Vec4::Zero();
-    for (Eigen::Index k = k0; k < k1; ++k) {
-      c.get(k, known_jr, G, Y);
-      ss += (G * f.sol.x - Y).cwiseAbs2();
-    }
-    f.res_rms = (ss / static_cast<double>(k1 - k0)).cwiseSqrt();
-    if (pass + 1 < passes)
-      for (int r = 0; r < 4; ++r) f.w(r) = 1.0 / std::max(f.res_rms(r), 1e-9 * out_rms(r) + 1e-300);
-  }
-  return f;
-}
-
-// Per time block: the QR factor of the weighted rows of `rows` (bit r = row r).
-std::vector<StreamingQR::Factor> block_factors(const RowCache& c, Eigen::Index k0, Eigen::Index k1, int blocks,
-                                               double known_jr, const Vec4& w, unsigned rows) {
-  std::vector<StreamingQR::Factor> out;
-  Eigen::Matrix<double, 4, Eigen::Dynamic> G(4, c.P);
-  Vec4 Y;
-  for (int j = 0; j < blocks; ++j) {
-    const Eigen::Index b0 = k0 + (k1 - k0) * j / blocks, b1 = k0 + (k1 - k0) * (j + 1) / blocks;
-    StreamingQR qr(c.P);
-    for (Eigen::Index k = b0; k < b1; ++k) {
-      c.get(k, known_jr, G, Y);
-      for (int r = 0; r < 4; ++r)
-        if (rows & (1u << r)) qr.add_row(w(r) * G.row(r).transpose(), w(r) * Y(r));
-    }
-    out.push_back(qr.factor());
-  }
-  return out;
-}
-
-// The fits without each of K blocks, from the blocks' factors.
-std::vector<Eigen::VectorXd> leave_one_block_out(const std::vector<StreamingQR::Factor>& blocks, Eigen::Index k0,
-                                                 Eigen::Index k1, const Eigen::VectorXd& prior, double rank_tolerance) {
-  const int K = static_cast<int>(blocks.size());
-  std::vector<Eigen::VectorXd> loo;
-  for (int b = 0; b < K; ++b) {
-    StreamingQR qr(prior.size());
-    long rows = 0;
-    for (int i = 0; i < K; ++i) {
-      if (i == b) continue;
-      const auto& fb = blocks[static_cast<size_t>(i)];
-      for (Eigen::Index q = 0; q < prior.size(); ++q) qr.add_row(fb.R.row(q).transpose(), fb.qty(q));
-      rows += 4 * ((k1 - k0) * (i + 1) / K - (k1 - k0) * i / K);
-    }
-    loo.push_back(solve_qr(qr.factor(), rows, prior, rank_tolerance).x);
-  }
-  return loo;
+// The weighted fit of the rows (row_least_squares.hpp) with this regression's options.
+WeightedFit fit(const RegressionRows& c, Eigen::Index k0, Eigen::Index k1, double known_jr, const Eigen::VectorXd& prior,
+                const ExtendedOptions& opt) {
+  return fit_weighted(c, k0, k1, known_jr, prior, opt.terms.weight_rows, opt.ls.rank_tolerance);
 }
 
 // Per time block: the QR factor of the weighted rows of `rows`, integrated
@@ -276,8 +182,6 @@ std::vector<StreamingQR::Factor> block_factors_integral(const RawSignals& r, Eig
   return out;
 }
 
-// Sum of squares of R x - qty over a factor: the weighted residual of its rows.
-double factor_sse(const StreamingQR::Factor& f, const Eigen::VectorXd& x) { return (f.R * x - f.qty).squaredNorm() + f.rss; }
 
 }  // namespace
 
@@ -358,11 +262,11 @@ HighpassSelection choose_highpass(const RawSignals& raw, const Eigen::Vector3d& 
     HighpassCandidate hc;
     hc.hz = f;
     const Unknowns u(opt, f > 0.0);
-    RowCache c = build_rows(raw, RegressionModel::Standard, opt, u);
+    RegressionRows c = build_rows(raw, RegressionModel::Standard, opt, u);
     if (f > 0.0) highpass_rows(c, f, fs, opt.highpass_order);
     const Eigen::Index e = highpass_edge(f, raw.T), b0 = k0 + e, b1 = k1 - e;
     if (b1 - b0 >= 32 * K) {
-      const Fit ft = fit(c, b0, b1, u.known_jr, u.prior, opt);
+      const WeightedFit ft = fit(c, b0, b1, u.known_jr, u.prior, opt);
       const auto loo =
           leave_one_block_out(block_factors(c, b0, b1, K, u.known_jr, ft.w, 0xFu), b0, b1, u.prior, opt.ls.rank_tolerance);
       // In the known mass's units when it is given (the s = 1 fit's m' = m / s).
@@ -460,7 +364,7 @@ constexpr std::array<int, 3> kMoments{1, 4, 6};
 // ExtendedResult::gyro_noise_share: each gyro column's white noise carried
 // through the rows' chain (noise_gain), against the power of the column that
 // Ixx, Iyy and Izz multiply in their own rows over [k0, k1).
-Eigen::Vector3d gyro_noise_share(const RawSignals& raw, const RowCache& rows, double hp, const Eigen::Vector3d& gyro_sd,
+Eigen::Vector3d gyro_noise_share(const RawSignals& raw, const RegressionRows& rows, double hp, const Eigen::Vector3d& gyro_sd,
                                  Eigen::Index k0, Eigen::Index k1, const ExtendedOptions& opt) {
   const Eigen::Index n = rows.M.rows();
   const double g_hp = noise_gain(opt, raw.f_moment, hp, raw.T, n, k0, k1);
@@ -558,11 +462,11 @@ class ExtendedEstimator {
       res.window = {static_cast<double>(k0) * raw_.T, static_cast<double>(k1 - 1) * raw_.T};
       res.window_samples = k1 - k0;
     }
-    RowCache rows = build_rows(raw_, model, opt_, u_);
+    RegressionRows rows = build_rows(raw_, model, opt_, u_);
     if (hp_ > 0.0) highpass_rows(rows, hp_, 1.0 / raw_.T, opt_.highpass_order);
     if (mi == 0) gyro_noise(rows, k0, k1, res);
     double jr = u_.known_jr;
-    const Fit f = fit_with_rotor_inertia(rows, k0, k1, jr);
+    const WeightedFit f = fit_with_rotor_inertia(rows, k0, k1, jr);
     ExtendedEstimate e;
     e.computed = true;
     e.samples = k1 - k0;
@@ -598,7 +502,7 @@ class ExtendedEstimator {
   }
 
   // The gyro noise's share of each moment column's power, and a warning where it biases the estimate.
-  void gyro_noise(const RowCache& rows, Eigen::Index k0, Eigen::Index k1, ExtendedResult& res) const {
+  void gyro_noise(const RegressionRows& rows, Eigen::Index k0, Eigen::Index k1, ExtendedResult& res) const {
     res.gyro_noise_share = gyro_noise_share(raw_, rows, hp_, gyro_sd_, k0, k1, opt_);
     std::vector<std::string> biased;
     for (size_t i = 0; i < kMoments.size(); ++i)
@@ -617,8 +521,8 @@ class ExtendedEstimator {
   // The streamed weighted fit; with a known mass and a known J_r, the s = 1
   // regression holds J_r as J_r / s, s = m / m' (known_mass_map): a fixed point
   // in s. J_r's share of the yaw torque is small, so a few rounds settle it.
-  Fit fit_with_rotor_inertia(const RowCache& rows, Eigen::Index k0, Eigen::Index k1, double& jr) const {
-    Fit f = fit(rows, k0, k1, jr, u_.prior, opt_);
+  WeightedFit fit_with_rotor_inertia(const RegressionRows& rows, Eigen::Index k0, Eigen::Index k1, double& jr) const {
+    WeightedFit f = fit(rows, k0, k1, jr, u_.prior, opt_);
     if (terms_.known_mass && jr != 0.0) {
       for (int round = 0; round < 8 && f.sol.x(0) > 0.0; ++round) {
         const double next = *terms_.known_rotor_inertia * f.sol.x(0) / *terms_.known_mass;
@@ -634,39 +538,11 @@ class ExtendedEstimator {
   // psi_k = (A^T W^2 A)^-1 sum_r w_r^2 G_r^T e_r, and their long-run
   // (HAC) covariance: filtered residuals are coloured, and on real flights
   // model error colours them far beyond the filters' own correlation length.
-  void hac_covariance(const RowCache& rows, Eigen::Index k0, Eigen::Index k1, double jr, const Fit& f,
+  void hac_covariance(const RegressionRows& rows, Eigen::Index k0, Eigen::Index k1, double jr, const WeightedFit& f,
                       ExtendedEstimate& e, Eigen::MatrixXd& white) const {
-    const Eigen::Index P = u_.P;
-    Eigen::Matrix<double, 4, Eigen::Dynamic> G(4, P);
-    Vec4 Y;
-    std::vector<double> psi;
-    psi.reserve(static_cast<size_t>((k1 - k0) * P));
-    Eigen::VectorXd g(P);
-    double wss = 0.0;
-    for (Eigen::Index k = k0; k < k1; ++k) {
-      rows.get(k, jr, G, Y);
-      const Vec4 r = Y - G * f.sol.x;
-      g.noalias() = G.transpose() * (f.w.cwiseAbs2().cwiseProduct(r));
-      wss += f.w.cwiseProduct(r).squaredNorm();
-      for (Eigen::Index j = 0; j < P; ++j) psi.push_back(g(j));
-    }
-    // sol.covariance = sigma^2 (A^T W^2 A)^-1 on the identifiable subspace.
-    const double sigma2 = wss / static_cast<double>(std::max<Eigen::Index>(1, 4 * (k1 - k0) - P));
-    const Eigen::MatrixXd Ainv = f.sol.covariance / sigma2;
-    for (size_t i = 0; i < psi.size(); i += static_cast<size_t>(P)) {
-      Eigen::Map<Eigen::VectorXd> pk(&psi[i], P);
-      pk = Ainv * Eigen::VectorXd(pk);
-    }
-    const LongRunCovariance lr = long_run_covariance(psi, static_cast<int>(P), opt_.uncertainty);
-    e.covariance = lr.covariance;
+    const LongRunCovariance lr = weighted_long_run_covariance(rows, k0, k1, jr, f, opt_.uncertainty);
+    e.set_long_run(lr);
     white = lr.white_covariance;
-    e.white_std_error = lr.white_covariance.diagonal().cwiseSqrt();
-    e.correlation_time = lr.correlation_time;
-    e.correlation_time_capped = lr.correlation_time_capped;
-    e.frequencies = lr.frequencies;
-    e.end_values_separated = lr.end_values_separated;
-    e.dof = lr.dof;
-    e.quantile = lr.quantile;
   }
 
   // "Weigh it, fly it": the regression found m' = m / s and every other
@@ -683,7 +559,7 @@ class ExtendedEstimator {
   // The known mass's map applied to the fit, its covariances carried by the
   // Jacobian of that map (exact: it is linear in x given x0, and x0's own
   // variance enters through J.col(0)).
-  Eigen::VectorXd known_mass_map(const Fit& f, ExtendedEstimate& e, Eigen::MatrixXd& white) const {
+  Eigen::VectorXd known_mass_map(const WeightedFit& f, ExtendedEstimate& e, Eigen::MatrixXd& white) const {
     const Eigen::Index P = u_.P;
     const double m0 = *terms_.known_mass, x0 = f.sol.x(0);
     if (!(x0 > 0.0))
@@ -708,7 +584,7 @@ class ExtendedEstimator {
   // the flight (an excitation that grows, a battery that sags, an effect no
   // term models) moves these fits more than the noise does; the HAC
   // sandwich, which sees only the residuals' size and correlation, does not.
-  void jackknife(const RowCache& rows, Eigen::Index k0, Eigen::Index k1, double jr, const Fit& f,
+  void jackknife(const RegressionRows& rows, Eigen::Index k0, Eigen::Index k1, double jr, const WeightedFit& f,
                  const Eigen::VectorXd& x, ExtendedEstimate& e, ExtendedResult& res) const {
     const int K = opt_.uncertainty.jackknife_blocks;
     if (!(K > 0 && k1 - k0 >= 8 * static_cast<Eigen::Index>(K))) return;
@@ -772,7 +648,7 @@ class ExtendedEstimator {
 
   // The estimate's values, its terms and given values, the fit's figures, and
   // which parameters are poorly determined.
-  void describe(const Eigen::VectorXd& x, const Fit& f, ExtendedEstimate& e) const {
+  void describe(const Eigen::VectorXd& x, const WeightedFit& f, ExtendedEstimate& e) const {
     const std::vector<std::string>& names = u_.names;
     e.value = x;
     e.theta = x.head<7>();
@@ -819,38 +695,21 @@ ExtendedResult identify_extended(const FlightLog& log, const ExtendedOptions& op
 }
 
 Estimate rigid_body_estimate(const ExtendedEstimate& x, bool known_mass) {
-  Estimate u = Estimate::unfilled({kThetaNames.begin(), kThetaNames.end()});
+  Estimate u = x.head(7);
   u.computed = true;
-  u.samples = x.samples;
+  u.names.assign(kThetaNames.begin(), kThetaNames.end());
   u.value = x.theta;
-  u.std_error = x.std_error.head<7>();
-  if (known_mass) u.std_error(0) = 0.0;
-  u.covariance = x.covariance.topLeftCorner<7, 7>();
-  if (known_mass) {  // m is given: no variance, no correlation
+  u.near_null.clear();
+  u.poorly_determined.clear();
+  for (const auto& n : x.poorly_determined)
+    if (n != "thrust_scale") u.poorly_determined.push_back(n);
+  if (known_mass) {  // m is given: no variance, no correlation, its interval the point
+    u.std_error(0) = u.white_std_error(0) = 0.0;
     u.covariance.row(0).setZero();
     u.covariance.col(0).setZero();
-  }
-  u.white_std_error = x.white_std_error.head<7>();
-  if (known_mass) u.white_std_error(0) = 0.0;
-  u.correlation_time = x.correlation_time;
-  u.correlation_time_capped = x.correlation_time_capped;
-  u.frequencies = x.frequencies;
-  u.end_values_separated = x.end_values_separated;
-  u.dof = x.dof;
-  u.quantile = x.quantile;
-  u.ci_low = x.ci_low.head<7>();
-  u.ci_high = x.ci_high.head<7>();
-  u.jackknife_std_error = x.jackknife_std_error.head<7>();
-  u.hac_std_error = x.hac_std_error.head<7>();
-  u.jackknife_blocks = x.jackknife_blocks;
-  u.jackknife_quantile = x.jackknife_quantile;
-  if (known_mass) {  // m is given: its interval is the point
     u.ci_low(0) = u.ci_high(0) = x.theta(0);
     u.jackknife_std_error(0) = u.hac_std_error(0) = 0.0;
   }
-  u.unidentifiable = x.unidentifiable;
-  for (const auto& n : x.poorly_determined)
-    if (n != "thrust_scale") u.poorly_determined.push_back(n);
   return u;
 }
 
