@@ -185,7 +185,7 @@ class ArduPilotIdentify : public CliTest {
     write("v.toml", vehicle_file(v));
     const CliRun r = run("identify " + path("flight.bin") + " --vehicle " + path("v.toml") + " --known-mass 1.2 --json");
     ASSERT_EQ(r.rc, 0) << r.err;
-    const nlohmann::json j = nlohmann::json::parse(r.out);
+    const nlohmann::ordered_json j = nlohmann::ordered_json::parse(r.out);
     const Mat3& I = v.nominal.I;
     for (const char* set : {"LS", "FMLS"}) {
       const auto& e = j.at("estimates").at(set);
@@ -233,7 +233,7 @@ TEST_F(ArduPilotIdentify, DefaultRateLoggingIsRefusedAndTheNamedFixWorks) {
   write("v.toml", vehicle_file(v));
   r = run("identify " + path("fast.bin") + " --vehicle " + path("v.toml") + " --known-mass 1.2 --json");
   ASSERT_EQ(r.rc, 0) << r.err;
-  const auto e = nlohmann::json::parse(r.out).at("estimates").at("LS");
+  const auto e = nlohmann::ordered_json::parse(r.out).at("estimates").at("LS");
   EXPECT_NEAR(e.at("Ixx").get<double>(), v.nominal.I(0, 0), 0.05 * v.nominal.I(0, 0));
   EXPECT_NEAR(e.at("Izz").get<double>(), v.nominal.I(2, 2), 0.05 * v.nominal.I(2, 2));
 }
@@ -272,7 +272,7 @@ TEST_F(ArduPilotIdentify, CrashIsLeftOutOfTheWindow) {
   ASSERT_EQ(r.rc, 0) << r.err;
   EXPECT_NE(r.err.find("the file ends mid-record"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("an impact at 24.0"), std::string::npos) << r.err;
-  const nlohmann::json j = nlohmann::json::parse(r.out);
+  const nlohmann::ordered_json j = nlohmann::ordered_json::parse(r.out);
   EXPECT_LE(j.at("window").at("t1").get<double>(), 23.0 + 0.01) << j.at("window").dump();
   const auto& e = j.at("estimates").at("LS");
   EXPECT_NEAR(e.at("Ixx").get<double>(), v.nominal.I(0, 0), 0.05 * v.nominal.I(0, 0));

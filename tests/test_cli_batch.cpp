@@ -39,10 +39,10 @@ const quadid::FlightLog& flight(int seed) {
   return it->second;
 }
 
-std::vector<nlohmann::json> lines(const std::string& out) {
-  std::vector<nlohmann::json> v;
+std::vector<nlohmann::ordered_json> lines(const std::string& out) {
+  std::vector<nlohmann::ordered_json> v;
   std::istringstream in(out);
-  for (std::string l; std::getline(in, l);) v.push_back(nlohmann::json::parse(l));  // one object per line
+  for (std::string l; std::getline(in, l);) v.push_back(nlohmann::ordered_json::parse(l));  // one object per line
   return v;
 }
 
@@ -54,10 +54,10 @@ class CliBatch : public quadid::testing::CliTest {
     quadid::write_flight_log(flight(2), path("b.csv"));
     write("corrupt.csv", "t,x\n0,1\n");  // no required columns
   }
-  nlohmann::json identify_json(const std::string& log, const std::string& opts) const {
+  nlohmann::ordered_json identify_json(const std::string& log, const std::string& opts) const {
     const auto r = run("identify " + path(log) + " --json --window " + kWindow + " " + opts);
     EXPECT_EQ(r.rc, 0) << r.err;
-    return nlohmann::json::parse(r.out);
+    return nlohmann::ordered_json::parse(r.out);
   }
 };
 
@@ -72,7 +72,7 @@ TEST_F(CliBatch, OneLinePerLogInInputOrderEqualToIdentify) {
   const auto v = lines(r.out);
   ASSERT_EQ(v.size(), 5u) << r.out;
   const std::vector<std::string> order = {"b.csv", "corrupt.csv", "a.csv", "missing.csv", "b.csv"};
-  const nlohmann::json ja = identify_json("a.csv", opts), jb = identify_json("b.csv", opts);
+  const nlohmann::ordered_json ja = identify_json("a.csv", opts), jb = identify_json("b.csv", opts);
   for (size_t i = 0; i < v.size(); ++i) {
     EXPECT_EQ(v[i]["path"], path(order[i])) << i;
     const bool ok = i != 1 && i != 3;
@@ -82,7 +82,7 @@ TEST_F(CliBatch, OneLinePerLogInInputOrderEqualToIdentify) {
       EXPECT_NE(v[i]["error"].get<std::string>().find(path(order[i])), std::string::npos) << v[i]["error"];
       continue;
     }
-    nlohmann::json expected = (order[i] == "a.csv") ? ja : jb;
+    nlohmann::ordered_json expected = (order[i] == "a.csv") ? ja : jb;
     expected["path"] = path(order[i]);
     expected["ok"] = true;
     EXPECT_EQ(v[i], expected) << i;  // the same code on the same bytes: equal, not just close
@@ -126,12 +126,12 @@ TEST_F(CliBatch, DefaultsAreIdentifysOnAJitteredClock) {
   const Eigen::Index t = log.find("t");
   for (Eigen::Index k = 1; k < log.rows(); ++k) log.data(k, t) += ((k % 2) ? 0.002 : -0.002) * 0.002;
   quadid::write_flight_log(log, path("jitter.csv"));
-  const nlohmann::json single = identify_json("jitter.csv", "");
+  const nlohmann::ordered_json single = identify_json("jitter.csv", "");
   const auto r = run("batch -q --window " + std::string(kWindow) + " " + path("jitter.csv"));
   ASSERT_EQ(r.rc, 0) << r.out << r.err;
   const auto v = lines(r.out);
   ASSERT_EQ(v.size(), 1u);
-  nlohmann::json expected = single;
+  nlohmann::ordered_json expected = single;
   expected["path"] = path("jitter.csv");
   expected["ok"] = true;
   EXPECT_EQ(v[0], expected);
@@ -173,9 +173,9 @@ namespace {
 
 // A batch record as to_json(BatchRecord) writes it, with the LS set `theta`
 // (m, Ixx, Ixy, Ixz, Iyy, Iyz, Izz), its standard errors `se`, and PC = LS.
-nlohmann::json record(const std::string& path, const std::array<double, 7>& theta, double se,
+nlohmann::ordered_json record(const std::string& path, const std::array<double, 7>& theta, double se,
                       const std::string& recommended = "PC") {
-  nlohmann::json est = nlohmann::json::object(), unc = nlohmann::json::object();
+  nlohmann::ordered_json est = nlohmann::ordered_json::object(), unc = nlohmann::ordered_json::object();
   for (size_t j = 0; j < 7; ++j) {
     est[quadid::kThetaNames[j]] = theta[j];
     unc[quadid::kThetaNames[j]] = {{"std_error", se}, {"ci95", {theta[j] - 2 * se, theta[j] + 2 * se}}};
@@ -199,7 +199,7 @@ std::array<double, 7> body(double m) { return {m, 0.012, -0.0008, 0.0001, 0.015,
 // tail equals 0.01 / 6 (to the bisection's 1e-12 relative).
 TEST(FleetSummary, LeaveOneOutTFlagsThePayloadFlightOnly) {
   const std::vector<double> masses = {1.0, 1.01, 0.99, 1.005, 0.995, 1.3};
-  std::vector<nlohmann::json> recs;
+  std::vector<nlohmann::ordered_json> recs;
   for (size_t i = 0; i < masses.size(); ++i) recs.push_back(record(fmt::format("f{}", i), body(masses[i]), 1e-4));
   quadid::FleetSummaryOptions ls;
   ls.set = "LS";
@@ -222,7 +222,7 @@ TEST(FleetSummary, LeaveOneOutTFlagsThePayloadFlightOnly) {
   const std::string table = s.table();
   EXPECT_NE(table.find("f5"), std::string::npos) << table;
   EXPECT_NE(table.find("fixed"), std::string::npos) << table;
-  const nlohmann::json j = quadid::to_json(s);
+  const nlohmann::ordered_json j = quadid::to_json(s);
   EXPECT_EQ(j["outliers"][0]["path"], "f5");
   EXPECT_EQ(j["parameters"]["Ixx"]["fixed"], true);
   // The recommended set here is PC: the same flags, but no standard errors
@@ -241,7 +241,7 @@ TEST(FleetSummary, LeaveOneOutTFlagsThePayloadFlightOnly) {
 // such a rule flags some flight of nearly every fleet of 4).
 TEST(FleetSummary, FewFlightsThatAgreeLooselyAreNotFlagged) {
   const std::vector<double> masses = {1.01, 1.0, 1.0001, 0.98};
-  std::vector<nlohmann::json> recs;
+  std::vector<nlohmann::ordered_json> recs;
   for (size_t i = 0; i < masses.size(); ++i) recs.push_back(record(fmt::format("f{}", i), body(masses[i]), 1e-4));
   const quadid::FleetSummary s = quadid::summarize_fleet(recs);
   EXPECT_TRUE(s.outliers.empty()) << s.table();
@@ -254,7 +254,7 @@ TEST(FleetSummary, FewFlightsThatAgreeLooselyAreNotFlagged) {
 // 1, 1 + 1e-9, 1 (mean 1, sd sqrt(2e-18 / 3)), t = 999 / (sd sqrt(1 + 1/4)).
 TEST(FleetSummary, AFarOutlierKeepsTheOthersSpreadExact) {
   const std::vector<double> masses = {1.0 - 1e-9, 1.0, 1.0 + 1e-9, 1.0, 1000.0};
-  std::vector<nlohmann::json> recs;
+  std::vector<nlohmann::ordered_json> recs;
   for (size_t i = 0; i < masses.size(); ++i) recs.push_back(record(fmt::format("f{}", i), body(masses[i]), 1e-4));
   const quadid::FleetSummary s = quadid::summarize_fleet(recs);
   ASSERT_EQ(s.outliers.size(), 1u) << s.table();
@@ -265,9 +265,9 @@ TEST(FleetSummary, AFarOutlierKeepsTheOthersSpreadExact) {
 }
 
 TEST(FleetSummary, FailedAndIncompleteRecordsAreSkippedAndSmallOrMixedFleetsNoted) {
-  std::vector<nlohmann::json> recs = {record("a", body(1.0), 1e-4), record("b", body(1.01), 1e-4, "FMPC"),
+  std::vector<nlohmann::ordered_json> recs = {record("a", body(1.0), 1e-4), record("b", body(1.01), 1e-4, "FMPC"),
                                       {{"path", "c"}, {"ok", false}, {"error", "bad"}}};
-  nlohmann::json no_fm = record("d", body(1.0), 1e-4, "FMPC");
+  nlohmann::ordered_json no_fm = record("d", body(1.0), 1e-4, "FMPC");
   recs.push_back(no_fm);  // recommends FMPC but has no such estimate
   recs[1]["estimates"]["FMPC"] = recs[1]["estimates"]["PC"];
   const quadid::FleetSummary s = quadid::summarize_fleet(recs);
@@ -275,7 +275,7 @@ TEST(FleetSummary, FailedAndIncompleteRecordsAreSkippedAndSmallOrMixedFleetsNote
   ASSERT_EQ(s.skipped.size(), 2u);
   EXPECT_EQ(s.skipped[0], "c: not identified");
   EXPECT_NE(s.skipped[1].find("d: no FMPC estimate"), std::string::npos) << s.skipped[1];
-  const std::string notes = nlohmann::json(s.notes).dump();
+  const std::string notes = nlohmann::ordered_json(s.notes).dump();
   EXPECT_NE(notes.find("recommended sets differ (FMPC 1, PC 1)"), std::string::npos) << notes;
   EXPECT_NE(notes.find("2 flights: outliers need 3 or more"), std::string::npos) << notes;
   EXPECT_TRUE(s.outliers.empty());
@@ -326,7 +326,7 @@ TEST_F(CliBatch, ComparesTheFlightsAndFlagsTheHeavyOne) {
                      path("out.jsonl"));
   ASSERT_EQ(r.rc, 0) << r.err;
   EXPECT_NE(r.err.find("Flights compared: 4 flights, set recommended"), std::string::npos) << r.err;
-  const nlohmann::json s = nlohmann::json::parse(quadid::read_file(path("summary.json")));
+  const nlohmann::ordered_json s = nlohmann::ordered_json::parse(quadid::read_file(path("summary.json")));
   EXPECT_EQ(s["flights"], 4);
   ASSERT_EQ(s["outliers"].size(), 1u) << s.dump(1);
   EXPECT_EQ(s["outliers"][0]["path"], path("heavy.csv"));

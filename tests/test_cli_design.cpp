@@ -15,7 +15,7 @@ namespace {
 
 class CliDesign : public quadid::testing::CliTest {};
 
-const nlohmann::json* constraint(const nlohmann::json& rep, const std::string& name) {
+const nlohmann::ordered_json* constraint(const nlohmann::ordered_json& rep, const std::string& name) {
   for (const auto& c : rep["constraints"])
     if (c["name"] == name) return &c;
   return nullptr;
@@ -26,7 +26,7 @@ const nlohmann::json* constraint(const nlohmann::json& rep, const std::string& n
 TEST_F(CliDesign, CheckTable2JsonShowsStartConditionsCondAndViolations) {
   const auto r = run("check-trajectory table2 --json");
   ASSERT_EQ(r.rc, 0) << r.err;
-  const auto j = nlohmann::json::parse(r.out);  // stdout is JSON and nothing else
+  const auto j = nlohmann::ordered_json::parse(r.out);  // stdout is JSON and nothing else
   EXPECT_NEAR(j["cond"].get<double>(), 16.22, 0.005);
   EXPECT_EQ(j["criteria"]["samples"].get<int>(), 5000);
   // The paper's start (0, 0, 0.7 m, 0) with zero velocity, to ~1e-4.
@@ -101,7 +101,7 @@ TEST_F(CliDesign, DesignWritesCheckedTrajectoryReproducibly) {
   // The file is a valid trajectory for the other commands, and checks the same.
   const auto c = run("check-trajectory --json " + path("a.json"));
   ASSERT_EQ(c.rc, 0) << c.err;
-  EXPECT_NEAR(nlohmann::json::parse(c.out)["cond"].get<double>(), j["check"]["cond"].get<double>(), 1e-12);
+  EXPECT_NEAR(nlohmann::ordered_json::parse(c.out)["cond"].get<double>(), j["check"]["cond"].get<double>(), 1e-12);
   // Same seed, same bytes.
   ASSERT_EQ(run(args + path("b.json")).rc, 0);
   EXPECT_EQ(quadid::read_file(path("a.json")), quadid::read_file(path("b.json")));
@@ -116,7 +116,7 @@ TEST_F(CliDesign, CheckUsesTheLimitsSavedInTheTrajectoryFile) {
   ASSERT_EQ(d.rc, 0) << d.err;
   const auto c = run("check-trajectory --strict --json " + path("t.json"));
   ASSERT_EQ(c.rc, 0) << c.err << c.out;
-  const auto j = nlohmann::json::parse(c.out);
+  const auto j = nlohmann::ordered_json::parse(c.out);
   EXPECT_EQ(j["limits_from"], path("t.json"));
   EXPECT_DOUBLE_EQ(j["limits"]["z_min"].get<double>(), 0.8);
   EXPECT_DOUBLE_EQ(j["limits"]["z_max"].get<double>(), 2.0);
@@ -138,7 +138,7 @@ TEST_F(CliDesign, Seed1BeatsTheScipyReferenceAndHoldsEveryLimitOnA1msGrid) {
   ASSERT_EQ(d.rc, 0) << d.err;
   const auto c = run("check-trajectory " + path("traj.json") + " --check-dt 0.001 --json");
   ASSERT_EQ(c.rc, 0) << c.err;
-  const auto j = nlohmann::json::parse(c.out);
+  const auto j = nlohmann::ordered_json::parse(c.out);
   EXPECT_LE(j["cond"].get<double>(), 16.24);
   EXPECT_EQ(j["constraint_dt"].get<double>(), 0.001);
   for (const auto& k : j["constraints"]) EXPECT_TRUE(k["holds"].get<bool>()) << k.dump();

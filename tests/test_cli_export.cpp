@@ -14,7 +14,7 @@ TEST_F(CliTest, ExportWritesEachFormatAndRefusesAnUnknownOne) {
   EXPECT_EQ(quadid::read_crazyflie_poly_csv(path("f.poly.csv")).size(), 24u);
   r = run("export table2 -o " + path("g.poly.csv") + " --json");
   ASSERT_EQ(r.rc, 0) << r.err;
-  const auto j = nlohmann::json::parse(r.out);
+  const auto j = nlohmann::ordered_json::parse(r.out);
   EXPECT_EQ(j["pieces"], 24);
   EXPECT_EQ(j["segments"].size(), 5u);
   EXPECT_TRUE(j["fits_crazyflie_memory"].get<bool>());
@@ -36,7 +36,7 @@ TEST_F(CliTest, ExportWritesEachFormatAndRefusesAnUnknownOne) {
 TEST_F(CliTest, CheckTrajectoryPrintsThePredictedPrecision) {
   auto r = run("check-trajectory table2 --json --closed-loop-flights 0");
   ASSERT_EQ(r.rc, 0) << r.err;
-  const auto j = nlohmann::json::parse(r.out);
+  const auto j = nlohmann::ordered_json::parse(r.out);
   for (const char* set : {"LS", "FMLS"})
     for (const char* p : {"m", "Ixx", "Ixy", "Ixz", "Iyy", "Iyz", "Izz"}) {
       const double se = j["predicted_precision"]["sets"][set][p]["std_error"].get<double>();

@@ -85,7 +85,7 @@ TEST_F(CliIdentify, PrintsTable3AndTables5And6) {
 TEST_F(CliIdentify, JsonOnStdoutAloneAndTheSameInTheOutputFile) {
   const quadid::testing::CliRun r = run(path("log.csv") + " --json -o " + path("result.json") + " --evolution " + path("evo.csv"));
   ASSERT_EQ(r.rc, 0) << r.err;
-  const nlohmann::json j = nlohmann::json::parse(r.out);  // throws if anything else is on stdout
+  const nlohmann::ordered_json j = nlohmann::ordered_json::parse(r.out);  // throws if anything else is on stdout
   EXPECT_EQ(j, quadid::read_json_file(path("result.json")));
   const quadid::Params truth = quadid::Params::qball2_virtual();
   for (const char* set : {"LS", "GD", "FMLS", "FMGD"}) ASSERT_TRUE(j["estimates"].contains(set)) << set;
@@ -122,12 +122,12 @@ TEST_F(CliIdentify, JsonOnStdoutAloneAndTheSameInTheOutputFile) {
 TEST_F(CliIdentify, HeldPoseIsReportedAndKeptOnRequest) {
   const quadid::testing::CliRun r = run(path("log.csv") + " --json");
   ASSERT_EQ(r.rc, 0) << r.err;
-  const nlohmann::json j = nlohmann::json::parse(r.out);
-  EXPECT_EQ(j["processing"]["held_pose_columns"], nlohmann::json({"x", "y", "z", "psi"}));
+  const nlohmann::ordered_json j = nlohmann::ordered_json::parse(r.out);
+  EXPECT_EQ(j["processing"]["held_pose_columns"], nlohmann::ordered_json({"x", "y", "z", "psi"}));
   EXPECT_NEAR(j["processing"]["held_pose_rate_hz"].get<double>(), 30.0, 0.05);
   const quadid::testing::CliRun k = run(path("log.csv") + " --json --keep-held-samples");
   ASSERT_EQ(k.rc, 0) << k.err;
-  const nlohmann::json jk = nlohmann::json::parse(k.out);
+  const nlohmann::ordered_json jk = nlohmann::ordered_json::parse(k.out);
   EXPECT_TRUE(jk["processing"]["held_pose_columns"].empty());
   EXPECT_TRUE(jk["processing"]["held_pose_rate_hz"].is_null());
   // The moments come from the 500 Hz gyro: the same to a few parts in 1e6.
@@ -168,7 +168,7 @@ TEST_F(CliIdentify, MapRenamesColumns) {
   EXPECT_NE(r.err.find("missing required column(s): tau_phi"), std::string::npos) << r.err;
   r = run(path("renamed.csv") + " --map tau_phi=Mx --json");
   ASSERT_EQ(r.rc, 0) << r.err;
-  EXPECT_EQ(nlohmann::json::parse(r.out)["estimates"], nlohmann::json::parse(run(path("log.csv") + " --json").out)["estimates"]);
+  EXPECT_EQ(nlohmann::ordered_json::parse(r.out)["estimates"], nlohmann::ordered_json::parse(run(path("log.csv") + " --json").out)["estimates"]);
 }
 
 TEST_F(CliIdentify, BadInputFailsClearlyAndWritesNothing) {
@@ -219,7 +219,7 @@ TEST_F(CliIdentify, LiteralGradientDescentReportsDivergence) {
   const quadid::testing::CliRun r = run(path("log.csv") + " --gd-discretization literal --json");
   ASSERT_EQ(r.rc, 0) << r.err;
   EXPECT_NE(r.err.find("warning: GD diverged"), std::string::npos) << r.err;
-  const nlohmann::json j = nlohmann::json::parse(r.out);
+  const nlohmann::ordered_json j = nlohmann::ordered_json::parse(r.out);
   EXPECT_FALSE(j["estimates"].contains("GD"));
   EXPECT_TRUE(j["gradient_descent"]["FMGD"]["diverged"].get<bool>());
 }
@@ -252,7 +252,7 @@ TEST_F(CliIdentify, ShortLogWithoutWindowTakesTheRestOfTheLog) {
       << a.err;
   const quadid::testing::CliRun a_explicit = run(path("l30.csv") + " --json --window 10:");
   ASSERT_EQ(a_explicit.rc, 0) << a_explicit.err;
-  EXPECT_EQ(nlohmann::json::parse(a.out)["estimates"], nlohmann::json::parse(a_explicit.out)["estimates"]);
+  EXPECT_EQ(nlohmann::ordered_json::parse(a.out)["estimates"], nlohmann::ordered_json::parse(a_explicit.out)["estimates"]);
   EXPECT_EQ(a_explicit.err.find("warning: window:"), std::string::npos) << a_explicit.err;
 
   const quadid::testing::CliRun b = run(path("l15.csv") + " --json");
@@ -260,7 +260,7 @@ TEST_F(CliIdentify, ShortLogWithoutWindowTakesTheRestOfTheLog) {
   EXPECT_NE(b.err.find("all of it used instead"), std::string::npos) << b.err;
   const quadid::testing::CliRun b_explicit = run(path("l15.csv") + " --json --window 0:");
   ASSERT_EQ(b_explicit.rc, 0) << b_explicit.err;
-  EXPECT_EQ(nlohmann::json::parse(b.out)["estimates"], nlohmann::json::parse(b_explicit.out)["estimates"]);
+  EXPECT_EQ(nlohmann::ordered_json::parse(b.out)["estimates"], nlohmann::ordered_json::parse(b_explicit.out)["estimates"]);
   // An explicit window past the end stays an error (BadInputFailsClearlyAndWritesNothing).
 }
 
@@ -291,7 +291,7 @@ TEST_F(CliIdentify, AxisSlipsAreRefusedWithAMapThatWorks) {
   ASSERT_EQ(clean.rc, 0) << clean.err;
   EXPECT_EQ(clean.err.find("axes"), std::string::npos) << clean.err;
   const auto theta = [](const std::string& out) {
-    return nlohmann::json::parse(out).at("least_squares").at("LS").at("theta").get<std::vector<double>>();
+    return nlohmann::ordered_json::parse(out).at("least_squares").at("LS").at("theta").get<std::vector<double>>();
   };
   const std::vector<double> want = theta(clean.out);  // m Ixx Ixy Ixz Iyy Iyz Izz
   for (const Case& c : cases) {
@@ -332,7 +332,7 @@ TEST_F(CliIdentify, AxisSlipsAreRefusedWithAMapThatWorks) {
 TEST_F(CliIdentify, LateGyroIsMeasuredAndTheAdvisedDelayWorks) {
   using quadid::testing::CliRun;
   const auto theta = [](const std::string& out) {
-    return nlohmann::json::parse(out).at("least_squares").at("LS").at("theta").get<std::vector<double>>();
+    return nlohmann::ordered_json::parse(out).at("least_squares").at("LS").at("theta").get<std::vector<double>>();
   };
   const CliRun clean = run(path("log.csv") + " --json");
   ASSERT_EQ(clean.rc, 0) << clean.err;
@@ -366,7 +366,7 @@ TEST_F(CliIdentify, TorquesPointSampledFromAFasterControllerAreNamedAndTheirMean
   // 50 Hz period, gives the full log's moments back.
   using quadid::testing::CliRun;
   const auto theta = [](const std::string& out) {
-    return nlohmann::json::parse(out).at("least_squares").at("FMLS").at("theta").get<std::vector<double>>();
+    return nlohmann::ordered_json::parse(out).at("least_squares").at("FMLS").at("theta").get<std::vector<double>>();
   };
   const CliRun clean = run(path("log.csv") + " --json");
   ASSERT_EQ(clean.rc, 0) << clean.err;

@@ -57,7 +57,7 @@ TEST_F(CliSimulate, JsonGoesToStdoutAlone) {
   const CliRun r = run("--trajectory circle --radius 0.7 --altitude 1.2 --duration 2 --noise none --json -o " +
                        path("c.csv"));
   ASSERT_EQ(r.rc, 0) << r.err;
-  const nlohmann::json j = nlohmann::json::parse(r.out);  // throws if anything else is on stdout
+  const nlohmann::ordered_json j = nlohmann::ordered_json::parse(r.out);  // throws if anything else is on stdout
   EXPECT_EQ(j.at("trajectory"), "circle radius=0.7 altitude=1.2");
   EXPECT_EQ(j.at("summary").at("samples"), 1001);
   EXPECT_TRUE(j.at("summary").at("rms_position_error_m").is_array());

@@ -21,7 +21,7 @@ TEST_F(CliValidate, JudgesAnIdentifyResultAsFourSetsPlusFiles) {
   const CliRun r = run("validate --log " + path("log.csv") + " --params " + path("result.json") +
                        " --params qball2-virtual --window 4:14 --json");
   ASSERT_EQ(r.rc, 0) << r.err;
-  const auto j = nlohmann::json::parse(r.out);  // stdout holds only the JSON
+  const auto j = nlohmann::ordered_json::parse(r.out);  // stdout holds only the JSON
   EXPECT_EQ(j["sets"].size(), 7u);  // the six sets of identify (PC, FMPC too) and the preset
   for (const char* k : {"LS", "GD", "FMLS", "FMGD", "PC", "FMPC", "qball2-virtual"}) EXPECT_TRUE(j["sets"].contains(k)) << k;
   EXPECT_EQ(j["simulation"]["rows"].size(), 7u);
@@ -48,7 +48,7 @@ TEST_F(CliValidate, RealFlightTermsWithoutAVehicleAreNamedAsNotApplied) {
             std::string::npos)
       << r.err;
   EXPECT_NE(r.err.find("give the vehicle to judge it with them"), std::string::npos) << r.err;
-  const auto j = nlohmann::json::parse(r.out);
+  const auto j = nlohmann::ordered_json::parse(r.out);
   EXPECT_FALSE(j["prediction_error"]["real_flight_terms"].get<bool>());
   EXPECT_TRUE(j["sets"]["LS"]["extra"].contains("damping_x")) << j["sets"]["LS"].dump();
   EXPECT_FALSE(j["sets"]["GD"].contains("extra"));
@@ -95,7 +95,7 @@ TEST_F(CliValidate, SimulateIdentifyAndValidateAtLogRatesWithoutMetadata) {
     const CliRun v = run("validate --log " + plain + " --params " + result + " --trajectory table2 --window 5:30 --json");
     ASSERT_EQ(v.rc, 0) << v.err;
     EXPECT_NE(v.err.find(fmt::format("at {} Hz", rate)), std::string::npos) << v.err;
-    const auto j = nlohmann::json::parse(v.out);
+    const auto j = nlohmann::ordered_json::parse(v.out);
     const auto& sim_j = j["simulation"];
     EXPECT_FALSE(sim_j["reference"].contains("failure")) << sim_j["reference"].dump();
     ASSERT_EQ(sim_j["rows"].size(), 6u);  // LS, GD, FMLS, FMGD, PC, FMPC
@@ -156,8 +156,8 @@ TEST_F(CliReproduce, Table2RunWritesACompleteReport) {
   EXPECT_NE(html.find("<p><b>Use ", concl), std::string::npos);
   EXPECT_EQ(html.find("<h2>", concl), std::string::npos);  // the last section
   EXPECT_NE(html.find(">desired</text>"), std::string::npos);
-  const auto s = nlohmann::json::parse(quadid::read_file(path("rep/summary.json")));
-  auto all_improve = [](const nlohmann::json& table, const std::string& where) {
+  const auto s = nlohmann::ordered_json::parse(quadid::read_file(path("rep/summary.json")));
+  auto all_improve = [](const nlohmann::ordered_json& table, const std::string& where) {
     for (const auto& row : table["sets"])
       for (const auto& p : row["improvement_pct"]) EXPECT_GT(p.get<double>(), 0.0) << where << " " << row["name"];
   };

@@ -70,7 +70,7 @@ class CliVehicle : public quadid::testing::CliTest {
     const CliRun sim = run("simulate --vehicle " + vehicle + " --trajectory table2 --duration 30 --json -o " +
                            path("log.csv"));
     ASSERT_EQ(sim.rc, 0) << sim.err;
-    const nlohmann::json s = nlohmann::json::parse(sim.out);
+    const nlohmann::ordered_json s = nlohmann::ordered_json::parse(sim.out);
     const quadid::Vehicle v = quadid::load_vehicle(vehicle);
     ASSERT_EQ(s.at("summary").at("rotor_saturation").size(), 4u);
     const double samples = s.at("summary").at("samples").get<double>();
@@ -92,7 +92,7 @@ class CliVehicle : public quadid::testing::CliTest {
 
     const CliRun id = run("identify " + path("rotors_only.csv") + " --vehicle " + vehicle + " --window 5:30 --json");
     ASSERT_EQ(id.rc, 0) << id.err;
-    const nlohmann::json j = nlohmann::json::parse(id.out);
+    const nlohmann::ordered_json j = nlohmann::ordered_json::parse(id.out);
     const quadid::Params& P = v.nominal;
     // Tolerances: issue 9 (mass 1 %, principal moments 5 %). The own simulator with
     // exact rotor signals gives far less (about 0.1 %), so this catches any model error.
@@ -166,7 +166,7 @@ TEST_F(CliVehicle, RealCrazyflieFlightsRecommendASetPhysicalInBodyAndTerms) {
     const CliRun id = run("identify " + (dir / flight).string() +
                           " --vehicle crazyflie21 --known-mass 0.0347 --ignore-input-errors --json");
     ASSERT_EQ(id.rc, 0) << id.err;
-    const nlohmann::json j = nlohmann::json::parse(id.out);
+    const nlohmann::ordered_json j = nlohmann::ordered_json::parse(id.out);
     const std::string rec = j.at("recommended").at("set");
     EXPECT_TRUE(j.at("consistency").at(rec).at("physical").get<bool>()) << j.at("consistency").at(rec).dump();
     for (const char* set : {"LS", "FMLS", "PC", "FMPC"}) {
@@ -319,7 +319,7 @@ TEST_F(CliVehicle, TorqueOfTheWrongSignIsAnInputError) {
   const CliRun c = run("identify " + path("log.csv") + " --window 5:30 --json");
   ASSERT_EQ(c.rc, 0) << c.err;
   const auto theta = [](const std::string& out) {
-    return nlohmann::json::parse(out).at("least_squares").at("LS").at("theta").get<std::vector<double>>();
+    return nlohmann::ordered_json::parse(out).at("least_squares").at("LS").at("theta").get<std::vector<double>>();
   };
   const std::vector<double> got = theta(f.out), want = theta(c.out);
   for (size_t i = 0; i < got.size(); ++i)  // the written log's 10 significant digits
@@ -364,7 +364,7 @@ TEST_F(CliVehicle, IdentifyTablesJudgeEachSetWithItsTerms) {
   const CliRun id = run("identify " + path("rotors.csv") + " --vehicle " + path("strong.toml") +
                         " --known-mass 0.0347 --window 5:30 --json");
   ASSERT_EQ(id.rc, 0) << id.err;
-  const nlohmann::json j = nlohmann::json::parse(id.out);
+  const nlohmann::ordered_json j = nlohmann::ordered_json::parse(id.out);
   // Issue 11's figure for the recovered thrust coefficient: 2 %.
   EXPECT_NEAR(j["estimates"]["LS"]["extra"]["thrust_scale"].get<double>(), 1.0 / 1.2, 0.02 / 1.2);
   const auto& pe = j["prediction_error"];
@@ -400,7 +400,7 @@ TEST_F(CliVehicle, ValidateWithAVehicleJudgesSetsOnAHeldOutFlight) {
                        " --params " + path("r2.json") + " --json");
   ASSERT_EQ(v.rc, 0) << v.err;
   EXPECT_NE(v.err.find("no simulation comparison (Table 4) with a vehicle"), std::string::npos) << v.err;
-  const nlohmann::json j = nlohmann::json::parse(v.out);
+  const nlohmann::ordered_json j = nlohmann::ordered_json::parse(v.out);
   EXPECT_FALSE(j.contains("simulation"));
   EXPECT_TRUE(j["prediction_error"]["torque_errors_centred"].get<bool>());
   EXPECT_EQ(j["reference"]["name"], "nom");  // the vehicle's [nominal]
@@ -426,9 +426,9 @@ TEST_F(CliVehicle, ValidateWithAVehicleJudgesSetsOnAHeldOutFlight) {
   const CliRun w = run("validate --log " + path("held.csv") + " --vehicle crazyflie21 --params " + path("r1.json") +
                        " --params " + path("truth.json") + " --reference " + path("double.json") + " --json");
   ASSERT_EQ(w.rc, 0) << w.err;
-  const nlohmann::json jw = nlohmann::json::parse(w.out);
+  const nlohmann::ordered_json jw = nlohmann::ordered_json::parse(w.out);
   EXPECT_EQ(jw["reference"]["name"], "double");
-  std::map<std::string, nlohmann::json> rows;
+  std::map<std::string, nlohmann::ordered_json> rows;
   for (const auto& row : jw["prediction_error"]["standard"]["sets"]) rows[row["name"].get<std::string>()] = row;
   ASSERT_TRUE(rows.count("PC") && rows.count("truth")) << jw["prediction_error"].dump();
   for (int c = 1; c < 4; ++c) {
@@ -438,7 +438,7 @@ TEST_F(CliVehicle, ValidateWithAVehicleJudgesSetsOnAHeldOutFlight) {
   }
   // A result identified with another vehicle: its terms belong to that rotor
   // model, and the warning says so.
-  nlohmann::json other = quadid::read_json_file(path("r1.json"));
+  nlohmann::ordered_json other = quadid::read_json_file(path("r1.json"));
   ASSERT_EQ(other["vehicle"]["name"], "crazyflie21");
   other["vehicle"]["name"] = "x500";
   write("other.json", other.dump());
@@ -484,14 +484,14 @@ TEST_F(CliVehicle, GroundAtTheEndsOfTheLogIsLeftOutOfTheWindow) {
 
   const CliRun all = run("identify " + path("armed.csv") + " --vehicle crazyflie21 --window 0: --json");
   ASSERT_EQ(all.rc, 0) << all.err;
-  const double m_all = nlohmann::json::parse(all.out)["estimates"]["LS"]["m"].get<double>();
+  const double m_all = nlohmann::ordered_json::parse(all.out)["estimates"]["LS"]["m"].get<double>();
   EXPECT_LT(m_all, 0.0347 * 0.9) << "the ground's force no longer biases the whole log: the test shows nothing";
   EXPECT_NE(all.err.find("window 0 s-end: the log is on the ground"), std::string::npos) << all.err;
   EXPECT_NE(all.err.find("the window reaches the ground"), std::string::npos) << all.err;
 
   const CliRun r = run("identify " + path("armed.csv") + " --vehicle crazyflie21 --json -o " + path("r.json"));
   ASSERT_EQ(r.rc, 0) << r.err;
-  const nlohmann::json j = nlohmann::json::parse(r.out);
+  const nlohmann::ordered_json j = nlohmann::ordered_json::parse(r.out);
   EXPECT_NEAR(j["estimates"]["LS"]["m"].get<double>(), 0.0347, 0.005 * 0.0347) << r.err;
   EXPECT_NEAR(j["window"]["t0"].get<double>(), 7.0, 0.3);  // 6 s on the ground, 1 s margin
   EXPECT_NEAR(j["window"]["t1"].get<double>(), 6.0 + 30.0 - 1.0, 0.3);
@@ -521,7 +521,7 @@ TEST_F(CliVehicle, RealisticPrecisionIsWithinTwiceTheScatterOfRealFlights) {
   for (const char* flight : {"jana00", "jana01", "jana04", "jana06"}) {
     const CliRun id = run("identify " + (dir / flight).string() + " --vehicle crazyflie21 --json");
     ASSERT_EQ(id.rc, 0) << id.err;
-    const nlohmann::json j = nlohmann::json::parse(id.out);
+    const nlohmann::ordered_json j = nlohmann::ordered_json::parse(id.out);
     const auto& e = j.at("estimates").at("LS");
     quadid::Theta t;
     for (int j = 0; j < 7; ++j) t(j) = e.at(quadid::kThetaNames[static_cast<size_t>(j)]).get<double>();
@@ -534,7 +534,7 @@ TEST_F(CliVehicle, RealisticPrecisionIsWithinTwiceTheScatterOfRealFlights) {
   const CliRun ct = run("check-trajectory table2 --vehicle crazyflie21 --json --flight-duration 14 --window 4:14 "
                         "--closed-loop-flights 2");
   ASSERT_EQ(ct.rc, 0) << ct.err;
-  const nlohmann::json p = nlohmann::json::parse(ct.out).at("predicted_precision");
+  const nlohmann::ordered_json p = nlohmann::ordered_json::parse(ct.out).at("predicted_precision");
   EXPECT_EQ(p.at("model_error").at("class"), "rotor-speed wrench");
   for (int j = 0; j < 7; ++j) {
     const char* name = quadid::kThetaNames[static_cast<size_t>(j)];
@@ -578,7 +578,7 @@ TEST_F(CliVehicle, CrazyflieLogWithoutRpmTakesThePwmPathAndSaysSo) {
   const CliRun b = run("identify " + path("log.csv") + " --vehicle crazyflie21-pwm --window 5:30 --json");
   ASSERT_EQ(b.rc, 0) << b.err;
   EXPECT_EQ(b.err.find("identified with the built-in"), std::string::npos) << b.err;
-  const nlohmann::json ja = nlohmann::json::parse(a.out), jb = nlohmann::json::parse(b.out);
+  const nlohmann::ordered_json ja = nlohmann::ordered_json::parse(a.out), jb = nlohmann::ordered_json::parse(b.out);
   EXPECT_EQ(ja.at("estimates"), jb.at("estimates"));
 }
 
@@ -616,7 +616,7 @@ TEST_F(CliVehicle, RealCrazyflieFlightsFromPwmArePhysicalAndCarryTheirWarning) {
                           " --vehicle crazyflie21-pwm --known-mass 0.0347 --ignore-input-errors --json");
     ASSERT_EQ(id.rc, 0) << id.err;
     EXPECT_NE(id.err.find("rpm per volt"), std::string::npos) << id.err;
-    const nlohmann::json j = nlohmann::json::parse(id.out);
+    const nlohmann::ordered_json j = nlohmann::ordered_json::parse(id.out);
     const std::string rec = j.at("recommended").at("set");
     EXPECT_TRUE(j.at("consistency").at(rec).at("physical").get<bool>()) << j.at("consistency").at(rec).dump();
     ixx.push_back(j.at("estimates").at(rec).at("Ixx").get<double>());

@@ -204,7 +204,7 @@ std::string gunzip(const fs::path& gz) {
   return ss.str();
 }
 
-void expect_number(const nlohmann::json& want, double got, const std::string& what) {
+void expect_number(const nlohmann::ordered_json& want, double got, const std::string& what) {
   if (want.is_string()) {  // the listing's "nan", "inf", "-inf"
     const std::string w = want.get<std::string>();
     if (w == "nan") EXPECT_TRUE(std::isnan(got)) << what;
@@ -224,7 +224,7 @@ void compare_with_listing(const std::string& stem) {
   const fs::path listing = fs::path(QUADID_TEST_DATA) / "ardupilot" / (stem + ".listing.json");
   ASSERT_TRUE(fs::exists(listing)) << listing;
   std::ifstream in(listing);
-  const nlohmann::json want = nlohmann::json::parse(in);
+  const nlohmann::ordered_json want = nlohmann::ordered_json::parse(in);
   const std::string bytes = gunzip(gz);
   const DataFlashLog log = parse_dataflash(bytes_of(bytes), stem);
   EXPECT_EQ(log.bytes, want.at("bytes").get<std::size_t>());
@@ -238,14 +238,14 @@ void compare_with_listing(const std::string& stem) {
     const DataFlashMessages* m = log.find(name);
     ASSERT_NE(m, nullptr) << name;
     EXPECT_EQ(m->count(), count.get<std::size_t>()) << name;
-    const nlohmann::json& f = want.at("formats").at(name);
+    const nlohmann::ordered_json& f = want.at("formats").at(name);
     EXPECT_EQ(m->format.format, f.at("format").get<std::string>()) << name;
     EXPECT_EQ(m->format.columns, f.at("columns").get<std::vector<std::string>>()) << name;
-    const nlohmann::json& units = f.at("units");
+    const nlohmann::ordered_json& units = f.at("units");
     ASSERT_EQ(units.size(), m->format.units.size()) << name;
     for (std::size_t c = 0; c < units.size(); ++c)
       EXPECT_EQ(m->format.units[c], units[c].is_null() ? "" : units[c].get<std::string>()) << name << " " << c;
-    const nlohmann::json& mults = f.at("multipliers");
+    const nlohmann::ordered_json& mults = f.at("multipliers");
     ASSERT_EQ(mults.size(), m->format.multipliers.size()) << name;
     for (std::size_t c = 0; c < mults.size(); ++c)
       if (mults[c].is_null()) EXPECT_TRUE(std::isnan(m->format.multipliers[c])) << name << " " << c;
@@ -309,7 +309,7 @@ TEST_F(DataFlashCli, LogInfoListsTypesUnitsRatesAndParameters) {
   EXPECT_NE(r.out.find("MOT_THST_HOVER   0.41"), std::string::npos) << r.out;
   const auto j = run("log-info " + path("flight.bin") + " --json");
   ASSERT_EQ(j.rc, 0) << j.err;
-  const nlohmann::json js = nlohmann::json::parse(j.out);
+  const nlohmann::ordered_json js = nlohmann::ordered_json::parse(j.out);
   EXPECT_EQ(js.at("kind"), "dataflash");
   EXPECT_EQ(js.at("messages").at("IMU").at("count"), 30);
   EXPECT_EQ(js.at("messages").at("IMU").at("instances"), 3);

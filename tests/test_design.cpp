@@ -14,7 +14,7 @@ namespace {
 
 const std::string kDir = std::string(QUADID_TEST_DATA) + "/design/";
 
-FourierTrajectory from_golden(const nlohmann::json& j) {
+FourierTrajectory from_golden(const nlohmann::ordered_json& j) {
   std::array<FourierTrajectory::AxisCoeffs, 4> axes;
   for (int i = 0; i < 4; ++i) {
     const auto& a = j["coefficients"][kAxisNames[static_cast<size_t>(i)]];
@@ -38,7 +38,7 @@ const ConstraintCheck& find(const CheckReport& r, const std::string& name) {
 // do not here (exact time compare within 1e-9). cond(W): the script gets the
 // angle derivatives by 8th-order finite differences (h = 1 ms, error ~1e-11
 // relative), so 1e-8 relative.
-void expect_matches_golden(const Trajectory& tr, const nlohmann::json& gold) {
+void expect_matches_golden(const Trajectory& tr, const nlohmann::ordered_json& gold) {
   const CheckReport r = check_trajectory(tr);
   ASSERT_EQ(r.constraints.size(), gold["constraints"].size());
   for (const auto& [name, g] : gold["constraints"].items()) {

@@ -75,7 +75,7 @@ class ForceSourceCli : public quadid::testing::CliTest {
   double mass_of(const CliRun& r) {
     EXPECT_EQ(r.rc, 0) << r.err;
     if (r.rc != 0) return 0.0;
-    return nlohmann::json::parse(r.out).at("estimates").at("LS").at("m").get<double>();
+    return nlohmann::ordered_json::parse(r.out).at("estimates").at("LS").at("m").get<double>();
   }
 };
 
@@ -133,7 +133,7 @@ TEST_F(ForceSourceCli, Px4LogWithoutPositionIdentifiesFromTheAccelerometer) {
   const CliRun r = run("identify " + path("nopos.ulg") + " --json");
   ASSERT_EQ(r.rc, 0) << r.err;
   EXPECT_NE(r.err.find("the log has no position (x y z)"), std::string::npos) << r.err;
-  const nlohmann::json j = nlohmann::json::parse(r.out);
+  const nlohmann::ordered_json j = nlohmann::ordered_json::parse(r.out);
   ASSERT_TRUE(j.at("estimates").is_object() && j.at("estimates").contains("FMLS")) << r.out.substr(0, 3000);
   const auto& e = j.at("estimates").at("FMLS");
   EXPECT_NEAR(e.at("m").get<double>(), 1.6, 0.005 * 1.6);

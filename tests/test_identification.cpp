@@ -469,7 +469,7 @@ TEST(Identification, LiteralGradientDescentDivergesAndSaysSo) {
   EXPECT_FALSE(r.estimate("FMGD").valid);
   EXPECT_NE(r.estimate("GD").note.find("stability limit 2"), std::string::npos) << r.estimate("GD").note;
   EXPECT_GT(r.gd_step_gain_standard, 5.0);  // ~ sigma T g^2 = 5.8 and more
-  const nlohmann::json j = to_json(r);
+  const nlohmann::ordered_json j = to_json(r);
   EXPECT_FALSE(j["estimates"].contains("GD"));
   EXPECT_TRUE(j["estimates"].contains("LS"));
   EXPECT_TRUE(j["gradient_descent"]["GD"]["diverged"].get<bool>());
@@ -781,7 +781,7 @@ TEST(Identification, JsonCarriesThetaOrderTensorAndCovariance) {
   SimulationOptions so;
   so.record_truth = false;
   const IdentificationResult r = identify(simulate(FourierTrajectory::table2(), so).log);
-  const nlohmann::json j = to_json(r);
+  const nlohmann::ordered_json j = to_json(r);
   for (const char* set : {"LS", "FMLS"}) {
     const auto& ls = j.at("least_squares").at(set);
     ASSERT_EQ(ls.at("theta_order").size(), 7u);

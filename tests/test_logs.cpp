@@ -823,7 +823,7 @@ TEST_F(LogsCli, ImportWarnsOfTopicsTooSlowForIdentify) {
   QUADID_REQUIRE_SHARED_FILE(f);
   const auto r = run("import " + f.string() + " -o " + path("s.csv") + " --json");
   ASSERT_EQ(r.rc, 0) << r.err;
-  const auto j = nlohmann::json::parse(r.out);
+  const auto j = nlohmann::ordered_json::parse(r.out);
   int slow = 0;
   for (const auto& w : j.at("warnings"))
     if (w.get<std::string>().rfind("too slow for identify's default cutoffs: ", 0) == 0) ++slow;
@@ -885,7 +885,7 @@ TEST_F(LogsCli, ASlowGridIsRefusedAndBothWaysOutWork) {
   const auto inside_truth = [&](const std::string& csv, const std::string& extra) {
     const auto id = run("identify " + csv + " --vehicle jmavsim-quad --json " + extra);
     ASSERT_EQ(id.rc, 0) << id.err;
-    const auto j = nlohmann::json::parse(id.out);
+    const auto j = nlohmann::ordered_json::parse(id.out);
     const auto& u = j.at("uncertainty").at("LS");
     for (const char* p : {"Ixx", "Iyy", "Izz"}) {
       const double truth = j.at("reference").at("params").at(p).get<double>();  // the vehicle file's, flown
@@ -907,7 +907,7 @@ TEST_F(LogsCli, LogInfoAndImport) {
   write("f.ulg", px4_flight({}));
   auto r = run("log-info " + path("f.ulg") + " --json");
   ASSERT_EQ(r.rc, 0) << r.err;
-  const auto j = nlohmann::json::parse(r.out);
+  const auto j = nlohmann::ordered_json::parse(r.out);
   EXPECT_EQ(j["kind"], "ulog");
   EXPECT_EQ(j["topics"].size(), 4u);
   r = run("import " + path("f.ulg") + " -o " + path("log.csv"));

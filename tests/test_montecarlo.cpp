@@ -39,7 +39,7 @@ TEST(MonteCarlo, OneAndTwoThreadsGiveIdenticalNumbers) {
     }
   }
   // The JSON (minus the wall time and thread count) is the same text.
-  auto strip = [](nlohmann::json j) {
+  auto strip = [](nlohmann::ordered_json j) {
     j.erase("seconds");
     j.erase("threads");
     return j.dump();

@@ -16,7 +16,7 @@
 
 namespace {
 
-using nlohmann::json;
+using json = nlohmann::ordered_json;
 using quadid::OptionDef;
 using quadid::OptionKind;
 using quadid::OptionScope;

@@ -120,7 +120,7 @@ TEST_F(PrecisionCli, CheckTrajectoryPredictsTheRegressionIdentifyFits) {
   auto regression = [&](const std::string& args) {
     const quadid::testing::CliRun r = run("check-trajectory table2 --json --flight-duration 14 --window 4:14 " + args);
     EXPECT_EQ(r.rc, 0) << r.err;
-    return nlohmann::json::parse(r.out).at("predicted_precision").at("regression").get<std::string>();
+    return nlohmann::ordered_json::parse(r.out).at("predicted_precision").at("regression").get<std::string>();
   };
   EXPECT_EQ(regression("--closed-loop-flights 0"), "paper (pre-filter 4 Hz)");
   EXPECT_EQ(regression("--vehicle crazyflie21 --closed-loop-flights 2"),

@@ -38,11 +38,11 @@ constexpr double kGoldenTol = 1e-9;
 constexpr double kPi = std::numbers::pi;
 constexpr double kEps = std::numeric_limits<double>::epsilon();
 
-const nlohmann::json& coeffs() {
-  static const nlohmann::json j = [] {
+const nlohmann::ordered_json& coeffs() {
+  static const nlohmann::ordered_json j = [] {
     std::ifstream f(kDir + "signal_coeffs.json");
     if (!f) throw std::runtime_error("cannot open " + kDir + "signal_coeffs.json");
-    return nlohmann::json::parse(f);
+    return nlohmann::ordered_json::parse(f);
   }();
   return j;
 }
@@ -74,11 +74,11 @@ const VectorXd& col(const std::string& name) {
   return it->second;
 }
 
-sig::TransferFunction tf_of(const nlohmann::json& f) {
+sig::TransferFunction tf_of(const nlohmann::ordered_json& f) {
   return {f.at("b").get<std::vector<double>>(), f.at("a").get<std::vector<double>>()};
 }
 
-MatrixXd matrix_of(const nlohmann::json& j) {
+MatrixXd matrix_of(const nlohmann::ordered_json& j) {
   const auto rows = j.get<std::vector<std::vector<double>>>();
   MatrixXd m(static_cast<Eigen::Index>(rows.size()), rows.empty() ? 0 : static_cast<Eigen::Index>(rows[0].size()));
   for (std::size_t i = 0; i < rows.size(); ++i)
@@ -86,7 +86,7 @@ MatrixXd matrix_of(const nlohmann::json& j) {
   return m;
 }
 
-sig::Sos sos_of(const nlohmann::json& j) { return matrix_of(j); }
+sig::Sos sos_of(const nlohmann::ordered_json& j) { return matrix_of(j); }
 
 // Sum over sections of the condition number of the DC gain, (1 + |a1| + |a2|) / |1 + a1 + a2|.
 double dc_condition(const sig::Sos& sos) {
@@ -630,7 +630,7 @@ TEST(SignalInPlace, SeveralColumnsEqualOneAtATime) {
 TEST(Spectrum, WelchMatchesScipy) {
   std::ifstream in(kDir + "welch_golden.json");
   ASSERT_TRUE(in) << kDir;
-  const nlohmann::json j = nlohmann::json::parse(in);
+  const nlohmann::ordered_json j = nlohmann::ordered_json::parse(in);
   const auto xs = j["x"].get<std::vector<double>>();
   const auto want = j["psd"].get<std::vector<double>>();
   const Eigen::VectorXd x = Eigen::Map<const Eigen::VectorXd>(xs.data(), static_cast<Eigen::Index>(xs.size()));

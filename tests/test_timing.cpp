@@ -271,12 +271,12 @@ class Px4Identify : public CliTest {
  protected:
   // `quadid identify FILE.ulg --json` without a vehicle file on a simulated
   // flight of `v`; checks issue 10's tolerances against the simulated truth.
-  nlohmann::json identify(const Vehicle& v, const Px4SimOptions& o) {
+  nlohmann::ordered_json identify(const Vehicle& v, const Px4SimOptions& o) {
     const std::string f = path("flight.ulg");
     std::ofstream(f, std::ios::binary) << px4_sim_ulog(v, o);
     const CliRun r = run("identify " + f + " --json");
     EXPECT_EQ(r.rc, 0) << r.err;
-    const nlohmann::json j = nlohmann::json::parse(r.out);
+    const nlohmann::ordered_json j = nlohmann::ordered_json::parse(r.out);
     const Params& P = v.nominal;
     // Issue 10: mass within 1.5 %, principal moments within 5 %, products within
     // 5 % of Ixx with the right signs (the truth's products are >= 5 % of Ixx,
@@ -303,7 +303,7 @@ class Px4Identify : public CliTest {
 TEST_F(Px4Identify, HeavyQuadWithoutVehicleFile) {
   Px4SimOptions o;
   o.rotor_offset = 0.010;  // commands stamped late, as a real pipeline may
-  const nlohmann::json j = identify(px4_test_vehicle(0.03), o);
+  const nlohmann::ordered_json j = identify(px4_test_vehicle(0.03), o);
   // The estimate is the one the library test above checks; here it must be reported.
   EXPECT_NEAR(j.at("timing").at("motor_time_constant").at("value").get<double>(), 0.03, 0.2 * 0.03);
   EXPECT_NEAR(j.at("timing").at("rotor_offset").at("value").get<double>(), 0.010, 0.0025);
@@ -313,7 +313,7 @@ TEST_F(Px4Identify, SmallQuadWithoutVehicleFileTextSaysWhereTheModelCameFrom) {
   Px4SimOptions o;
   o.duration = 15.0;
   o.seed = 2;
-  const nlohmann::json j = identify(small_vehicle(), o);
+  const nlohmann::ordered_json j = identify(small_vehicle(), o);
   EXPECT_NEAR(j.at("timing").at("motor_time_constant").at("value").get<double>(), 0.02, 0.2 * 0.02);
   const CliRun r = run("identify " + path("flight.ulg") + " --verbose");
   ASSERT_EQ(r.rc, 0) << r.err;
@@ -337,7 +337,7 @@ TEST_F(Px4Identify, GazeboLogNeedsTheSimulatedVehicleAndGetsItsColumns) {
   EXPECT_NE(r.err.find("--vehicle x500-gz"), std::string::npos) << r.err;
   r = run("identify " + f + " --vehicle x500-gz --json");
   ASSERT_EQ(r.rc, 0) << r.err;
-  const nlohmann::json j = nlohmann::json::parse(r.out);
+  const nlohmann::ordered_json j = nlohmann::ordered_json::parse(r.out);
   const Params P = load_vehicle("x500").nominal;
   const auto& e = j.at("estimates").at(j.at("recommended").at("set").get<std::string>());
   // Issue 11's tolerances for a clean simulated flight (0.5 % on m, 2 % on

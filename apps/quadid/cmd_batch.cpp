@@ -61,12 +61,12 @@ void run(const OptionValues& v) {
   // collected and the file is written once, atomically, at the end.
   std::string collected;
   const bool compare = !a.quiet || !a.summary.empty();  // the flights' comparison is printed or written
-  std::vector<nlohmann::json> records;                 // what it reads of each result, when it is
+  std::vector<nlohmann::ordered_json> records;                 // what it reads of each result, when it is
   const BatchSink sink = [&](std::size_t, const BatchRecord& r) {
-    nlohmann::json j = to_json(r);
+    nlohmann::ordered_json j = to_json(r);
     const std::string line = j.dump() + "\n";
     if (compare) {
-      nlohmann::json kept = nlohmann::json::object();
+      nlohmann::ordered_json kept = nlohmann::ordered_json::object();
       for (const char* key : {"path", "ok", "estimates", "uncertainty", "recommended"})
         if (j.contains(key)) kept[key] = std::move(j[key]);
       records.push_back(std::move(kept));

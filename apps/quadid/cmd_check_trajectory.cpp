@@ -39,7 +39,7 @@ void run(const OptionValues& v) {
     }
   }
   if (v.flag("json")) {
-    nlohmann::json j = to_json(rep);
+    nlohmann::ordered_json j = to_json(rep);
     if (pred) j["predicted_precision"] = to_json(*pred);
     else if (!no_pred.empty()) j["predicted_precision"] = {{"error", no_pred}};
     j["source"] = spec;

@@ -70,7 +70,7 @@ void run(const OptionValues& v) {
   const DesignResult res = design_trajectory(opt, progress);
   if (!res.check.all_hold())
     throw std::runtime_error(infeasible_design_message(res, opt));
-  nlohmann::json j = design_to_json(res, opt);
+  nlohmann::ordered_json j = design_to_json(res, opt);
   std::optional<PrecisionResult> pred;
   if (req.precision.predict) {
     try {

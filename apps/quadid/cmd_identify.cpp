@@ -54,7 +54,7 @@ void run(const OptionValues& v) {
   if (!a.quiet)
     for (const auto& w : res.warnings) fmt::print(stderr, "quadid identify: warning: {}\n", w);
 
-  nlohmann::json j = to_json(res);
+  nlohmann::ordered_json j = to_json(res);
   j["log"] = a.log;
   add_input_json(j, in);
   // Files first (atomically), so that a failed write leaves no partial report.

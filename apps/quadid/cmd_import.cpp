@@ -83,7 +83,7 @@ void run(const OptionValues& v) {
       rep.warnings.push_back("too slow for identify's default cutoffs: " + f);
   }
   if (a.json) {
-    nlohmann::json j = {{"file", a.file}, {"out", a.out}, {"rows", log.rows()}, {"columns", log.columns}};
+    nlohmann::ordered_json j = {{"file", a.file}, {"out", a.out}, {"rows", log.rows()}, {"columns", log.columns}};
     j.update(logs::import_report_json(rep));
     fmt::print("{}\n", j.dump(2));
     return;

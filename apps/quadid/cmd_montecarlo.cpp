@@ -58,7 +58,7 @@ void run(const OptionValues& v) {
   };
   const MonteCarloResult r = run_montecarlo(o, progress);
 
-  const nlohmann::json j = to_json(r);
+  const nlohmann::ordered_json j = to_json(r);
   if (!a.out.empty()) {
     namespace fs = std::filesystem;
     fs::create_directories(a.out);

@@ -72,13 +72,13 @@ void run(const OptionValues& v) {
 
   const SimulationSummary& s = res.summary;
   if (a.json) {
-    nlohmann::json j = {{"trajectory", trajectory_spec(*traj)},
+    nlohmann::ordered_json j = {{"trajectory", trajectory_spec(*traj)},
                         {"plant", to_json(o.plant)},
                         {"controller_params", to_json(o.controller.params)},
                         {"seed", o.sensors.seed},
                         {"options", to_json(o)},
-                        {"log", a.out.empty() ? nlohmann::json() : nlohmann::json(a.out)},
-                        {"truth", a.truth.empty() ? nlohmann::json() : nlohmann::json(a.truth)},
+                        {"log", a.out.empty() ? nlohmann::ordered_json() : nlohmann::ordered_json(a.out)},
+                        {"truth", a.truth.empty() ? nlohmann::ordered_json() : nlohmann::ordered_json(a.truth)},
                         {"summary", to_json(s)}};
     fmt::print("{}\n", j.dump(2));
     return;

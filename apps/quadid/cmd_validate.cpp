@@ -33,7 +33,7 @@ void run(const OptionValues& o) {
         if (!a.quiet) fmt::print(stderr, "quadid validate: {}\n", note);
       });
 
-  const nlohmann::json j = to_json(v, a.log);
+  const nlohmann::ordered_json j = to_json(v, a.log);
   if (!a.out.empty()) write_file_atomic(a.out, j.dump(2) + "\n");
   if (a.json) {
     fmt::print("{}\n", j.dump(2));

@@ -56,7 +56,7 @@ void add_one(CLI::App* sub, const std::shared_ptr<GivenOptions>& g, const Option
       o = sub->add_option_function<std::vector<std::string>>(names, [g, name, note](const std::vector<std::string>& v) {
         note();
         auto& a = g->values[name];
-        if (!a.is_array()) a = nlohmann::json::array();
+        if (!a.is_array()) a = nlohmann::ordered_json::array();
         for (const auto& s : v) a.push_back(s);
       }, cli_help(d));
       break;

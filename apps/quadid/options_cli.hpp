@@ -17,7 +17,7 @@ namespace quadid::cli {
 /// What was given on the command line, by long name (numbers as typed: the library parses them).
 struct GivenOptions {
   std::string command;
-  nlohmann::json values = nlohmann::json::object();
+  nlohmann::ordered_json values = nlohmann::ordered_json::object();
   /// The options given, read against the table (OptionSource::Cli: errors name the flag).
   OptionValues read() const { return OptionValues(values, command, OptionSource::Cli); }
 };

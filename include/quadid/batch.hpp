@@ -24,7 +24,7 @@ FlightLog load_log_file(const std::string& path, const CsvReadOptions& csv);
 /// "log": path. Errors keep their type (InputError for bad data,
 /// std::invalid_argument for bad options) and their message starts with the path.
 /// `evolution`, when given, receives the estimates over time (not in the JSON).
-nlohmann::json identify_log_file(const std::string& path, const IdentifyRequest& req, Evolution* evolution = nullptr);
+nlohmann::ordered_json identify_log_file(const std::string& path, const IdentifyRequest& req, Evolution* evolution = nullptr);
 
 struct BatchOptions {
   int threads = 0;  // worker threads; 0 = one per core (std::thread::hardware_concurrency)
@@ -36,13 +36,13 @@ struct BatchRecord {
   std::string path;
   bool ok = false;
   std::string error;       // why it failed (empty when ok)
-  nlohmann::json result;   // identify --json (null when failed)
+  nlohmann::ordered_json result;   // identify --json (null when failed)
   double seconds = 0.0;    // wall time of this log
 };
 
 /// One JSON Lines object: {"path", "ok": true, ...identify --json...} or
 /// {"path", "ok": false, "error": "..."}.
-nlohmann::json to_json(const BatchRecord& r);
+nlohmann::ordered_json to_json(const BatchRecord& r);
 
 struct BatchSummary {
   std::size_t total = 0, ok = 0, failed = 0;
@@ -119,7 +119,7 @@ struct FleetSummary {
   std::vector<std::string> notes;  // what a reader should know (too few flights, spread beyond the standard errors)
   std::string table() const;       // a table a person reads
 };
-nlohmann::json to_json(const FleetSummary& s);
+nlohmann::ordered_json to_json(const FleetSummary& s);
 
 /// Compares the flights of a batch: for each parameter its median and spread
 /// over the flights, the flights' own standard errors beside it, and the
@@ -127,6 +127,6 @@ nlohmann::json to_json(const FleetSummary& s);
 /// to_json(BatchRecord) writes them (or the Python fleet runner's dicts);
 /// failed records and those without the set are listed in `skipped`. Outliers
 /// need 3 flights or more (the others' mean and spread need 2).
-FleetSummary summarize_fleet(const std::vector<nlohmann::json>& records, const FleetSummaryOptions& opt = {});
+FleetSummary summarize_fleet(const std::vector<nlohmann::ordered_json>& records, const FleetSummaryOptions& opt = {});
 
 }  // namespace quadid

@@ -84,8 +84,8 @@ std::vector<InputFinding> check_input(const FlightLog& log, const InputCheckOpti
 /// same log (check_input's, and the rates and rotor checks of an autopilot log).
 std::optional<InputFinding> no_thrust_finding(const Eigen::VectorXd& fz);
 
-nlohmann::json to_json(const InputFinding& f);
-nlohmann::json to_json(const std::vector<InputFinding>& f);
+nlohmann::ordered_json to_json(const InputFinding& f);
+nlohmann::ordered_json to_json(const std::vector<InputFinding>& f);
 /// "error: angle-units: ... -> ..." lines.
 std::string format_findings(const std::vector<InputFinding>& f);
 

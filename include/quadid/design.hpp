@@ -287,16 +287,16 @@ class ExcitationProblem {
 /// The limits a designed trajectory file records (its "constraints"), or
 /// nothing for a built-in name or a file without them.
 std::optional<Constraints> saved_trajectory_limits(const std::string& spec);
-nlohmann::json to_json(const Constraints& c);
+nlohmann::ordered_json to_json(const Constraints& c);
 /// Inverse of to_json(Constraints): the "constraints" a designed trajectory file
 /// records (null = unbounded; absent fields keep `defaults`). Throws InputError
 /// naming `source` and the bad field.
-Constraints constraints_from_json(const nlohmann::json& j, const std::string& source, Constraints defaults = {});
-nlohmann::json to_json(const CheckReport& r);
-nlohmann::json to_json(const StartSummary& s);
+Constraints constraints_from_json(const nlohmann::ordered_json& j, const std::string& source, Constraints defaults = {});
+nlohmann::ordered_json to_json(const CheckReport& r);
+nlohmann::ordered_json to_json(const StartSummary& s);
 /// The trajectory JSON of docs/file-formats.md plus "criterion", "constraints", "check",
 /// "seed", "starts" (and "start_results").
-nlohmann::json design_to_json(const DesignResult& r, const DesignOptions& opt);
+nlohmann::ordered_json design_to_json(const DesignResult& r, const DesignOptions& opt);
 /// Human-readable tables (degrees for angles, units in the column titles).
 std::string format_check_report(const CheckReport& r);
 

@@ -138,6 +138,6 @@ ExportSummary export_flight(const std::shared_ptr<const Trajectory>& traj, const
                             const ExportOptions& opt = {}, const std::vector<std::string>& comments = {});
 std::string format_export_summary(const ExportSummary& s);
 /// {"format", "files", "duration", "segments": [{"name", "t0", "t1"}], "setpoints" | "pieces", "bytes", "fit"}.
-nlohmann::json to_json(const ExportSummary& s);
+nlohmann::ordered_json to_json(const ExportSummary& s);
 
 }  // namespace quadid

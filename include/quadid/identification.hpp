@@ -198,9 +198,9 @@ std::string format_estimates_table(const IdentificationResult& r);
 std::string format_prediction_table(const PredictionErrorTable& t, std::string_view title);
 /// CSV of the evolution (header, then rows; "nan" where undetermined).
 std::string format_evolution_csv(const Evolution& e);
-nlohmann::json to_json(const PredictionErrorTable& t);
+nlohmann::ordered_json to_json(const PredictionErrorTable& t);
 /// {"estimates": {"LS": {m, Ixx, ...}, ...}, "prediction_error": {...}, ...}
-nlohmann::json to_json(const IdentificationResult& r);
+nlohmann::ordered_json to_json(const IdentificationResult& r);
 /// Standard errors, intervals and what the data determine poorly, for LS and FMLS.
 std::string format_uncertainty_table(const IdentificationResult& r);
 /// One line per set: physically consistent or why not.

@@ -123,12 +123,12 @@ std::string read_file(const std::filesystem::path& path);
 
 // --- JSON -------------------------------------------------------------------
 
-nlohmann::json to_json(const Params& P);
+nlohmann::ordered_json to_json(const Params& P);
 /// Reads {"m":..,"Ixx":..,...}; missing Ixy/Ixz/Iyz default to 0. With
 /// `physical` (the default) also requires m > 0 and I positive definite;
 /// without, only finite numbers (an estimate may be unphysical and still be
 /// judged by its prediction error). `source` names the origin in messages.
-Params params_from_json(const nlohmann::json& j, const std::string& source, bool physical = true);
+Params params_from_json(const nlohmann::ordered_json& j, const std::string& source, bool physical = true);
 
 /// The name a parameter set goes by in tables: "nom" for the QBall 2 nominal
 /// preset (the paper's), another preset's own name, or a file's name without
@@ -147,12 +147,12 @@ std::vector<NamedParams> load_param_sets(const std::string& spec);
 /// key when it is missing (if required), not a number, or not finite;
 /// `fallback` when it is absent and not required. The one field reader of the
 /// library's JSON inputs.
-double json_number(const nlohmann::json& j, const std::string& key, const std::string& where, bool required,
+double json_number(const nlohmann::ordered_json& j, const std::string& key, const std::string& where, bool required,
                    double fallback = 0.0);
 /// An array of numbers `key` of object j; InputError naming `where` and the key otherwise.
-Eigen::VectorXd json_number_array(const nlohmann::json& j, const std::string& key, const std::string& where);
+Eigen::VectorXd json_number_array(const nlohmann::ordered_json& j, const std::string& key, const std::string& where);
 
 /// Parses a JSON file; InputError names the file, line and column of a syntax error.
-nlohmann::json read_json_file(const std::filesystem::path& path);
+nlohmann::ordered_json read_json_file(const std::filesystem::path& path);
 
 }  // namespace quadid

@@ -478,14 +478,14 @@ std::vector<TimeGap> find_gaps(const std::vector<double>& t, double factor);
 /// The ULog listing in pyulog's layout (ulog_info, then parameters, then
 /// ulog_messages): `verbose` as ulog_info -v (perf_ info, multi-info values).
 std::string format_ulog_info(const ULog& log, bool verbose);
-nlohmann::json ulog_info_json(const ULog& log);
+nlohmann::ordered_json ulog_info_json(const ULog& log);
 /// Messages with counts, instances, rates and their columns' units; the
 /// parameters' last values (`verbose`: also those logged again with another value).
 std::string format_dataflash_info(const DataFlashLog& log, bool verbose);
-nlohmann::json dataflash_info_json(const DataFlashLog& log);
+nlohmann::ordered_json dataflash_info_json(const DataFlashLog& log);
 /// Events with their variables, record counts, mean rates and gaps.
 std::string format_usd_info(const UsdLog& log);
-nlohmann::json usd_info_json(const UsdLog& log);
+nlohmann::ordered_json usd_info_json(const UsdLog& log);
 
 // ============================================================================
 // Import: autopilot log -> flight log (docs/file-formats.md columns t x y z phi theta psi p q r
@@ -563,7 +563,7 @@ struct ImportReport {
 
 /// The report as `quadid import --json` prints it (kind, rate_hz, t0_s,
 /// duration_s, sources, warnings, truncated, gaps, dropouts).
-nlohmann::json import_report_json(const ImportReport& rep);
+nlohmann::ordered_json import_report_json(const ImportReport& rep);
 
 FlightLog import_ulog(const ULog& log, const ImportOptions& opt = {}, ImportReport* report = nullptr);
 FlightLog import_usd(const UsdLog& log, const ImportOptions& opt = {}, ImportReport* report = nullptr);

@@ -82,7 +82,7 @@ MonteCarloResult run_montecarlo(const MonteCarloOptions& options,
 /// The statistics of the runs (run_montecarlo calls it; exposed for tests).
 std::vector<MonteCarloSetStats> montecarlo_statistics(const std::vector<MonteCarloRun>& runs, const Theta& truth);
 
-nlohmann::json to_json(const MonteCarloResult& r);
+nlohmann::ordered_json to_json(const MonteCarloResult& r);
 /// Text tables: bias, std, RMSE (in % of the truth for m and the moments, of
 /// the mean moment for products) and the coverage of the intervals.
 std::string format_montecarlo(const MonteCarloResult& r);

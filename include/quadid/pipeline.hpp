@@ -78,7 +78,7 @@ struct IdentifyRequest {
 /// Options of `quadid identify` (and `quadid batch`): option_table("identify")'s
 /// OptionScope::Both options. Defaults: the table's. Validated.
 IdentifyRequest identify_request(const OptionValues& v);
-IdentifyRequest identify_options_from_json(const nlohmann::json& j);
+IdentifyRequest identify_options_from_json(const nlohmann::ordered_json& j);
 
 /// Applies them to `req`, with the defaults of docs/real-flights.md: with a
 /// vehicle, the real-flight terms, cutoffs chosen on held-out data, the whole
@@ -149,7 +149,7 @@ std::vector<std::string> identification_columns(const IdentifyRequest& req);
 IdentificationResult identify_prepared(const IdentificationInput& in);
 /// With a rotor model: adds "wrench_source", "vehicle" ({name, source}), "rotors" and
 /// "timing" to a result JSON (nothing for a log with its own wrench).
-void add_input_json(nlohmann::json& j, const IdentificationInput& in);
+void add_input_json(nlohmann::ordered_json& j, const IdentificationInput& in);
 /// Text: where the wrench came from (and the rotor model), then the timing.
 std::string format_input(const IdentificationInput& in);
 
@@ -160,7 +160,7 @@ struct SimulateRequest {
   SimulationOptions options;
 };
 SimulateRequest simulate_request(const OptionValues& v);
-SimulateRequest simulate_options_from_json(const nlohmann::json& j);
+SimulateRequest simulate_options_from_json(const nlohmann::ordered_json& j);
 
 /// The predicted precision of design and check-trajectory (--vehicle,
 /// --flight-duration, --window, --sigma-*, --closed-loop-flights, --regression,
@@ -183,7 +183,7 @@ struct DesignRequest {
   std::string row_noise_note;  // criterion precision: the rows' noise found (empty: another criterion)
 };
 DesignRequest design_request(const OptionValues& v);
-DesignOptions design_options_from_json(const nlohmann::json& j);
+DesignOptions design_options_from_json(const nlohmann::ordered_json& j);
 
 /// `quadid check-trajectory` of `trajectory` (a designed file's own limits,
 /// those given in place of its values; empty: the defaults of section III-B).
@@ -194,7 +194,7 @@ struct CheckRequest {
   bool limits_given = false;   // some limit option was given
 };
 CheckRequest check_request(const OptionValues& v, const std::string& trajectory);
-CheckOptions check_options_from_json(const nlohmann::json& j);
+CheckOptions check_options_from_json(const nlohmann::ordered_json& j);
 
 /// `quadid montecarlo` (notes: what it says on stderr, e.g. the window fitted to a short flight).
 struct MonteCarloRequest {
@@ -232,7 +232,7 @@ struct ValidateRequest {
   CsvReadOptions csv;
 };
 ValidateRequest validate_request(const OptionValues& v);
-ValidateRequest validate_options_from_json(const nlohmann::json& j);
+ValidateRequest validate_options_from_json(const nlohmann::ordered_json& j);
 
 /// The log of a validation: any format (load_any_log); with req.vehicle, the
 /// wrench computed from the rotor columns (load_identification_log's way),
@@ -261,13 +261,13 @@ struct LogValidation {
 LogValidation validate_log(const FlightLog& log, const ValidateRequest& req,
                            const std::function<void(const std::string&)>& note = {});
 /// The JSON of `quadid validate --json` ("log": log_name).
-nlohmann::json to_json(const LogValidation& v, const std::string& log_name);
+nlohmann::ordered_json to_json(const LogValidation& v, const std::string& log_name);
 
 /// `quadid log-info PATH` (docs/log-info.md): the listing of a PX4 ULog, a
 /// Crazyflie uSD log or an ArduPilot DataFlash log, the kind from the file's
 /// first bytes; an InputError naming byte 0 for anything else.
 /// allow_truncated: a ULog cut mid-message keeps the messages before it.
-nlohmann::json log_info_json(const std::string& path, bool allow_truncated = false);
+nlohmann::ordered_json log_info_json(const std::string& path, bool allow_truncated = false);
 std::string log_info_text(const std::string& path, bool verbose, bool allow_truncated = false);
 
 }  // namespace quadid

@@ -175,6 +175,6 @@ PrecisionResult predict_precision(const Trajectory& traj, const PrecisionOptions
 /// A table: parameter, predicted std error (SI), relative % for each set, and
 /// the dominant noise source.
 std::string format_precision(const PrecisionResult& r);
-nlohmann::json to_json(const PrecisionResult& r);
+nlohmann::ordered_json to_json(const PrecisionResult& r);
 
 }  // namespace quadid

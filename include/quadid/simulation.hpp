@@ -275,9 +275,9 @@ std::unique_ptr<Trajectory> trajectory_from_log(const FlightLog& log);
 /// dt, duration, ...). Throws InputError if the metadata is missing or malformed.
 SimulationOptions simulation_options_from_log(const FlightLog& log);
 
-nlohmann::json to_json(const SimulationOptions& opt);
+nlohmann::ordered_json to_json(const SimulationOptions& opt);
 /// Fields absent from `j` keep their defaults. Throws InputError naming the bad field.
-SimulationOptions simulation_options_from_json(const nlohmann::json& j, const std::string& source);
-nlohmann::json to_json(const SimulationSummary& s);
+SimulationOptions simulation_options_from_json(const nlohmann::ordered_json& j, const std::string& source);
+nlohmann::ordered_json to_json(const SimulationSummary& s);
 
 }  // namespace quadid

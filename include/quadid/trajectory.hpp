@@ -207,17 +207,17 @@ class PolynomialTrajectory final : public Trajectory {
 /// {"type": "poly4d", "pieces": [[duration, x^0..x^7, y^0.., z^0.., yaw^0..yaw^7], ...]}: the
 /// one-line spec a simulated log records for a polynomial trajectory (simulate
 /// --trajectory FILE.poly.csv), and back (InputError naming `source`).
-nlohmann::json to_json(const PolynomialTrajectory& p);
-PolynomialTrajectory polynomial_from_json(const nlohmann::json& j, const std::string& source);
+nlohmann::ordered_json to_json(const PolynomialTrajectory& p);
+PolynomialTrajectory polynomial_from_json(const nlohmann::ordered_json& j, const std::string& source);
 
 /// Reads crazyflie_poly_csv's layout; InputError naming the file, line and column.
 std::vector<PolyPiece> read_crazyflie_poly_csv(const std::filesystem::path& path);
 
 // --- Trajectories as text: files, specs, JSON ------------------------------------
 
-nlohmann::json to_json(const FourierTrajectory& traj);
+nlohmann::ordered_json to_json(const FourierTrajectory& traj);
 /// Reads the trajectory JSON of docs/file-formats.md; the error names the field that is wrong.
-FourierTrajectory trajectory_from_json(const nlohmann::json& j, const std::string& source);
+FourierTrajectory trajectory_from_json(const nlohmann::ordered_json& j, const std::string& source);
 
 /// The one-line spec of a trajectory (a built-in name, "circle radius=R
 /// altitude=A ...", or its JSON) that a simulated log records and

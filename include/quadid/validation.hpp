@@ -62,7 +62,7 @@ std::string improvement_undefined(const SimulationComparison& c, const Simulatio
 /// Table 4 layout: a row per signal (angles in degrees), columns e_ref, then
 /// e_set and P_imp% for each set.
 std::string format_simulation_table(const SimulationComparison& c, std::string_view title);
-nlohmann::json to_json(const SimulationComparison& c);
+nlohmann::ordered_json to_json(const SimulationComparison& c);
 
 struct PredictionValidationOptions {
   ProcessingOptions processing{};

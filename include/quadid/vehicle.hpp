@@ -227,8 +227,8 @@ std::string_view builtin_vehicle_text(std::string_view name);
 
 /// The [rotors] table as JSON (the keys of the vehicle file; spin as "cw"/"ccw"), e.g. for
 /// the metadata of a simulated log, and back (InputError naming `source` and the key).
-nlohmann::json to_json(const RotorModel& m);
-RotorModel rotor_model_from_json(const nlohmann::json& j, const std::string& source);
+nlohmann::ordered_json to_json(const RotorModel& m);
+RotorModel rotor_model_from_json(const nlohmann::ordered_json& j, const std::string& source);
 
 /// The vehicle's per-rotor columns of `log` (samples x N); InputError naming a missing column.
 /// input = "duty": the applied voltages d_i vbat (V), from the duty columns and voltage_column

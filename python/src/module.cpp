@@ -27,7 +27,7 @@
 #include <utility>
 
 namespace py = pybind11;
-using nlohmann::json;
+using json = nlohmann::ordered_json;
 
 namespace {
 

@@ -28,7 +28,7 @@ FlightLog load_log_file(const std::string& path, const CsvReadOptions& csv) {
   return logs::load_any_log(path, load);
 }
 
-nlohmann::json identify_log_file(const std::string& path, const IdentifyRequest& req, Evolution* evolution) {
+nlohmann::ordered_json identify_log_file(const std::string& path, const IdentifyRequest& req, Evolution* evolution) {
   const IdentificationInput in = prepare_identification(path, req);  // InputError names the file
   IdentificationResult res;
   try {
@@ -40,7 +40,7 @@ nlohmann::json identify_log_file(const std::string& path, const IdentifyRequest&
   } catch (const std::exception& e) {
     throw std::runtime_error(fmt::format("{}: {}", path, e.what()));
   }
-  nlohmann::json j = to_json(res);
+  nlohmann::ordered_json j = to_json(res);
   j["log"] = path;
   add_input_json(j, in);
   if (evolution) *evolution = std::move(res.evolution);
@@ -51,9 +51,9 @@ void BatchOptions::validate() const {
   if (threads < 0) throw std::invalid_argument(fmt::format("--threads {}: expected 0 (one per core) or more", threads));
 }
 
-nlohmann::json to_json(const BatchRecord& r) {
+nlohmann::ordered_json to_json(const BatchRecord& r) {
   if (!r.ok) return {{"path", r.path}, {"ok", false}, {"error", r.error}};
-  nlohmann::json j = r.result;
+  nlohmann::ordered_json j = r.result;
   j["path"] = r.path;
   j["ok"] = true;
   return j;

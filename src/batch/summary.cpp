@@ -40,7 +40,7 @@ const char* const kSets[] = {"LS", "GD", "FMLS", "FMGD", "PC", "FMPC"};
 // errors (docs/fleet.md).
 bool has_std_errors(const std::string& set) { return set == "LS" || set == "FMLS"; }
 
-double number_or_nan(const nlohmann::json& j) { return j.is_number() ? j.get<double>() : kNaN; }
+double number_or_nan(const nlohmann::ordered_json& j) { return j.is_number() ? j.get<double>() : kNaN; }
 
 double median(std::vector<double> v) {
   if (v.empty()) return kNaN;
@@ -69,7 +69,7 @@ void FleetSummaryOptions::validate() const {
 namespace {
 
 // One record's flight in the compared set, or nullopt with the reason it is skipped.
-std::optional<Flight> flight_of(const nlohmann::json& r, const FleetSummaryOptions& opt, FleetSummary& s) {
+std::optional<Flight> flight_of(const nlohmann::ordered_json& r, const FleetSummaryOptions& opt, FleetSummary& s) {
   const std::string path = r.contains("path") && r["path"].is_string() ? r["path"].get<std::string>() : "(no path)";
   if (!r.value("ok", false)) {
     s.skipped.push_back(fmt::format("{}: not identified", path));
@@ -91,7 +91,7 @@ std::optional<Flight> flight_of(const nlohmann::json& r, const FleetSummaryOptio
     return std::nullopt;
   }
   const auto& est = r["estimates"][f.set];
-  const nlohmann::json* unc = nullptr;
+  const nlohmann::ordered_json* unc = nullptr;
   if (has_std_errors(f.set) && r.contains("uncertainty") && r["uncertainty"].contains(f.set))
     unc = &r["uncertainty"][f.set];
   bool finite = true;
@@ -196,7 +196,7 @@ void flag_outliers(const std::vector<Flight>& flights, const FleetSummaryOptions
 
 }  // namespace
 
-FleetSummary summarize_fleet(const std::vector<nlohmann::json>& records, const FleetSummaryOptions& opt) {
+FleetSummary summarize_fleet(const std::vector<nlohmann::ordered_json>& records, const FleetSummaryOptions& opt) {
   opt.validate();
   FleetSummary s;
   s.set = opt.set;
@@ -260,13 +260,13 @@ std::string FleetSummary::table() const {
   return out;
 }
 
-nlohmann::json to_json(const FleetSummary& s) {
-  nlohmann::json params = nlohmann::json::object();
+nlohmann::ordered_json to_json(const FleetSummary& s) {
+  nlohmann::ordered_json params = nlohmann::ordered_json::object();
   for (const auto& p : s.parameters)
     params[p.name] = {{"flights", p.flights}, {"mean", finite_or_null(p.mean)}, {"std_dev", finite_or_null(p.std_dev)},
                       {"min", finite_or_null(p.min)},    {"max", finite_or_null(p.max)},       {"median_std_error", finite_or_null(p.median_std_error)},
                       {"fixed", p.fixed}};
-  nlohmann::json outliers = nlohmann::json::array();
+  nlohmann::ordered_json outliers = nlohmann::ordered_json::array();
   for (const auto& x : s.outliers)
     outliers.push_back({{"path", x.path},
                         {"parameter", x.parameter},

@@ -571,12 +571,12 @@ std::vector<InputFinding> check_input(const FlightLog& log, const InputCheckOpti
   return InputChecks(log, opt).run();
 }
 
-nlohmann::json to_json(const InputFinding& f) {
+nlohmann::ordered_json to_json(const InputFinding& f) {
   return {{"check", f.check}, {"severity", to_string(f.severity)}, {"saw", f.saw}, {"action", f.action}};
 }
 
-nlohmann::json to_json(const std::vector<InputFinding>& fs) {
-  nlohmann::json a = nlohmann::json::array();
+nlohmann::ordered_json to_json(const std::vector<InputFinding>& fs) {
+  nlohmann::ordered_json a = nlohmann::ordered_json::array();
   for (const auto& f : fs) a.push_back(to_json(f));
   return a;
 }

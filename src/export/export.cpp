@@ -395,14 +395,14 @@ ExportSummary export_flight(const std::shared_ptr<const Trajectory>& traj, const
   return sum;
 }
 
-nlohmann::json to_json(const ExportSummary& s) {
+nlohmann::ordered_json to_json(const ExportSummary& s) {
   static const char* names[] = {"setpoints", "crazyflie", "mavsdk"};
-  nlohmann::json j;
+  nlohmann::ordered_json j;
   j["format"] = names[static_cast<int>(s.format)];
-  j["files"] = nlohmann::json::array();
+  j["files"] = nlohmann::ordered_json::array();
   for (const auto& f : s.files) j["files"].push_back(f.string());
   j["duration"] = s.duration;
-  j["segments"] = nlohmann::json::array();
+  j["segments"] = nlohmann::ordered_json::array();
   for (const auto& seg : s.segments) j["segments"].push_back({{"name", seg.name}, {"t0", seg.t0}, {"t1", seg.t1}});
   if (s.format == ExportFormat::Crazyflie) {
     j["pieces"] = s.pieces;

@@ -13,7 +13,7 @@
 namespace quadid {
 namespace {
 
-using nlohmann::json;
+using json = nlohmann::ordered_json;
 
 constexpr std::array<const char*, 4> kComponents = {"Fz", "tau_phi", "tau_theta", "tau_psi"};
 constexpr std::array<const char*, 4> kComponentUnits = {"N", "N m", "N m", "N m"};

@@ -297,9 +297,9 @@ FlightLog apply_timing(const FlightLog& log, const RotorModel& rotors, const Tim
   return with_rotor_wrench(out, m);
 }
 
-nlohmann::json to_json(const TimingEstimate& t) {
-  auto item = [](double v, bool estimated) { return nlohmann::json{{"value", v}, {"estimated", estimated}}; };
-  nlohmann::json lag = item(t.time_constant, t.time_constant_estimated);
+nlohmann::ordered_json to_json(const TimingEstimate& t) {
+  auto item = [](double v, bool estimated) { return nlohmann::ordered_json{{"value", v}, {"estimated", estimated}}; };
+  nlohmann::ordered_json lag = item(t.time_constant, t.time_constant_estimated);
   lag["applies"] = t.lag_applies;
   return {{"motor_time_constant", lag},
           {"gyro_offset", item(t.gyro_offset, t.gyro_offset_estimated)},

@@ -81,11 +81,11 @@ std::string read_file(const std::filesystem::path& path) {
   return ss.str();
 }
 
-nlohmann::json read_json_file(const std::filesystem::path& path) {
+nlohmann::ordered_json read_json_file(const std::filesystem::path& path) {
   const std::string text = read_file(path);
   try {
-    return nlohmann::json::parse(text);
-  } catch (const nlohmann::json::parse_error& e) {
+    return nlohmann::ordered_json::parse(text);
+  } catch (const nlohmann::ordered_json::parse_error& e) {
     // Convert the byte offset into line and column for the message.
     const size_t off = std::min<size_t>(e.byte, text.size());
     size_t line = 1, col = 1;

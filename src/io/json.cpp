@@ -7,7 +7,7 @@
 
 namespace quadid {
 
-using nlohmann::json;
+using json = nlohmann::ordered_json;
 
 json to_json(const Params& P) {
   const Theta th = P.theta();

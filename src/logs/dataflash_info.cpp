@@ -122,21 +122,21 @@ std::string format_dataflash_info(const DataFlashLog& log, bool verbose) {
   return s;
 }
 
-nlohmann::json dataflash_info_json(const DataFlashLog& log) {
-  nlohmann::json j;
+nlohmann::ordered_json dataflash_info_json(const DataFlashLog& log) {
+  nlohmann::ordered_json j;
   j["kind"] = "dataflash";
   j["bytes"] = log.bytes;
   j["skipped_bytes"] = log.skipped_bytes;
   j["resyncs"] = log.resyncs;
   j["trailing_bytes"] = log.trailing_bytes;
   if (log.trailing_bytes > 0) j["trailing_offset"] = log.trailing_offset;
-  j["problems"] = nlohmann::json::array();
+  j["problems"] = nlohmann::ordered_json::array();
   for (const auto& p : log.problems) j["problems"].push_back(printable(p));
   j["formats_defined"] = log.formats.size();
-  nlohmann::json msgs = nlohmann::json::object();
+  nlohmann::ordered_json msgs = nlohmann::ordered_json::object();
   for (const auto& [type, m] : log.messages) {
     const TypeSummary t = summarize(m);
-    nlohmann::json cols = nlohmann::json::array();
+    nlohmann::ordered_json cols = nlohmann::ordered_json::array();
     for (std::size_t c = 0; c < m.format.columns.size(); ++c)
       cols.push_back({{"name", printable(m.format.columns[c])},
                       {"format", printable(std::string(1, m.format.format[c]))},
@@ -152,7 +152,7 @@ nlohmann::json dataflash_info_json(const DataFlashLog& log) {
   }
   j["messages"] = msgs;
   j["parameter_records"] = log.parameters.size();
-  nlohmann::json params = nlohmann::json::object();
+  nlohmann::ordered_json params = nlohmann::ordered_json::object();
   for (const auto& [name, v] : last_parameters(log)) params[printable(name)] = finite_or_null(v);
   j["parameters"] = params;
   return j;

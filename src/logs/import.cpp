@@ -346,14 +346,14 @@ std::string ImportReport::summary() const {
   return s;
 }
 
-nlohmann::json import_report_json(const ImportReport& rep) {
-  nlohmann::json j = {{"kind", rep.kind},         {"rate_hz", rep.rate_hz}, {"t0_s", rep.t0},
+nlohmann::ordered_json import_report_json(const ImportReport& rep) {
+  nlohmann::ordered_json j = {{"kind", rep.kind},         {"rate_hz", rep.rate_hz}, {"t0_s", rep.t0},
                       {"duration_s", rep.duration}, {"sources", rep.sources}, {"warnings", rep.warnings},
                       {"truncated", rep.truncated}};
-  j["gaps"] = nlohmann::json::array();
+  j["gaps"] = nlohmann::ordered_json::array();
   for (const auto& g : rep.gaps)
     j["gaps"].push_back({{"topic", g.topic}, {"t_s", g.gap.t}, {"duration_s", g.gap.duration}, {"bridged", g.bridged}});
-  j["dropouts"] = nlohmann::json::array();
+  j["dropouts"] = nlohmann::ordered_json::array();
   for (const auto& d : rep.dropouts) j["dropouts"].push_back({{"t_s", d.t}, {"duration_s", d.duration}});
   return j;
 }

@@ -21,7 +21,7 @@ std::string hms(std::uint64_t us) {
   return fmt::format("{}:{:02}:{:02}", s / 3600u, (s / 60u) % 60u, s % 60u);
 }
 
-nlohmann::json value_json(const ULogValue& v) {
+nlohmann::ordered_json value_json(const ULogValue& v) {
   if (v.is_string()) return v.bytes;
   if (auto n = v.number()) return *n;
   return v.to_string();
@@ -117,8 +117,8 @@ std::string format_ulog_info(const ULog& log, bool verbose) {
   return s;
 }
 
-nlohmann::json ulog_info_json(const ULog& log) {
-  nlohmann::json j;
+nlohmann::ordered_json ulog_info_json(const ULog& log) {
+  nlohmann::ordered_json j;
   j["kind"] = "ulog";
   j["version"] = log.version;
   j["start_timestamp_us"] = log.start_timestamp;
@@ -126,21 +126,21 @@ nlohmann::json ulog_info_json(const ULog& log) {
   j["appended_offsets"] = log.appended_offsets;
   j["sync_count"] = log.sync_count;
   j["unknown_messages"] = log.unknown_messages;
-  j["dropouts"] = nlohmann::json::array();
+  j["dropouts"] = nlohmann::ordered_json::array();
   for (const auto& d : log.dropouts)
     j["dropouts"].push_back({{"t_s", static_cast<double>(d.timestamp) * 1e-6}, {"duration_ms", d.duration_ms}});
-  j["info"] = nlohmann::json::object();
+  j["info"] = nlohmann::ordered_json::object();
   for (const auto& [k, v] : log.info) j["info"][k] = value_json(v);
-  j["info_multiple"] = nlohmann::json::object();
+  j["info_multiple"] = nlohmann::ordered_json::object();
   for (const auto& [k, lists] : log.info_multiple) {
-    auto& a = j["info_multiple"][k] = nlohmann::json::array();
+    auto& a = j["info_multiple"][k] = nlohmann::ordered_json::array();
     for (const auto& l : lists) {
-      nlohmann::json parts = nlohmann::json::array();
+      nlohmann::ordered_json parts = nlohmann::ordered_json::array();
       for (const auto& v : l) parts.push_back(value_json(v));
       a.push_back(parts);
     }
   }
-  j["topics"] = nlohmann::json::array();
+  j["topics"] = nlohmann::ordered_json::array();
   for (const auto& t : log.topics) {
     const auto ts = seconds(t.timestamps());
     const double T = signal::median_step(ts);
@@ -151,19 +151,19 @@ nlohmann::json ulog_info_json(const ULog& log) {
                            {"total_bytes", t.size * t.count()},
                            {"median_rate_hz", T > 0 ? 1.0 / T : 0.0}});
   }
-  j["parameters"] = nlohmann::json::object();
+  j["parameters"] = nlohmann::ordered_json::object();
   for (const auto& [k, v] : log.parameters) j["parameters"][k] = value_json(v);
-  j["default_parameters_system"] = nlohmann::json::object();
+  j["default_parameters_system"] = nlohmann::ordered_json::object();
   for (const auto& [k, v] : log.default_parameters_system) j["default_parameters_system"][k] = value_json(v);
-  j["default_parameters_config"] = nlohmann::json::object();
+  j["default_parameters_config"] = nlohmann::ordered_json::object();
   for (const auto& [k, v] : log.default_parameters_config) j["default_parameters_config"][k] = value_json(v);
-  j["changed_parameters"] = nlohmann::json::array();
+  j["changed_parameters"] = nlohmann::ordered_json::array();
   for (const auto& c : log.changed_parameters)
     j["changed_parameters"].push_back(
         {{"t_s", static_cast<double>(c.timestamp) * 1e-6}, {"name", c.name}, {"value", value_json(c.value)}});
-  j["logged_messages"] = nlohmann::json::array();
+  j["logged_messages"] = nlohmann::ordered_json::array();
   for (const auto& m : log.logged) {
-    nlohmann::json e = {{"t_s", static_cast<double>(m.timestamp) * 1e-6}, {"level", m.level_name()}, {"message", m.message}};
+    nlohmann::ordered_json e = {{"t_s", static_cast<double>(m.timestamp) * 1e-6}, {"level", m.level_name()}, {"message", m.message}};
     if (m.tag) e["tag"] = *m.tag;
     j["logged_messages"].push_back(e);
   }
@@ -200,18 +200,18 @@ std::string format_usd_info(const UsdLog& log) {
   return s;
 }
 
-nlohmann::json usd_info_json(const UsdLog& log) {
-  nlohmann::json j;
+nlohmann::ordered_json usd_info_json(const UsdLog& log) {
+  nlohmann::ordered_json j;
   j["kind"] = "usd";
   j["version"] = log.version;
   j["crc32"] = fmt::format("{:08x}", log.crc);
   j["crc_ok"] = true;
-  j["events"] = nlohmann::json::array();
+  j["events"] = nlohmann::ordered_json::array();
   for (const auto& e : log.events) {
     const auto t = seconds(e.timestamps_us);
     const double T = signal::median_step(t);
-    nlohmann::json ev = {{"name", e.name}, {"id", e.id}, {"count", e.count()}};
-    ev["variables"] = nlohmann::json::array();
+    nlohmann::ordered_json ev = {{"name", e.name}, {"id", e.id}, {"count", e.count()}};
+    ev["variables"] = nlohmann::ordered_json::array();
     for (const auto& v : e.variables) ev["variables"].push_back({{"name", v.name}, {"type", std::string(1, v.type)}});
     if (t.size() > 1) {
       ev["t_first_s"] = t.front();
@@ -219,7 +219,7 @@ nlohmann::json usd_info_json(const UsdLog& log) {
       ev["mean_rate_hz"] = static_cast<double>(t.size() - 1) / (t.back() - t.front());
       ev["median_period_s"] = T;
     }
-    ev["gaps"] = nlohmann::json::array();
+    ev["gaps"] = nlohmann::ordered_json::array();
     for (const auto& g : find_gaps(t, 3.0)) ev["gaps"].push_back({{"t_s", g.t}, {"duration_s", g.duration}});
     j["events"].push_back(ev);
   }

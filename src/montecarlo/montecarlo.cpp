@@ -159,8 +159,8 @@ MonteCarloResult run_montecarlo(const MonteCarloOptions& options, const std::fun
 
 namespace {
 
-nlohmann::json theta_obj(const Theta& t) {
-  nlohmann::json j = nlohmann::json::object();
+nlohmann::ordered_json theta_obj(const Theta& t) {
+  nlohmann::ordered_json j = nlohmann::ordered_json::object();
   for (int i = 0; i < 7; ++i)
     j[kThetaNames[static_cast<size_t>(i)]] = finite_or_null(t(i));
   return j;
@@ -168,10 +168,10 @@ nlohmann::json theta_obj(const Theta& t) {
 
 }  // namespace
 
-nlohmann::json to_json(const MonteCarloResult& r) {
-  nlohmann::json sets = nlohmann::json::object();
+nlohmann::ordered_json to_json(const MonteCarloResult& r) {
+  nlohmann::ordered_json sets = nlohmann::ordered_json::object();
   for (const auto& s : r.sets) {
-    nlohmann::json j = {{"runs", s.runs},     {"mean", theta_obj(s.mean)}, {"bias", theta_obj(s.bias)},
+    nlohmann::ordered_json j = {{"runs", s.runs},     {"mean", theta_obj(s.mean)}, {"bias", theta_obj(s.bias)},
                         {"std", theta_obj(s.std)}, {"rmse", theta_obj(s.rmse)},
                         {"physical_fraction", s.physical_fraction}};
     if (s.has_intervals) {
@@ -180,7 +180,7 @@ nlohmann::json to_json(const MonteCarloResult& r) {
     }
     sets[s.name] = j;
   }
-  nlohmann::json failures = nlohmann::json::array();
+  nlohmann::ordered_json failures = nlohmann::ordered_json::array();
   for (const auto& run : r.runs)
     if (!run.ok) failures.push_back({{"run", run.index}, {"seed", run.seed}, {"error", run.error}});
   const auto& o = r.options;

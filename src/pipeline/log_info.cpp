@@ -18,7 +18,7 @@ namespace {
 
 }  // namespace
 
-nlohmann::json log_info_json(const std::string& path, bool allow_truncated) {
+nlohmann::ordered_json log_info_json(const std::string& path, bool allow_truncated) {
   switch (logs::detect_log_kind(path)) {
     case logs::LogKind::Ulog: {
       logs::ULogReadOptions opt;

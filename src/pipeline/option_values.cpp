@@ -16,7 +16,7 @@
 namespace quadid {
 namespace {
 
-using json = nlohmann::json;
+using json = nlohmann::ordered_json;
 
 std::string kind_name(OptionKind k) {
   switch (k) {

@@ -24,7 +24,7 @@
 namespace quadid {
 namespace {
 
-using json = nlohmann::json;
+using json = nlohmann::ordered_json;
 
 /// An error of the options as a whole: "identify: MSG" from JSON, "MSG" on the
 /// command line (which prints "quadid identify: error: MSG").
@@ -244,7 +244,7 @@ IdentifyRequest identify_request(const OptionValues& r) {
   return req;
 }
 
-IdentifyRequest identify_options_from_json(const nlohmann::json& j) {
+IdentifyRequest identify_options_from_json(const nlohmann::ordered_json& j) {
   return identify_request(OptionValues(j, "identify"));
 }
 
@@ -870,7 +870,7 @@ IdentificationResult identify_prepared(const IdentificationInput& in) {
   return res;
 }
 
-void add_input_json(nlohmann::json& j, const IdentificationInput& in) {
+void add_input_json(nlohmann::ordered_json& j, const IdentificationInput& in) {
   if (in.vehicle) {  // a log with its own wrench adds nothing (the result of identify() on it)
     j["wrench_source"] = in.wrench_source;
     j["vehicle"] = {{"name", in.vehicle->name}, {"source", in.vehicle->source}};
@@ -969,7 +969,7 @@ SimulateRequest simulate_request(const OptionValues& r) {
   return req;
 }
 
-SimulateRequest simulate_options_from_json(const nlohmann::json& j) {
+SimulateRequest simulate_options_from_json(const nlohmann::ordered_json& j) {
   return simulate_request(OptionValues(j, "simulate"));
 }
 
@@ -1023,7 +1023,7 @@ DesignRequest design_request(const OptionValues& r) {
   return req;
 }
 
-DesignOptions design_options_from_json(const nlohmann::json& j) { return design_request(OptionValues(j, "design")).options; }
+DesignOptions design_options_from_json(const nlohmann::ordered_json& j) { return design_request(OptionValues(j, "design")).options; }
 
 CheckRequest check_request(const OptionValues& r, const std::string& trajectory) {
   CheckRequest req;
@@ -1053,7 +1053,7 @@ CheckRequest check_request(const OptionValues& r, const std::string& trajectory)
   return req;
 }
 
-CheckOptions check_options_from_json(const nlohmann::json& j) {
+CheckOptions check_options_from_json(const nlohmann::ordered_json& j) {
   return check_request(OptionValues(j, "check-trajectory"), "").options;
 }
 
@@ -1084,7 +1084,7 @@ ValidateRequest validate_request(const OptionValues& r) {
   return req;
 }
 
-ValidateRequest validate_options_from_json(const nlohmann::json& j) {
+ValidateRequest validate_options_from_json(const nlohmann::ordered_json& j) {
   return validate_request(OptionValues(j, "validate"));
 }
 

@@ -95,7 +95,7 @@ void load_sets(const ValidateRequest& req, const Say& say, std::vector<NamedPara
     // An identify result records its vehicle: terms found for another one
     // (its thrust scale, rotor inertia) would be judged on this one's rotors.
     if (req.vehicle && std::filesystem::is_regular_file(spec)) {
-      const nlohmann::json j = read_json_file(spec);
+      const nlohmann::ordered_json j = read_json_file(spec);
       if (j.is_object() && j.contains("vehicle") && j["vehicle"].is_object() && j["vehicle"].contains("name") &&
           j["vehicle"]["name"].is_string() && j["vehicle"]["name"].get<std::string>() != req.vehicle->name)
         say(fmt::format("warning: {} was identified with the vehicle '{}', this log is judged with '{}': its "
@@ -243,15 +243,15 @@ LogValidation validate_log(const FlightLog& log, const ValidateRequest& req,
   return v;
 }
 
-nlohmann::json to_json(const LogValidation& v, const std::string& log_name) {
-  nlohmann::json j;
+nlohmann::ordered_json to_json(const LogValidation& v, const std::string& log_name) {
+  nlohmann::ordered_json j;
   j["log"] = log_name;
   j["reference"] = {{"name", v.reference.name}, {"params", to_json(v.reference.params)}};
-  nlohmann::json js = nlohmann::json::object();
+  nlohmann::ordered_json js = nlohmann::ordered_json::object();
   for (const auto& s : v.sets) {
     js[s.name] = to_json(s.params);
     if (!s.terms.empty()) {
-      nlohmann::json x = nlohmann::json::object();
+      nlohmann::ordered_json x = nlohmann::ordered_json::object();
       for (const auto& [n, val] : s.terms) x[n] = val;
       js[s.name]["extra"] = x;
     }

@@ -792,8 +792,8 @@ std::string format_precision(const PrecisionResult& r) {
   return s;
 }
 
-nlohmann::json to_json(const PrecisionResult& r) {
-  nlohmann::json j;
+nlohmann::ordered_json to_json(const PrecisionResult& r) {
+  nlohmann::ordered_json j;
   j["trajectory"] = r.trajectory;
   j["regression"] = r.regression;
   j["samples"] = r.samples;
@@ -807,13 +807,13 @@ nlohmann::json to_json(const PrecisionResult& r) {
     j["model_error"] = nullptr;
   }
   for (const auto& set : r.sets) {
-    nlohmann::json s;
+    nlohmann::ordered_json s;
     for (int p = 0; p < 7; ++p) {
-      nlohmann::json e;
+      nlohmann::ordered_json e;
       e["std_error"] = set.std_error(p);
       e["relative"] = set.relative(p);
       e["realistic_std_error"] = finite_or_null(set.realistic_std_error(p));
-      nlohmann::json by;
+      nlohmann::ordered_json by;
       for (size_t k = 0; k < r.sources.size(); ++k)
         by[r.sources[k]] = std::sqrt(std::max(0.0, set.variance_by_source(p, static_cast<Eigen::Index>(k))));
       e["std_error_by_source"] = by;

@@ -642,7 +642,7 @@ void write_reproduction(const Reproduction& r, const std::filesystem::path& dir)
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
   if (ec) throw InputError(fmt::format("{}: cannot create directory: {}", dir.string(), ec.message()));
-  nlohmann::json summary;
+  nlohmann::ordered_json summary;
   summary["seed"] = r.options.seed;
   summary["trajectory_source"] = r.options.trajectory;
   summary["duration"] = r.options.duration;
@@ -653,7 +653,7 @@ void write_reproduction(const Reproduction& r, const std::filesystem::path& dir)
   summary["check"] = to_json(r.check);
   summary["identification"] = to_json(r.identification);
   summary["simulation_comparison"] = to_json(r.table4);
-  nlohmann::json circles = nlohmann::json::array();
+  nlohmann::ordered_json circles = nlohmann::ordered_json::array();
   for (const auto& c : r.circles)
     circles.push_back({{"name", c.name},
                        {"describe", c.describe},
@@ -676,7 +676,7 @@ void write_reproduction(const Reproduction& r, const std::filesystem::path& dir)
     table += 2;
   }
 
-  nlohmann::json traj = to_json(r.trajectory);
+  nlohmann::ordered_json traj = to_json(r.trajectory);
   traj["check"] = to_json(r.check);
   write_file_atomic(dir / "trajectory.json", traj.dump(2) + "\n");
   write_file_atomic(dir / "identification.json", to_json(r.identification).dump(2) + "\n");

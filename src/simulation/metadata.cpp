@@ -10,7 +10,7 @@
 
 namespace quadid {
 
-using nlohmann::json;
+using json = nlohmann::ordered_json;
 
 // --- options <-> JSON ---------------------------------------------------------
 

@@ -14,7 +14,7 @@
 
 namespace quadid {
 
-using nlohmann::json;
+using json = nlohmann::ordered_json;
 
 json to_json(const FourierTrajectory& traj) {
   json j;

@@ -41,10 +41,10 @@ std::string PolynomialTrajectory::describe() const {
   return fmt::format("piecewise polynomial: {} pieces of degree 7, {:.4g} s", pieces_.size(), total_);
 }
 
-nlohmann::json to_json(const PolynomialTrajectory& p) {
-  nlohmann::json pieces = nlohmann::json::array();
+nlohmann::ordered_json to_json(const PolynomialTrajectory& p) {
+  nlohmann::ordered_json pieces = nlohmann::ordered_json::array();
   for (const auto& piece : p.pieces()) {
-    nlohmann::json row = nlohmann::json::array({piece.duration});
+    nlohmann::ordered_json row = nlohmann::ordered_json::array({piece.duration});
     for (const auto& c : piece.coeffs)
       for (int i = 0; i < 8; ++i) row.push_back(c(i));
     pieces.push_back(row);
@@ -52,7 +52,7 @@ nlohmann::json to_json(const PolynomialTrajectory& p) {
   return {{"type", "poly4d"}, {"pieces", pieces}};
 }
 
-PolynomialTrajectory polynomial_from_json(const nlohmann::json& j, const std::string& source) {
+PolynomialTrajectory polynomial_from_json(const nlohmann::ordered_json& j, const std::string& source) {
   if (!j.is_object() || j.value("type", "") != "poly4d" || !j.contains("pieces") || !j["pieces"].is_array())
     throw InputError(fmt::format("{}: expected {{\"type\": \"poly4d\", \"pieces\": [...]}}", source));
   std::vector<PolyPiece> pieces;

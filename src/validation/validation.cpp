@@ -173,8 +173,8 @@ std::string format_simulation_table(const SimulationComparison& c, std::string_v
   return t.to_text();
 }
 
-nlohmann::json to_json(const SimulationComparison& c) {
-  using nlohmann::json;
+nlohmann::ordered_json to_json(const SimulationComparison& c) {
+  using json = nlohmann::ordered_json;
   auto row_json = [&c](const SimulationComparisonRow& r, bool with_imp) {
     json rms = json::object(), imp = json::object();
     for (int i = 0; i < 10; ++i) {

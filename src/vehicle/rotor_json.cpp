@@ -9,11 +9,11 @@
 
 namespace quadid {
 
-nlohmann::json to_json(const RotorModel& m) {
-  nlohmann::json pos = nlohmann::json::array(), spin = nlohmann::json::array();
+nlohmann::ordered_json to_json(const RotorModel& m) {
+  nlohmann::ordered_json pos = nlohmann::ordered_json::array(), spin = nlohmann::ordered_json::array();
   for (const Vec3& p : m.positions) pos.push_back({p(0), p(1), p(2)});
   for (int s : m.spin) spin.push_back(s > 0 ? "cw" : "ccw");
-  nlohmann::json j = {{"input", to_string(m.input)},   {"columns", m.columns},
+  nlohmann::ordered_json j = {{"input", to_string(m.input)},   {"columns", m.columns},
           {"kf", m.kf},                    {"thrust_max", m.thrust_max},
           {"torque_ratio", m.torque_ratio}, {"time_constant", m.time_constant},
           {"rotor_inertia", m.rotor_inertia}, {"positions", pos},
@@ -29,7 +29,7 @@ nlohmann::json to_json(const RotorModel& m) {
   return j;
 }
 
-RotorModel rotor_model_from_json(const nlohmann::json& j, const std::string& source) {
+RotorModel rotor_model_from_json(const nlohmann::ordered_json& j, const std::string& source) {
   try {
     if (!j.is_object()) throw std::invalid_argument("rotors: must be an object");
     for (const auto& [k, v] : j.items()) {
@@ -72,7 +72,7 @@ RotorModel rotor_model_from_json(const nlohmann::json& j, const std::string& sou
     }
     m.validate();
     return m;
-  } catch (const nlohmann::json::exception& e) {
+  } catch (const nlohmann::ordered_json::exception& e) {
     throw InputError(fmt::format("{}: rotors: {}", source, e.what()));
   } catch (const std::invalid_argument& e) {
     throw InputError(fmt::format("{}: {}", source, e.what()));

@@ -9,7 +9,7 @@
 int main() {
   const quadid::Params P = quadid::Params::qball2_nominal();
   P.validate("qball2-nominal");
-  const nlohmann::json j = quadid::to_json(P);
+  const nlohmann::ordered_json j = quadid::to_json(P);
   std::printf("m = %.2f kg, Izz = %.5f kg m^2\n", j["m"].get<double>(), j["Izz"].get<double>());
   return j["m"].get<double>() == 1.79 ? 0 : 1;
 }

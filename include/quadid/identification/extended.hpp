@@ -240,7 +240,7 @@ PredictionErrorTable real_flight_prediction_error(const FlightLog& log, const st
                                                   const ExtendedOptions& opt, bool centre_torques);
 
 /// {"sets": {"LS": {"parameters": {name: {value, std_error}}, row_weight, residual_rms, ...}}, "window", ...}
-nlohmann::json to_json(const ExtendedResult& x);
+nlohmann::ordered_json to_json(const ExtendedResult& x);
 /// Text: the cutoffs (and how they were chosen), then every parameter of LS
 /// and FMLS with its standard error, and the rows' residual RMS.
 std::string format_real_flight(const ExtendedResult& x);

@@ -93,7 +93,7 @@ TimingEstimate estimate_timing(const FlightLog& log, const RotorModel& rotors, c
 FlightLog apply_timing(const FlightLog& log, const RotorModel& rotors, const TimingEstimate& t);
 
 /// {"motor_time_constant": {"value", "estimated"}, "gyro_offset": {...}, "rotor_offset": {...}, "cost", "evaluations", "notes"}
-nlohmann::json to_json(const TimingEstimate& t);
+nlohmann::ordered_json to_json(const TimingEstimate& t);
 /// One line per quantity, in ms, saying whether it was estimated or given.
 std::string format_timing(const TimingEstimate& t);
 /// Appends the estimated quantities (motor_time_constant, gyro_time_offset,

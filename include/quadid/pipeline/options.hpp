@@ -102,7 +102,7 @@ std::string with_option_names(std::string_view message, OptionSource source);
 /// options are known; with Cli, all.
 class OptionValues {
  public:
-  OptionValues(const nlohmann::json& given, std::string_view command, OptionSource source = OptionSource::Json);
+  OptionValues(const nlohmann::ordered_json& given, std::string_view command, OptionSource source = OptionSource::Json);
 
   bool given(const std::string& name) const;
   std::optional<double> number(const std::string& name) const;
@@ -134,15 +134,15 @@ class OptionValues {
   const std::vector<std::string>& deprecations() const { return deprecations_; }
 
  private:
-  const nlohmann::json* value(const std::string& name, OptionKind kind) const;
+  const nlohmann::ordered_json* value(const std::string& name, OptionKind kind) const;
   const OptionDef& def(const std::string& name, OptionKind kind) const;
   [[noreturn]] void bad(const std::string& name, const std::string& why) const;
   void check_range(const std::string& name, double v) const;
 
   const OptionTable* table_;
   OptionSource source_;
-  nlohmann::json values_ = nlohmann::json::object();   // normalized name -> value (non-null)
-  nlohmann::json spelled_ = nlohmann::json::object();  // normalized name -> key as given
+  nlohmann::ordered_json values_ = nlohmann::ordered_json::object();   // normalized name -> value (non-null)
+  nlohmann::ordered_json spelled_ = nlohmann::ordered_json::object();  // normalized name -> key as given
   std::vector<std::string> deprecations_;
 };
 
