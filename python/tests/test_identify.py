@@ -1,5 +1,7 @@
 """quadid.read_log and quadid.identify against the command line (`quadid identify --json`)."""
 
+import json
+
 import numpy as np
 import pytest
 
@@ -89,6 +91,18 @@ def test_identify_on_a_path_equals_the_command_line_with_options(logs):
     # lam is the other spelling of --lambda.
     res2 = quadid.identify(str(logs[1]), window=WINDOW, cutoff=3.0, lam=20, order=2, sigma=10)
     assert_same(without(res2, "evolution"), cli, 0.0)
+
+
+def test_dicts_keep_the_order_written_parameters_in_theta_order(logs):
+    # Not alphabetical (Ixx Ixy ... m): a parameter set reads m Ixx Ixy Ixz Iyy Iyz Izz,
+    # as Theta and the printed tables do, and the JSON text has the same order.
+    res = quadid.identify(logs[1], window=WINDOW)
+    theta = ["m", "Ixx", "Ixy", "Ixz", "Iyy", "Iyz", "Izz"]
+    for s in ("LS", "FMLS"):
+        assert list(res["estimates"][s]) == theta
+    assert list(res)[0] == "estimates"
+    cli = json.loads(run_cli("identify", str(logs[1]), "--window", WINDOW, "--json").stdout)
+    assert list(cli["estimates"]["LS"]) == theta
 
 
 def test_evolution_is_the_csv_of_the_command_line(logs, tmp_path):
