@@ -395,3 +395,23 @@ TEST(Simulation, SetRateCapsSensorsAndKeepsAMillisecondStep) {
     EXPECT_NO_THROW(o.validate()) << c.hz << " Hz";
   }
 }
+
+// The metadata reader (a log's "# controller: {...}" lines) names the field and
+// what it must be, through the io module's one JSON field reader.
+TEST(Simulation, MalformedMetadataNamesTheField) {
+  auto message = [](const char* text) {
+    try {
+      (void)simulation_options_from_json(nlohmann::ordered_json::parse(text), "log.csv");
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("(no error)");
+  };
+  EXPECT_EQ(message(R"({"controller": {"gains": {"Kpp": [1, 2]}}})"),
+            "log.csv.controller.gains: field \"Kpp\" must be an array of 3 finite numbers");
+  EXPECT_EQ(message(R"({"controller": {"gains": {"Kpp": [1, "a", 3]}}})"),
+            "log.csv.controller.gains: \"Kpp\"[1] must be a number");
+  EXPECT_EQ(message(R"({"controller": {"g": "9.81"}})"), "log.csv.controller: field \"g\" must be a number");
+  // A field that is absent keeps its default.
+  EXPECT_EQ(message(R"({"controller": {}})"), "(no error)");
+}

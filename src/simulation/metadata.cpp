@@ -81,19 +81,14 @@ struct Reader {
     if (!s.is_object()) throw InputError(fmt::format("{}.{}: must be an object", where, key));
     return Reader{s, where + "." + key};
   }
-  void num(const char* key, double& out) const {
-    if (!has(key)) return;
-    const json& v = j.at(key);
-    if (!v.is_number() || !std::isfinite(v.get<double>()))
-      throw InputError(fmt::format("{}.{}: must be a finite number", where, key));
-    out = v.get<double>();
-  }
+  // The io module's JSON field readers (io.hpp), which name the field and what it must be.
+  void num(const char* key, double& out) const { out = json_number(j, key, where, false, out); }
   void vec3(const char* key, Vec3& out) const {
     if (!has(key)) return;
-    const json& v = j.at(key);
-    if (!v.is_array() || v.size() != 3 || !v[0].is_number() || !v[1].is_number() || !v[2].is_number())
-      throw InputError(fmt::format("{}.{}: must be an array of 3 numbers", where, key));
-    out = Vec3(v[0].get<double>(), v[1].get<double>(), v[2].get<double>());
+    const Eigen::VectorXd v = json_number_array(j, key, where);
+    if (v.size() != 3 || !v.allFinite())
+      throw InputError(fmt::format("{}: field \"{}\" must be an array of 3 finite numbers", where, key));
+    out = v;
   }
   template <class F>
   void str(const char* key, F&& parse) const {
