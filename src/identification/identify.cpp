@@ -391,17 +391,22 @@ class IdentifyRun {
     const double fs = res_.processing.fs, f3 = res_.processing.filter_f3db;
     out = run_regression(reg, res_.gd_initial, opt_.gd, rec_, res_.evolution.data, ls_col, gd_col, !filtered);
     sol = solve_least_squares(out.acc, prior_, opt_.ls, correlation_length(fs, f3, opt_.lambda, filtered));
+    // With terms or two cutoffs the real-flight regression gives LS and FMLS,
+    // their intervals and consistent sets (use_real_flight_regression); this
+    // solution keeps only what the paper's model alone can say (its singular
+    // values, near-null directions, GD), so its intervals and projection are
+    // not computed.
+    if (opt_.extended()) return;
     // Second pass: the influence of each sample on the estimate, for the HAC
     // covariance (docs/uncertainty.md), and, when one window holds the other
-    // (by default Tables 5-6 cover the whole log) and the sets are final
-    // (not replaced by the real-flight regression), the tables' sums in the
+    // (by default Tables 5-6 cover the whole log), the tables' sums in the
     // same pass: each sum still sees its own samples in their order.
     InfluenceAccumulator infl(sol);
     infl.reserve(static_cast<long>(reg.size()));
     const Regression err_reg = reg.with_window(error_window_);
     const bool err_outer = err_reg.begin() <= reg.begin() && err_reg.end() >= reg.end();
     const bool reg_outer = reg.begin() <= err_reg.begin() && reg.end() >= err_reg.end();
-    if (!opt_.extended() && (err_outer || reg_outer)) {
+    if (err_outer || reg_outer) {
       std::vector<NamedParams> sets{{filtered ? "FMLS" : "LS", Params::from_theta(sol.theta)}};
       if (!out.gd->diverged()) sets.push_back({filtered ? "FMGD" : "GD", Params::from_theta(out.gd->theta())});
       PredictionErrorSums errors(sets, opt_.reference);
@@ -414,9 +419,8 @@ class IdentifyRun {
       reg.for_each([&](Eigen::Index, const Regressor4x7& G, const Vec4& Y) { infl.add(G, Y); });
     }
     attach_uncertainty(sol, infl.finish(opt_.uncertainty), prior_, opt_.ls);
-    // Kept for the disagreement's noise (the real-flight regression replaces
-    // these sets and adds the whole disagreement: nothing to keep then).
-    if (!opt_.extended()) influences_[filtered ? 1 : 0] = {infl.series(), static_cast<long>(reg.begin())};
+    // Kept for the disagreement's noise.
+    influences_[filtered ? 1 : 0] = {infl.series(), static_cast<long>(reg.begin())};
     // The physically consistent set: the closest consistent Theta in the LS metric.
     pc = closest_physical(sol, prior_, opt_.physical);
   }
