@@ -602,6 +602,38 @@ TEST_F(CliVehicle, BatteryVoltageInTheWrongUnitNamesTheScaleThatFits) {
   EXPECT_EQ(fixed.rc, 0) << fixed.err;
 }
 
+// Duty commands that chatter at the logging rate (a controller oscillating at
+// Nyquist, as one of the real Crazyflie flights does): the motors average them,
+// the duty map does not, so the PWM path warns and names the fix, rotor speeds.
+// Chatter here: every other sample +-12000 counts (18 % of full range) added to
+// each duty of a clean simulated flight, which the warning must name; the clean
+// flight must not warn (its ratio: 0.06-0.07). The fix: the same vehicle's flight
+// with rotor speeds logged, identified from them, has no such warning.
+TEST_F(CliVehicle, DutyCommandsThatChatterAreNamedWithTheRotorSpeedsAsTheFix) {
+  const CliRun sim = run("simulate --vehicle crazyflie21-pwm --trajectory table2 --duration 30 -o " + path("log.csv"));
+  ASSERT_EQ(sim.rc, 0) << sim.err;
+  const CliRun clean = run("identify " + path("log.csv") + " --vehicle crazyflie21-pwm --window 5:30");
+  ASSERT_EQ(clean.rc, 0) << clean.err;
+  EXPECT_EQ(clean.err.find("chatter"), std::string::npos) << clean.err;
+  quadid::CsvReadOptions csv;
+  csv.required = {"t"};
+  quadid::FlightLog log = quadid::read_flight_log(path("log.csv"), csv);
+  for (int i = 1; i <= 4; ++i) {
+    auto col = log.data.col(log.find(fmt::format("pwm.m{}_pwm", i)));
+    for (Eigen::Index k = 0; k < col.size(); ++k) col(k) = std::clamp(col(k) + (k % 2 ? 12000.0 : -12000.0), 0.0, 65535.0);
+  }
+  quadid::write_flight_log(log, path("chatter.csv"));
+  const CliRun r = run("identify " + path("chatter.csv") + " --vehicle crazyflie21-pwm --window 5:30 --ignore-input-errors");
+  ASSERT_EQ(r.rc, 0) << r.err;
+  EXPECT_NE(r.err.find("the duty commands chatter: pwm.m"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("Log the rotor speeds"), std::string::npos) << r.err;
+  const CliRun rpm_sim = run("simulate --vehicle crazyflie21 --trajectory table2 --duration 30 -o " + path("rpm.csv"));
+  ASSERT_EQ(rpm_sim.rc, 0) << rpm_sim.err;
+  const CliRun fixed = run("identify " + path("rpm.csv") + " --vehicle crazyflie21 --window 5:30");
+  ASSERT_EQ(fixed.rc, 0) << fixed.err;
+  EXPECT_EQ(fixed.err.find("chatter"), std::string::npos) << fixed.err;
+}
+
 // The PWM path on the real flights (which log PWM, battery and rpm): it runs on
 // each, recommends a physical set, and warns how far its inertia can be trusted.
 // Measured against the same flights' rpm results (docs/crazyflie.md): Ixx median

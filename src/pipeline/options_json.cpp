@@ -665,6 +665,38 @@ void use_builtin_variant(const FlightLog& raw, IdentifyRequest& req, std::vector
   }
 }
 
+// Duty commands that change more from one sample to the next than about
+// their mean: rms(first difference) / rms(deviation) is sqrt(2) for white
+// noise and 2 sin(pi f / fs) for a sine of frequency f, so above 1 most of the
+// commands' variation lies above a sixth of the log's rate, far beyond a
+// motor's bandwidth (its lag, time_constant). The motors average such
+// chatter; the duty-to-speed map, a steady-state map with a lag, is then
+// driven far from the slow commands it describes, and the torques it gives
+// can be off by tens of percent with nothing in the residuals to show it.
+void warn_duty_chatter(const FlightLog& log, const RotorModel& rotors, std::vector<std::string>& warnings) {
+  double worst = 0.0;
+  std::string name;
+  for (const auto& c : rotors.columns) {
+    if (!log.has(c) || log.rows() < 16) continue;
+    const Eigen::VectorXd x = log.column(c);
+    const double dev = (x.array() - x.mean()).matrix().norm() / std::sqrt(static_cast<double>(x.size()));
+    const Eigen::VectorXd d = x.tail(x.size() - 1) - x.head(x.size() - 1);
+    const double step = d.norm() / std::sqrt(static_cast<double>(d.size()));
+    if (dev > 0.0 && step / dev > worst) {
+      worst = step / dev;
+      name = c;
+    }
+  }
+  if (!(worst > 1.0)) return;
+  warnings.push_back(fmt::format(
+      "the duty commands chatter: {} changes more from one sample to the next than about its mean (rms of its "
+      "first difference / rms of its deviation = {:.2f}; 1.41 for white noise, well below 1 for commands a motor "
+      "follows), so most of their variation is faster than a sixth of the log's rate. The motors average it, the "
+      "duty-to-speed map does not describe it, and the torques, so the inertia, can be off by tens of percent "
+      "beyond the intervals. Log the rotor speeds (an RPM deck, ESC telemetry) and identify from them",
+      name, worst));
+}
+
 IdentificationInput with_rotor_model(const FlightLog& raw, const logs::ImportReport& report, IdentifyRequest req,
                                      bool from_log, IdentificationInput in) {
   use_builtin_variant(raw, req, in.warnings);
@@ -689,6 +721,7 @@ IdentificationInput with_rotor_model(const FlightLog& raw, const logs::ImportRep
     air = airborne_part(*wrench);
   } catch (const InputError&) {
   }
+  if (rotors.input == RotorInput::kDuty) warn_duty_chatter(air ? rows_in(raw, air->window) : raw, rotors, in.warnings);
   if (from_log) {
     // The reference set from the log itself (rough_nominal: the mean thrust
     // in the air), then the defaults a --vehicle gets.
