@@ -17,5 +17,6 @@ void register_import(CLI::App& app);
 void register_batch(CLI::App& app);
 void register_montecarlo(CLI::App& app);
 void register_export(CLI::App& app);
+void register_model(CLI::App& app);
 
 }  // namespace quadid::cli

@@ -7,6 +7,7 @@
 #include "quadid/design.hpp"
 #include "quadid/estimation.hpp"
 #include "quadid/export.hpp"
+#include "quadid/models.hpp"
 #include "quadid/identification.hpp"
 #include "quadid/logs.hpp"
 #include "quadid/montecarlo.hpp"
@@ -616,6 +617,19 @@ Defs export_options() {
          export_group();
 }
 
+Defs model_options() {
+  return {
+      B("result", K::String, "identify's result JSON (quadid identify LOG -o RESULT.json)").positional().required().cli(),
+      B("format", K::String, "the simulator's format: " + fmt::format("{}", fmt::join(model_format_names(), " | ")))
+          .choices(model_format_names())
+          .required()
+          .cli(),
+      B("out", K::String, "file to write (atomically)").shorthand("o").text("stdout").cli(),
+      B("set", K::String, "the parameter set to write (LS, FMLS, PC, FMPC, GD, FMGD)").text("the result's recommended set").cli(),
+      quiet_flag(),
+  };
+}
+
 OptionTable make(std::string command, Defs defs) {
   OptionTable t{std::move(command), std::move(defs)};
   // A programming error caught by every test: two options (or aliases) of one name.
@@ -667,7 +681,7 @@ const OptionDef* OptionTable::alias_of(std::string_view name) const {
 const std::vector<std::string>& option_commands() {
   static const std::vector<std::string> c = {"design",   "check-trajectory", "simulate", "identify",
                                              "validate", "reproduce",        "import",   "log-info",
-                                             "batch",    "montecarlo",       "export"};
+                                             "batch",    "montecarlo",       "export",   "model"};
   return c;
 }
 
@@ -685,6 +699,7 @@ const OptionTable& option_table(std::string_view command) {
     m.emplace("import", make("import", import_options()));
     m.emplace("log-info", make("log-info", log_info_options()));
     m.emplace("export", make("export", export_options()));
+    m.emplace("model", make("model", model_options()));
     return m;
   }();
   const auto it = tables.find(command);

@@ -1,0 +1,50 @@
+// quadid model: an identification result -> the identified vehicle in a
+// simulator's format (vehicle file, MuJoCo MJCF, RotorPy, URDF).
+#include "commands.hpp"
+#include "options_cli.hpp"
+#include "quadid/io.hpp"
+#include "quadid/models.hpp"
+
+#include <fmt/format.h>
+
+namespace quadid::cli {
+
+namespace {
+
+void run(const OptionValues& v) {
+  const std::string result = *v.string("result");
+  const IdentifiedModel m = load_identified_model(result, v.string("set").value_or(""));
+  const ModelFormat f = parse_model_format(*v.string("format"));
+  const std::string text = model_text(m, f);
+  const auto out = v.string("out");
+  if (!out) {
+    fmt::print("{}", text);
+    return;
+  }
+  write_file_atomic(*out, text);
+  if (!v.flag("quiet"))
+    fmt::print(stderr, "quadid model: wrote {} ({}, set {}{})\n", *out, to_string(f), m.set,
+               m.thrust_scale != 1.0 ? fmt::format(", thrust scale {:.5g} folded into kf", m.thrust_scale) : "");
+}
+
+}  // namespace
+
+void register_model(CLI::App& app) {
+  auto* sub = app.add_subcommand("model", "an identification result -> the identified vehicle for a simulator");
+  sub->footer(
+      "Writes the recommended set (or --set) of RESULT.json, with the vehicle's rotor model when identify used one\n"
+      "(positions, spins, kf with the identified thrust scale folded in, torque ratio, time constant):\n"
+      "  vehicle   a quadid vehicle file: quadid simulate --vehicle FILE flies the identified vehicle\n"
+      "  mjcf      MuJoCo: a free body with <inertial fullinertia>, a site and a thrust <motor> per rotor\n"
+      "  rotorpy   a RotorPy quad_params dict (Python), for rotorpy.vehicles.multirotor.Multirotor\n"
+      "  urdf      ROS: base_link <inertial> and a fixed link per rotor\n"
+      "Body FLU, SI units; each target's conventions in docs/models.md. Numbers round-trip.\n\n"
+      "Examples:\n"
+      "  quadid identify flight.ulg --vehicle x500 -o result.json\n"
+      "  quadid model result.json --format mjcf -o x500.xml\n"
+      "  quadid model result.json --format vehicle --set FMLS -o identified.toml");
+  auto given = add_table_options(sub, "model");
+  sub->callback([given] { run(given->read()); });
+}
+
+}  // namespace quadid::cli

@@ -1,0 +1,130 @@
+"""`quadid model` read back by parsers that are not quadid's: xml.etree for MJCF and
+URDF, ast for the RotorPy dict, tomllib for the vehicle file. Every value is compared
+with the result JSON it came from (the identified set, the vehicle's rotors with the
+thrust scale folded in), on a vehicle with non-zero products of inertia, so that a
+swapped or negated entry in a conversion fails."""
+
+import ast
+import json
+import math
+import tomllib
+import xml.etree.ElementTree as ET
+
+import numpy as np
+import pytest
+
+from conftest import run_cli
+
+THETA = ["m", "Ixx", "Ixy", "Ixz", "Iyy", "Iyz", "Izz"]
+
+
+@pytest.fixture(scope="module")
+def identified(tmp_path_factory):
+    d = tmp_path_factory.mktemp("models")
+    log, res = d / "cf.csv", d / "result.json"
+    run_cli("simulate", "--vehicle", "crazyflie21", "--trajectory", "table2", "--duration", "30", "-o", str(log))
+    run_cli("identify", str(log), "--vehicle", "crazyflie21", "--known-mass", "0.0347", "-q", "-o", str(res))
+    j = json.loads(res.read_text())
+    s = j["recommended"]["set"]
+    reg = "LS" if s in ("LS", "PC") else "FMLS"
+    scale = j["real_flight"]["sets"][reg]["parameters"]["thrust_scale"]["value"]
+    return res, j, s, scale
+
+
+def model(res, fmt):
+    return run_cli("model", str(res), "--format", fmt).stdout
+
+
+def tensor(e):
+    return np.array([[e["Ixx"], e["Ixy"], e["Ixz"]], [e["Ixy"], e["Iyy"], e["Iyz"]], [e["Ixz"], e["Iyz"], e["Izz"]]])
+
+
+def test_products_are_not_zero(identified):
+    _, j, s, _ = identified
+    e = j["estimates"][s]
+    for p in ("Ixy", "Ixz", "Iyz"):
+        assert abs(e[p]) > 1e-7  # a sign slip in a conversion must show
+
+
+def test_mjcf_fullinertia_sites_and_motor_gears(identified):
+    res, j, s, scale = identified
+    root = ET.fromstring(model(res, "mjcf"))
+    assert root.tag == "mujoco"
+    inertial = root.find("./worldbody/body/inertial")
+    e = j["estimates"][s]
+    assert float(inertial.get("mass")) == e["m"]
+    # MuJoCo's order: ixx iyy izz ixy ixz iyz
+    full = [float(x) for x in inertial.get("fullinertia").split()]
+    assert full == [e["Ixx"], e["Iyy"], e["Izz"], e["Ixy"], e["Ixz"], e["Iyz"]]
+    r = j["rotors"]
+    sites = {x.get("name"): [float(v) for v in x.get("pos").split()] for x in root.iter("site")}
+    for i, p in enumerate(r["positions"]):
+        assert sites[f"rotor{i + 1}"] == p
+    for i, mot in enumerate(root.find("actuator").iter("motor")):
+        gear = [float(v) for v in mot.get("gear").split()]
+        # Thrust along the site's z; reaction torque +torque_ratio for a clockwise rotor (seen from above).
+        sign = 1.0 if r["spin"][i] == "cw" else -1.0
+        assert gear == [0, 0, 1, 0, 0, sign * r["torque_ratio"]]
+        assert float(mot.get("ctrlrange").split()[1]) == pytest.approx(r["thrust_max"] * scale, rel=1e-15)
+
+
+def test_urdf_inertia_as_ros_reads_it(identified):
+    res, j, s, _ = identified
+    root = ET.fromstring(model(res, "urdf"))
+    inert = root.find("./link[@name='base_link']/inertial")
+    e = j["estimates"][s]
+    assert float(inert.find("mass").get("value")) == e["m"]
+    i = inert.find("inertia")
+    got = np.array([[float(i.get("ixx")), float(i.get("ixy")), float(i.get("ixz"))],
+                    [float(i.get("ixy")), float(i.get("iyy")), float(i.get("iyz"))],
+                    [float(i.get("ixz")), float(i.get("iyz")), float(i.get("izz"))]])
+    np.testing.assert_array_equal(got, tensor(e))
+    joints = {jn.find("child").get("link"): [float(v) for v in jn.find("origin").get("xyz").split()]
+              for jn in root.iter("joint")}
+    for k, p in enumerate(j["rotors"]["positions"]):
+        name = f"rotor{k + 1}_{j['rotors']['spin'][k]}"
+        assert joints[name] == p
+
+
+def literal(node):
+    """ast -> value, with np.array([...]) read as a list (the only call the dict holds)."""
+    if isinstance(node, ast.Call):
+        assert ast.unparse(node.func) == "np.array" and len(node.args) == 1
+        return literal(node.args[0])
+    if isinstance(node, ast.Dict):
+        return {literal(k): literal(v) for k, v in zip(node.keys, node.values)}
+    if isinstance(node, ast.List):
+        return [literal(x) for x in node.elts]
+    return ast.literal_eval(node)
+
+
+def test_rotorpy_dict_has_every_key_its_multirotor_reads(identified):
+    res, j, s, scale = identified
+    tree = ast.parse(model(res, "rotorpy"))
+    assign = [n for n in tree.body if isinstance(n, ast.Assign) and n.targets[0].id == "quad_params"][0]
+    q = literal(assign.value)
+    e = j["estimates"][s]
+    for p in ("Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz"):
+        assert q[p] == e[p]
+    assert q["mass"] == e["m"]
+    r = j["rotors"]
+    assert q["num_rotors"] == len(r["positions"])
+    assert [q["rotor_pos"][f"r{i + 1}"] for i in range(4)] == r["positions"]
+    # RotorPy: M_yaw = rotor_dir k_m w^2, +1 = clockwise seen from above.
+    assert q["rotor_directions"] == [1 if x == "cw" else -1 for x in r["spin"]]
+    k_eta = r["kf"] * scale * (30 / math.pi) ** 2  # N/rpm^2 -> N/(rad/s)^2
+    assert q["k_eta"] == pytest.approx(k_eta, rel=1e-15)
+    assert q["k_m"] == pytest.approx(r["torque_ratio"] * k_eta, rel=1e-15)
+    assert q["tau_m"] == r["time_constant"]
+    assert q["k_eta"] * q["rotor_speed_max"] ** 2 == pytest.approx(r["thrust_max"] * scale, rel=1e-12)
+    for key in ("rotor_speed_min", "rI"):
+        assert key in q
+
+
+def test_vehicle_file_reads_back_with_tomllib(identified):
+    res, j, s, scale = identified
+    v = tomllib.loads(model(res, "vehicle"))
+    for p in THETA:
+        assert v["nominal"][p] == j["estimates"][s][p]
+    assert v["rotors"]["kf"] == pytest.approx(j["rotors"]["kf"] * scale, rel=1e-15)
+    assert v["rotors"]["spin"] == j["rotors"]["spin"]

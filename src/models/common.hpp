@@ -1,0 +1,62 @@
+// What the model writers share (src/models/): number text that reads back to
+// the same double, and the rotor model in rad/s units. Internal to the module.
+#pragma once
+
+#include "quadid/models.hpp"
+
+#include <fmt/format.h>
+
+#include <cctype>
+#include <cmath>
+#include <numbers>
+#include <optional>
+#include <string>
+
+namespace quadid::models_detail {
+
+/// Shortest text that reads back to the same double, always with a decimal
+/// point or an exponent (TOML reads "1" as an integer; XML and Python do not care).
+inline std::string num(double x) {
+  std::string s = fmt::format("{}", x);
+  if (std::isfinite(x) && s.find_first_of(".e") == std::string::npos) s += ".0";
+  return s;
+}
+
+/// kf per (rad/s)^2: the rotor model's kf when its speeds are in rad/s, kf x
+/// (30/pi)^2 when in rpm (w_rpm = w_rad 30/pi); none for a command-driven
+/// rotor, whose speed the model does not know.
+inline std::optional<double> thrust_per_rad2(const RotorModel& r) {
+  if (r.input == RotorInput::kCommand || !(r.kf > 0.0)) return std::nullopt;
+  if (r.speed_in_rpm()) return r.kf * (30.0 / std::numbers::pi) * (30.0 / std::numbers::pi);
+  return r.kf;
+}
+
+/// The largest rotor speed, rad/s: where kf w^2 reaches thrust_max (none without both).
+inline std::optional<double> max_speed_rad(const RotorModel& r) {
+  const auto k = thrust_per_rad2(r);
+  if (!k || !(r.thrust_max > 0.0)) return std::nullopt;
+  return std::sqrt(r.thrust_max / *k);
+}
+
+/// A name usable as an identifier in XML and file names.
+inline std::string model_name(const IdentifiedModel& m) {
+  std::string n = m.vehicle.empty() ? std::string("quadrotor") : m.vehicle;
+  for (char& c : n)
+    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-')) c = '_';
+  return n + "_identified";
+}
+
+/// One line saying where the numbers come from. It goes into XML comments,
+/// which may not hold "--": a file name that does is shown with "- -".
+inline std::string provenance(const IdentifiedModel& m) {
+  std::string src = m.source;
+  for (std::size_t i; (i = src.find("--")) != std::string::npos;) src.replace(i, 2, "- -");
+  return fmt::format("identified by quadid {} from {}: set {}, {}", QUADID_VERSION, src, m.set, m.reason);
+}
+
+std::string vehicle_toml(const IdentifiedModel& m);
+std::string mjcf(const IdentifiedModel& m);
+std::string rotorpy(const IdentifiedModel& m);
+std::string urdf(const IdentifiedModel& m);
+
+}  // namespace quadid::models_detail
