@@ -123,3 +123,39 @@ TEST_F(Models, NotAResultOrNoRotorModelIsRefusedNamingWhatIsMissing) {
   EXPECT_NE(fmt_bad.rc, 0);
   EXPECT_NE(fmt_bad.err.find("vehicle"), std::string::npos) << fmt_bad.err;
 }
+
+#ifdef QUADID_HAVE_URDFDOM
+#include <urdf_parser/urdf_parser.h>
+
+// The URDF read back by urdfdom (ROS's parser, the one check_urdf uses): the
+// base link's mass and every entry of its inertia are the identified set's,
+// and each rotor link sits at its position.
+TEST_F(Models, UrdfdomReadsTheIdentifiedInertiaBack) {
+  identify_crazyflie();
+  ASSERT_EQ(run("model " + path("result.json") + " --format urdf -o " + path("cf.urdf")).rc, 0);
+  const auto urdf = urdf::parseURDFFile(path("cf.urdf"));
+  ASSERT_TRUE(urdf) << "urdfdom could not parse the file";
+  const auto base = urdf->getLink("base_link");
+  ASSERT_TRUE(base && base->inertial);
+  const quadid::IdentifiedModel im = quadid::load_identified_model(path("result.json"));
+  const auto& in = *base->inertial;
+  EXPECT_DOUBLE_EQ(in.mass, im.params.m);
+  EXPECT_DOUBLE_EQ(in.ixx, im.params.I(0, 0));
+  EXPECT_DOUBLE_EQ(in.ixy, im.params.I(0, 1));
+  EXPECT_DOUBLE_EQ(in.ixz, im.params.I(0, 2));
+  EXPECT_DOUBLE_EQ(in.iyy, im.params.I(1, 1));
+  EXPECT_DOUBLE_EQ(in.iyz, im.params.I(1, 2));
+  EXPECT_DOUBLE_EQ(in.izz, im.params.I(2, 2));
+  EXPECT_NE(in.ixy, 0.0);  // crazyflie21's products are not zero: a dropped entry would show
+  ASSERT_TRUE(im.rotors.has_value());
+  for (size_t i = 0; i < im.rotors->positions.size(); ++i) {
+    const std::string name = fmt::format("rotor{}_{}", i + 1, im.rotors->spin[i] > 0 ? "cw" : "ccw");
+    const auto joint = urdf->getJoint(name + "_joint");
+    ASSERT_TRUE(joint) << name;
+    const auto& p = joint->parent_to_joint_origin_transform.position;
+    EXPECT_DOUBLE_EQ(p.x, im.rotors->positions[i](0));
+    EXPECT_DOUBLE_EQ(p.y, im.rotors->positions[i](1));
+    EXPECT_DOUBLE_EQ(p.z, im.rotors->positions[i](2));
+  }
+}
+#endif
