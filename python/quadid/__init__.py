@@ -50,6 +50,7 @@ __all__ = [
     "check_trajectory",
     "validate",
     "log_info",
+    "model",
     "option_names",
     "option_specs",
 ]
@@ -122,7 +123,7 @@ def _log_argument(log, kwargs: dict, function: str):
 class IdentifyResult(dict):
     """The dict of `quadid identify --json`, plus numpy accessors of each set's estimate.
 
-    theta_order: the order of theta (m, Ixx, Iyy, Izz, Ixy, Ixz, Iyz).
+    theta_order: the order of theta (m, Ixx, Ixy, Ixz, Iyy, Iyz, Izz).
     theta(set) -> (7,) array, inertia_tensor(set) -> (3, 3), covariance(set) -> (7, 7)
     (symmetric; its diagonal is the squared standard errors), for the sets of
     least_squares ("LS", "FMLS", ...).
@@ -280,3 +281,17 @@ def validate(log=None, params=None, **options) -> dict:
 
 
 from . import fleet  # noqa: E402  (imports identify)
+
+
+def model(result, format: str, *, set: str | None = None) -> str:
+    """`quadid model RESULT --format FORMAT` as text: the identified vehicle for a simulator.
+
+    RESULT is identify's result, a path to its JSON (`quadid identify LOG -o RESULT.json`)
+    or the dict `quadid.identify(...)` returns. FORMAT: "vehicle" (a quadid vehicle
+    file), "mjcf" (MuJoCo), "rotorpy" (a RotorPy quad_params dict), "urdf".
+    `set`: the parameter set to write (default: the result's recommended one).
+    See docs/models.md for each target's frames, units and signs.
+    """
+    if not isinstance(result, dict):
+        result = _path(result)
+    return _quadid.model(result, str(format), "" if set is None else str(set))

@@ -10,6 +10,7 @@
 #include "quadid/identification.hpp"
 #include "quadid/io.hpp"
 #include "quadid/pipeline.hpp"
+#include "quadid/models.hpp"
 #include "quadid/precision.hpp"
 #include "quadid/simulation.hpp"
 
@@ -92,14 +93,20 @@ json from_py(const py::handle& o, const std::string& where) {
   if (py::isinstance<py::bool_>(o)) return o.cast<bool>();
   if (py::isinstance<py::str>(o)) return o.cast<std::string>();
   if (py::hasattr(o, "__fspath__")) return py::str(o.attr("__fspath__")()).cast<std::string>();
+  // numpy before the number tests: an array has __float__ too (for size 1 only)
+  if (py::hasattr(o, "tolist") && py::hasattr(o, "ndim")) return from_py(o.attr("tolist")(), where);  // numpy
   if (py::isinstance<py::int_>(o) || (py::hasattr(o, "__index__") && !py::isinstance<py::float_>(o)))
     return py::int_(py::reinterpret_borrow<py::object>(o)).cast<long long>();
   if (py::isinstance<py::float_>(o) || py::hasattr(o, "__float__")) return py::float_(py::reinterpret_borrow<py::object>(o)).cast<double>();
-  if (py::hasattr(o, "tolist") && py::hasattr(o, "ndim")) return from_py(o.attr("tolist")(), where);  // numpy
   if (py::isinstance<py::list>(o) || py::isinstance<py::tuple>(o)) {
     json a = json::array();
     for (const auto& e : o) a.push_back(from_py(e, where));
     return a;
+  }
+  if (py::isinstance<py::dict>(o)) {  // e.g. identify()'s result handed back to model()
+    json obj = json::object();
+    for (const auto& [k, v] : py::reinterpret_borrow<py::dict>(o)) obj[py::str(k).cast<std::string>()] = from_py(v, where);
+    return obj;
   }
   throw py::value_error("option " + where + ": unsupported value of type " +
                         py::str(py::type::of(o).attr("__name__")).cast<std::string>());
@@ -381,6 +388,17 @@ PYBIND11_MODULE(_quadid, m) {
       [](const py::dict& opts) { (void)quadid::identify_options_from_json(options_json(opts)); },
       py::arg("options"), "raises ValueError for an option identify would reject");
   m.def("normalize_option_key", &quadid::normalize_option_key, py::arg("key"));
+  m.def(
+      "model",
+      [](const py::object& result, const std::string& format, const std::string& set) {
+        const quadid::ModelFormat f = quadid::parse_model_format(format);
+        const quadid::IdentifiedModel im =
+            py::isinstance<py::dict>(result)
+                ? quadid::identified_model_from_json(from_py(result, "result"), "the result dict", set)
+                : quadid::load_identified_model(from_py(result, "result").get<std::string>(), set);
+        return quadid::model_text(im, f);
+      },
+      py::arg("result"), py::arg("format"), py::arg("set"));
   m.def(
       "summarize_fleet",
       [](const std::string& records_json, const std::string& set, double level) {

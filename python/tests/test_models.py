@@ -128,3 +128,24 @@ def test_vehicle_file_reads_back_with_tomllib(identified):
         assert v["nominal"][p] == j["estimates"][s][p]
     assert v["rotors"]["kf"] == pytest.approx(j["rotors"]["kf"] * scale, rel=1e-15)
     assert v["rotors"]["spin"] == j["rotors"]["spin"]
+
+
+def test_python_model_equals_the_command_line_from_a_path_or_identify_s_dict(identified, tmp_path):
+    import quadid
+
+    res, j, s, _ = identified
+    for fmt in ("vehicle", "mjcf", "rotorpy", "urdf"):
+        assert quadid.model(res, fmt) == model(res, fmt)
+    # The dict identify() returns (numpy arrays inside) gives the same numbers; only
+    # the provenance line names the source differently.
+    log = tmp_path / "again.csv"
+    run_cli("simulate", "--vehicle", "crazyflie21", "--trajectory", "table2", "--duration", "30", "-o", str(log))
+    r = quadid.identify(log, vehicle="crazyflie21", known_mass=0.0347)
+    out = tmp_path / "r.json"
+    run_cli("identify", str(log), "--vehicle", "crazyflie21", "--known-mass", "0.0347", "-q", "-o", str(out))
+    strip = lambda t: "\n".join(l for l in t.splitlines() if "identified by quadid" not in l)
+    assert strip(quadid.model(r, "rotorpy")) == strip(model(out, "rotorpy"))
+    with pytest.raises(quadid.InputError, match="no estimate named XX"):
+        quadid.model(res, "mjcf", set="XX")
+    with pytest.raises(ValueError, match="expected one of vehicle, mjcf, rotorpy, urdf"):
+        quadid.model(res, "gazebo")
