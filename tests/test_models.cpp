@@ -159,3 +159,22 @@ TEST_F(Models, UrdfdomReadsTheIdentifiedInertiaBack) {
   }
 }
 #endif
+
+// identify --model FORMAT:FILE writes what `quadid model` writes from the same
+// result; a malformed spec names the option and its form.
+TEST_F(Models, IdentifyModelShortcutWritesWhatTheModelCommandWrites) {
+  const CliRun sim = run("simulate --vehicle crazyflie21 --trajectory table2 --duration 30 -o " + path("cf.csv"));
+  ASSERT_EQ(sim.rc, 0) << sim.err;
+  const CliRun id = run("identify " + path("cf.csv") + " --vehicle crazyflie21 --known-mass 0.0347 -q -o " +
+                        path("result.json") + " --model mjcf:" + path("short.xml"));
+  ASSERT_EQ(id.rc, 0) << id.err;
+  const CliRun m = run("model " + path("result.json") + " --format mjcf");
+  ASSERT_EQ(m.rc, 0) << m.err;
+  std::ifstream in(path("short.xml"));
+  std::stringstream ss;
+  ss << in.rdbuf();
+  EXPECT_EQ(ss.str(), m.out);
+  const CliRun bad = run("identify " + path("cf.csv") + " --vehicle crazyflie21 --model short.xml");
+  EXPECT_NE(bad.rc, 0);
+  EXPECT_NE(bad.err.find("--model short.xml: expected FORMAT:FILE"), std::string::npos) << bad.err;
+}

@@ -1,10 +1,10 @@
 // quadid identify LOG: Table 3 and Tables 5-6 from a flight log (docs/identify.md).
 #include "commands.hpp"
-#include "quadid/io.hpp"
 #include "options_cli.hpp"
 #include "quadid/identification/extended.hpp"
 #include "quadid/identification.hpp"
 #include "quadid/io.hpp"
+#include "quadid/models.hpp"
 #include "quadid/pipeline.hpp"
 
 #include <fmt/format.h>
@@ -22,7 +22,8 @@ namespace {
 
 /// What the command line adds to the library's request: the input, the outputs, -q.
 struct IdentifyArgs {
-  std::string log, out, evolution, gd_discretization;
+  std::string log, out, evolution, gd_discretization, model_file;
+  std::optional<ModelFormat> model_format;  // --model FORMAT:FILE
   bool json = false, quiet = false, verbose = false;
 };
 
@@ -31,6 +32,17 @@ void run(const OptionValues& v) {
   a.log = *v.string("log");
   a.out = v.string("out").value_or("");
   a.evolution = v.string("evolution").value_or("");
+  if (const auto spec = v.string("model")) {
+    const auto colon = spec->find(':');
+    if (colon == std::string::npos || colon + 1 >= spec->size())
+      throw std::invalid_argument(fmt::format("--model {}: expected FORMAT:FILE, e.g. --model mjcf:vehicle.xml", *spec));
+    try {
+      a.model_format = parse_model_format(spec->substr(0, colon));
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument(fmt::format("--model {}: {}", *spec, e.what()));
+    }
+    a.model_file = spec->substr(colon + 1);
+  }
   a.gd_discretization = *v.string("gd-discretization");
   a.json = v.flag("json");
   a.quiet = v.flag("quiet");
@@ -40,6 +52,7 @@ void run(const OptionValues& v) {
   // Output paths checked before the work starts.
   if (!a.out.empty()) check_output_file(a.out, "-o/--out");
   if (!a.evolution.empty()) check_output_file(a.evolution, "--evolution");
+  if (a.model_format) check_output_file(a.model_file, "--model");
   // The wrench from a rotor model (--vehicle, or a ULog's CA_ROTOR* parameters), the
   // motor time constant and the time offsets estimated and applied (timing.hpp).
   const IdentificationInput in = prepare_identification(a.log, req);
@@ -60,6 +73,9 @@ void run(const OptionValues& v) {
   // Files first (atomically), so that a failed write leaves no partial report.
   if (!a.evolution.empty()) write_file_atomic(a.evolution, format_evolution_csv(res.evolution));
   if (!a.out.empty()) write_file_atomic(a.out, j.dump(2) + "\n");
+  if (a.model_format)
+    write_file_atomic(a.model_file,
+                      model_text(identified_model_from_json(j, a.out.empty() ? a.log : a.out), *a.model_format));
   if (a.json) {
     fmt::print("{}\n", j.dump(2));
     return;

@@ -306,6 +306,10 @@ Defs identify_options() {
              B("evolution-interval", K::Number, "seconds between evolution rows (0 = every sample)")
                  .def(0.01).unit("s"),
              out_file("write the result JSON (estimates.{LS,GD,FMLS,FMGD}, prediction errors)"),
+             B("model", K::String,
+               "also write the identified vehicle for a simulator, FORMAT:FILE (formats of quadid model: "
+               "vehicle, mjcf, rotorpy, urdf; docs/models.md)")
+                 .text("none").cli(),
              B("verbose", K::Flag,
                "print every set (LS, GD, FMLS, FMGD, PC, FMPC), the wrench and timing, the intervals' method, "
                "physical consistency and Tables 5-6; without it a short summary of the recommended set")
