@@ -13,6 +13,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <map>
 #include <numbers>
 #include <sstream>
 
@@ -177,4 +178,53 @@ TEST_F(Models, IdentifyModelShortcutWritesWhatTheModelCommandWrites) {
   const CliRun bad = run("identify " + path("cf.csv") + " --vehicle crazyflie21 --model short.xml");
   EXPECT_NE(bad.rc, 0);
   EXPECT_NE(bad.err.find("--model short.xml: expected FORMAT:FILE"), std::string::npos) << bad.err;
+}
+
+// PX4 SIH: a Crazyflie's tensor is below SIH's determinant threshold (it
+// could not rotate there). The warning names the limit and the --sih-scale
+// that clears it; applied, the warning is gone and every acceleration SIH
+// computes (thrust / mass, yaw torque / Izz, drag / mass) is unchanged.
+TEST_F(Models, SihWarnsForASmallTensorAndTheAdvisedScaleKeepsEveryAcceleration) {
+  identify_crazyflie();
+  const CliRun r = run("model " + path("result.json") + " --format px4-sih -o " + path("sih1.txt"));
+  ASSERT_EQ(r.rc, 0) << r.err;
+  const std::string key = "Give --sih-scale ";
+  const auto at = r.err.find(key);
+  ASSERT_NE(at, std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("1.192e-07 (FLT_EPSILON)"), std::string::npos) << r.err;
+  const double s = std::stod(r.err.substr(at + key.size()));
+  EXPECT_GT(s, 2.46);  // cbrt(FLT_EPSILON / det(100 I)) for this tensor, the least that works
+  EXPECT_LT(s, 3.0);
+  const CliRun f = run("model " + path("result.json") + " --format px4-sih --sih-scale " + fmt::format("{}", s) + " -o " + path("sih2.txt"));
+  ASSERT_EQ(f.rc, 0) << f.err;
+  EXPECT_EQ(f.err.find("cannot rotate"), std::string::npos) << f.err;
+  auto params = [&](const std::string& file) {
+    std::map<std::string, double> p;
+    std::ifstream in(path(file));
+    for (std::string line; std::getline(in, line);) {
+      std::istringstream ls(line);
+      std::string a, b, name;
+      double v = 0.0;
+      if (ls >> a >> b >> name >> v && a == "param" && b == "set") p[name] = v;
+    }
+    return p;
+  };
+  const auto p1 = params("sih1.txt"), p2 = params("sih2.txt");
+  ASSERT_EQ(p1.size(), 15u);
+  const quadid::IdentifiedModel im = quadid::load_identified_model(path("result.json"));
+  // FRD: the products about x change sign, Iyz keeps it (R = diag(1, -1, -1)).
+  EXPECT_DOUBLE_EQ(p1.at("SIH_IXY"), -im.params.I(0, 1));
+  EXPECT_DOUBLE_EQ(p1.at("SIH_IXZ"), -im.params.I(0, 2));
+  EXPECT_DOUBLE_EQ(p1.at("SIH_IYZ"), im.params.I(1, 2));
+  EXPECT_DOUBLE_EQ(p1.at("SIH_Q_MAX"), im.rotors->torque_ratio * im.rotors->thrust_max);
+  Eigen::Matrix3d I2;
+  I2 << p2.at("SIH_IXX"), p2.at("SIH_IXY"), p2.at("SIH_IXZ"), p2.at("SIH_IXY"), p2.at("SIH_IYY"), p2.at("SIH_IYZ"),
+      p2.at("SIH_IXZ"), p2.at("SIH_IYZ"), p2.at("SIH_IZZ");
+  EXPECT_GE((100.0 * I2).determinant(), 1.1920928955078125e-7);
+  for (const auto& [num_key, den_key] : {std::pair{"SIH_T_MAX", "SIH_MASS"}, {"SIH_Q_MAX", "SIH_IZZ"}, {"SIH_KDV", "SIH_MASS"},
+                                         {"SIH_KDW", "SIH_IXX"}})
+    EXPECT_NEAR(p2.at(num_key) / p2.at(den_key), p1.at(num_key) / p1.at(den_key), 1e-12 * p1.at(num_key) / p1.at(den_key))
+        << num_key;
+  EXPECT_EQ(p2.at("SIH_L_ROLL"), p1.at("SIH_L_ROLL"));
+  EXPECT_EQ(p2.at("SIH_T_TAU"), p1.at("SIH_T_TAU"));
 }

@@ -15,7 +15,11 @@ void run(const OptionValues& v) {
   const std::string result = *v.string("result");
   const IdentifiedModel m = load_identified_model(result, v.string("set").value_or(""));
   const ModelFormat f = parse_model_format(*v.string("format"));
-  const std::string text = model_text(m, f);
+  ModelOptions opt;
+  opt.sih_scale = *v.number("sih-scale");
+  const std::string text = model_text(m, f, opt);
+  if (!v.flag("quiet"))
+    for (const auto& w : model_warnings(m, f, opt)) fmt::print(stderr, "quadid model: warning: {}\n", w);
   const auto out = v.string("out");
   if (!out) {
     fmt::print("{}", text);
@@ -38,6 +42,7 @@ void register_model(CLI::App& app) {
       "  mjcf      MuJoCo: a free body with <inertial fullinertia>, a site and a thrust <motor> per rotor\n"
       "  rotorpy   a RotorPy quad_params dict (Python), for rotorpy.vehicles.multirotor.Multirotor\n"
       "  urdf      ROS: base_link <inertial> and a fixed link per rotor\n"
+      "  px4-sih   PX4 SIH: SIH_* parameters (FRD) as a param set script; px4-sih-qgc: a QGroundControl .params file\n"
       "Body FLU, SI units; each target's conventions in docs/models.md. Numbers round-trip.\n\n"
       "Examples:\n"
       "  quadid identify flight.ulg --vehicle x500 -o result.json\n"

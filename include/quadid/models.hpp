@@ -42,16 +42,32 @@ IdentifiedModel identified_model_from_json(const nlohmann::ordered_json& result,
 /// The same from a file.
 IdentifiedModel load_identified_model(const std::string& path, const std::string& set = "");
 
-enum class ModelFormat { kVehicle, kMjcf, kRotorpy, kUrdf };
-/// "vehicle", "mjcf", "rotorpy", "urdf"; throws std::invalid_argument listing them.
+enum class ModelFormat { kVehicle, kMjcf, kRotorpy, kUrdf, kPx4Sih, kPx4SihQgc };
+/// "vehicle", "mjcf", "rotorpy", "urdf", "px4-sih" (a `param set` script),
+/// "px4-sih-qgc" (a QGroundControl .params file); throws std::invalid_argument listing them.
 ModelFormat parse_model_format(std::string_view name);
 std::string to_string(ModelFormat f);
 /// The formats' names, in the order above.
 std::vector<std::string> model_format_names();
 
+struct ModelOptions {
+  /// PX4 SIH only: every mass, inertia, thrust, torque, drag and damping
+  /// parameter multiplied by this factor (> 0). Every acceleration stays the
+  /// same; a small vehicle's tensor then clears SIH's determinant threshold
+  /// (model_warnings names the factor needed). 1: as identified.
+  double sih_scale = 1.0;
+  /// Throws std::invalid_argument naming the field.
+  void validate() const;
+};
+
 /// The model as the target's text. Values the identification did not give and
 /// the vehicle file does not hold are left out (with a comment), never
 /// invented; a target that needs one refuses, naming it.
-std::string model_text(const IdentifiedModel& m, ModelFormat f);
+std::string model_text(const IdentifiedModel& m, ModelFormat f, const ModelOptions& opt = {});
+
+/// What the target will do differently from the identified vehicle, beyond
+/// what the text's comments say (e.g. SIH's inertia below its determinant
+/// threshold): one sentence each, naming the fix. Empty when nothing.
+std::vector<std::string> model_warnings(const IdentifiedModel& m, ModelFormat f, const ModelOptions& opt = {});
 
 }  // namespace quadid

@@ -283,15 +283,17 @@ def validate(log=None, params=None, **options) -> dict:
 from . import fleet  # noqa: E402  (imports identify)
 
 
-def model(result, format: str, *, set: str | None = None) -> str:
+def model(result, format: str, *, set: str | None = None, sih_scale: float = 1.0) -> str:
     """`quadid model RESULT --format FORMAT` as text: the identified vehicle for a simulator.
 
     RESULT is identify's result, a path to its JSON (`quadid identify LOG -o RESULT.json`)
     or the dict `quadid.identify(...)` returns. FORMAT: "vehicle" (a quadid vehicle
     file), "mjcf" (MuJoCo), "rotorpy" (a RotorPy quad_params dict), "urdf".
     `set`: the parameter set to write (default: the result's recommended one).
+    `sih_scale`: px4-sih only, every mass, inertia, thrust, torque, drag and damping
+    parameter times this factor (a UserWarning names the one a small vehicle needs).
     See docs/models.md for each target's frames, units and signs.
     """
     if not isinstance(result, dict):
         result = _path(result)
-    return _quadid.model(result, str(format), "" if set is None else str(set))
+    return _quadid.model(result, str(format), "" if set is None else str(set), float(sih_scale))

@@ -390,15 +390,19 @@ PYBIND11_MODULE(_quadid, m) {
   m.def("normalize_option_key", &quadid::normalize_option_key, py::arg("key"));
   m.def(
       "model",
-      [](const py::object& result, const std::string& format, const std::string& set) {
+      [](const py::object& result, const std::string& format, const std::string& set, double sih_scale) {
         const quadid::ModelFormat f = quadid::parse_model_format(format);
+        quadid::ModelOptions opt;
+        opt.sih_scale = sih_scale;
         const quadid::IdentifiedModel im =
             py::isinstance<py::dict>(result)
                 ? quadid::identified_model_from_json(from_py(result, "result"), "the result dict", set)
                 : quadid::load_identified_model(from_py(result, "result").get<std::string>(), set);
-        return quadid::model_text(im, f);
+        for (const auto& w : quadid::model_warnings(im, f, opt))
+          PyErr_WarnEx(PyExc_UserWarning, w.c_str(), 1);
+        return quadid::model_text(im, f, opt);
       },
-      py::arg("result"), py::arg("format"), py::arg("set"));
+      py::arg("result"), py::arg("format"), py::arg("set"), py::arg("sih_scale"));
   m.def(
       "summarize_fleet",
       [](const std::string& records_json, const std::string& set, double level) {

@@ -149,3 +149,66 @@ def test_python_model_equals_the_command_line_from_a_path_or_identify_s_dict(ide
         quadid.model(res, "mjcf", set="XX")
     with pytest.raises(ValueError, match="expected one of vehicle, mjcf, rotorpy, urdf"):
         quadid.model(res, "gazebo")
+
+
+def read_qgc(text):
+    """QGroundControl's rules (ParameterManager): '#' lines skipped; a row is exactly five
+    tab-separated fields vehicle, component, name, value, MAV_PARAM_TYPE (9 float32, 6 int32)."""
+    out = {}
+    for line in text.splitlines():
+        if not line or line.startswith("#"):
+            continue
+        f = line.split("\t")
+        assert len(f) == 5, line
+        assert f[0] == "1" and f[1] == "1"
+        assert f[4] in ("9", "6")
+        out[f[2]] = float(f[3]) if f[4] == "9" else int(f[3])
+    return out
+
+
+def read_param_set(text):
+    """PX4's shell: `param set NAME VALUE` (strtod); '#' lines are comments."""
+    out = {}
+    for line in text.splitlines():
+        if line.startswith("#") or not line.strip():
+            continue
+        a, b, name, value = line.split()
+        assert (a, b) == ("param", "set")
+        out[name] = float(value)
+    return out
+
+
+def test_px4_sih_parameters_in_frd_as_qgc_and_the_shell_read_them(identified):
+    res, j, s, scale = identified
+    q = read_qgc(run_cli("model", str(res), "--format", "px4-sih-qgc").stdout)
+    p = read_param_set(model(res, "px4-sih"))
+    assert set(q) == set(p)
+    for k in p:
+        assert q[k] == pytest.approx(p[k], rel=1e-12, abs=1e-18), k  # 18 fixed decimals against shortest text
+    e, r = j["estimates"][s], j["rotors"]
+    assert p["SIH_MASS"] == e["m"]
+    for a in ("Ixx", "Iyy", "Izz"):
+        assert p["SIH_" + a.upper()] == e[a]
+    # FLU -> FRD, R = diag(1, -1, -1): Ixy and Ixz change sign, Iyz keeps it.
+    assert p["SIH_IXY"] == -e["Ixy"] and p["SIH_IXZ"] == -e["Ixz"] and p["SIH_IYZ"] == e["Iyz"]
+    assert p["SIH_T_MAX"] == pytest.approx(r["thrust_max"] * scale, rel=1e-15)
+    assert p["SIH_Q_MAX"] == pytest.approx(r["torque_ratio"] * r["thrust_max"] * scale, rel=1e-15)
+    assert p["SIH_L_ROLL"] == abs(r["positions"][0][1]) and p["SIH_L_PITCH"] == abs(r["positions"][0][0])
+    assert p["SIH_T_TAU"] == r["time_constant"]
+    assert p["SIH_VEHICLE_TYPE"] == 0
+
+
+def test_python_model_warns_for_sih_and_the_advised_scale_clears_it(identified):
+    import re
+    import warnings
+
+    import quadid
+
+    res = identified[0]
+    with pytest.warns(UserWarning, match="cannot rotate") as rec:
+        quadid.model(res, "px4-sih")
+    s = float(re.search(r"--sih-scale ([0-9.]+)", str(rec[0].message)).group(1))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        text = quadid.model(res, "px4-sih", sih_scale=s)
+    assert "cannot rotate" not in text

@@ -58,5 +58,7 @@ std::string vehicle_toml(const IdentifiedModel& m);
 std::string mjcf(const IdentifiedModel& m);
 std::string rotorpy(const IdentifiedModel& m);
 std::string urdf(const IdentifiedModel& m);
+std::string px4_sih(const IdentifiedModel& m, const ModelOptions& opt, bool qgc);
+std::vector<std::string> px4_sih_warnings(const IdentifiedModel& m, const ModelOptions& opt);
 
 }  // namespace quadid::models_detail

@@ -3,30 +3,47 @@
 
 #include <fmt/ranges.h>
 
+#include <cmath>
 #include <stdexcept>
 
 namespace quadid {
 
-std::vector<std::string> model_format_names() { return {"vehicle", "mjcf", "rotorpy", "urdf"}; }
+std::vector<std::string> model_format_names() { return {"vehicle", "mjcf", "rotorpy", "urdf", "px4-sih", "px4-sih-qgc"}; }
+
+void ModelOptions::validate() const {
+  if (!(sih_scale > 0.0) || !std::isfinite(sih_scale))
+    throw std::invalid_argument(fmt::format("sih_scale = {}: must be a positive factor", sih_scale));
+}
 
 ModelFormat parse_model_format(std::string_view name) {
   if (name == "vehicle") return ModelFormat::kVehicle;
   if (name == "mjcf") return ModelFormat::kMjcf;
   if (name == "rotorpy") return ModelFormat::kRotorpy;
   if (name == "urdf") return ModelFormat::kUrdf;
+  if (name == "px4-sih") return ModelFormat::kPx4Sih;
+  if (name == "px4-sih-qgc") return ModelFormat::kPx4SihQgc;
   throw std::invalid_argument(fmt::format("model format '{}': expected one of {}", name, fmt::join(model_format_names(), ", ")));
 }
 
 std::string to_string(ModelFormat f) { return model_format_names().at(static_cast<size_t>(f)); }
 
-std::string model_text(const IdentifiedModel& m, ModelFormat f) {
+std::string model_text(const IdentifiedModel& m, ModelFormat f, const ModelOptions& opt) {
+  opt.validate();
   switch (f) {
     case ModelFormat::kVehicle: return models_detail::vehicle_toml(m);
     case ModelFormat::kMjcf: return models_detail::mjcf(m);
     case ModelFormat::kRotorpy: return models_detail::rotorpy(m);
     case ModelFormat::kUrdf: return models_detail::urdf(m);
+    case ModelFormat::kPx4Sih: return models_detail::px4_sih(m, opt, false);
+    case ModelFormat::kPx4SihQgc: return models_detail::px4_sih(m, opt, true);
   }
   throw std::logic_error("model_text: unknown format");
+}
+
+std::vector<std::string> model_warnings(const IdentifiedModel& m, ModelFormat f, const ModelOptions& opt) {
+  opt.validate();
+  if (f == ModelFormat::kPx4Sih || f == ModelFormat::kPx4SihQgc) return models_detail::px4_sih_warnings(m, opt);
+  return {};
 }
 
 }  // namespace quadid

@@ -630,6 +630,12 @@ Defs model_options() {
           .cli(),
       B("out", K::String, "file to write (atomically)").shorthand("o").text("stdout").cli(),
       B("set", K::String, "the parameter set to write (LS, FMLS, PC, FMPC, GD, FMGD)").text("the result's recommended set").cli(),
+      B("sih-scale", K::Number,
+        "px4-sih: mass, inertia, thrust, torque, drag and damping times this factor (every acceleration unchanged), "
+        "for a vehicle too small for SIH's inverse of its inertia")
+          .def(1.0)
+          .above(0)
+          .cli(),
       quiet_flag(),
   };
 }
