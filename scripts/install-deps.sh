@@ -3,7 +3,7 @@
 set -euo pipefail
 PKGS=(g++ cmake make libeigen3-dev libnlopt-cxx-dev libnlopt-dev libcli11-dev nlohmann-json3-dev
       libfmt-dev libgtest-dev libgmock-dev libbenchmark-dev libtomlplusplus-dev
-      liburdfdom-dev  # tests read the exported URDF back with its parser (quadid model)
+      liburdfdom-dev libsdformat-dev  # tests read the exported URDF and SDF back with their parsers (quadid model)
       clang libclang-rt-dev
       pybind11-dev python3-dev python3-numpy python3-pytest python3-distributed
       chromium)  # the report test renders pages in a real browser (ReportBrowser)

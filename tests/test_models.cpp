@@ -228,3 +228,54 @@ TEST_F(Models, SihWarnsForASmallTensorAndTheAdvisedScaleKeepsEveryAcceleration) 
   EXPECT_EQ(p2.at("SIH_L_ROLL"), p1.at("SIH_L_ROLL"));
   EXPECT_EQ(p2.at("SIH_T_TAU"), p1.at("SIH_T_TAU"));
 }
+
+#ifdef QUADID_HAVE_SDFORMAT
+#include <ignition/math/Inertial.hh>
+#include <sdf/Link.hh>
+#include <sdf/Model.hh>
+#include <sdf/Root.hh>
+
+// The SDF read by libsdformat (Gazebo's own parser) and its links composed by
+// gz-math: the whole model's mass, centre of mass and inertia about it are the
+// identified set's (base link = total - rotor links). Tolerance 1e-9 of Ixx
+// for the tensor (the subtraction and the composition round), 1e-12 relative
+// for the mass. Each motor plugin: the spin as turningDirection, motorConstant
+// = kf (30/pi)^2 (rpm -> rad/s), momentConstant = torque_ratio.
+TEST_F(Models, LibsdformatComposesTheLinksBackToTheIdentifiedBody) {
+  identify_crazyflie();
+  const quadid::IdentifiedModel im = quadid::load_identified_model(path("result.json"));
+  for (const char* fmt_name : {"sdf", "sdf-classic"}) {
+    SCOPED_TRACE(fmt_name);
+    ASSERT_EQ(run("model " + path("result.json") + " --format " + fmt_name + " -o " + path("cf.sdf")).rc, 0);
+    sdf::Root root;
+    const sdf::Errors errors = root.Load(path("cf.sdf"));
+    ASSERT_TRUE(errors.empty()) << errors.front().Message();
+    const sdf::Model* model = root.Model();
+    ASSERT_NE(model, nullptr);
+    ignition::math::Inertiald total;
+    for (uint64_t i = 0; i < model->LinkCount(); ++i) {
+      const sdf::Link* link = model->LinkByIndex(i);
+      ignition::math::Inertiald in = link->Inertial();
+      in.SetPose(link->RawPose() * in.Pose());
+      total = i == 0 ? in : total + in;
+    }
+    EXPECT_NEAR(total.MassMatrix().Mass(), im.params.m, 1e-12 * im.params.m);
+    EXPECT_LT(total.Pose().Pos().Length(), 1e-12);
+    const ignition::math::Matrix3d I = total.Moi();
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b) EXPECT_NEAR(I(a, b), im.params.I(a, b), 1e-9 * im.params.I(0, 0)) << a << b;
+    const double k_eta = im.rotors->kf * (30.0 / std::numbers::pi) * (30.0 / std::numbers::pi);
+    int plugins = 0;
+    for (auto e = model->Element()->GetElement("plugin"); e; e = e->GetNextElement("plugin"), ++plugins) {
+      const int n = e->Get<int>("motorNumber");
+      ASSERT_GE(n, 0);
+      ASSERT_LT(n, 4);
+      EXPECT_EQ(e->Get<std::string>("turningDirection"), im.rotors->spin[static_cast<size_t>(n)] > 0 ? "cw" : "ccw");
+      EXPECT_DOUBLE_EQ(e->Get<double>("motorConstant"), k_eta);
+      EXPECT_DOUBLE_EQ(e->Get<double>("momentConstant"), im.rotors->torque_ratio);
+      EXPECT_EQ(e->Get<std::string>("jointName"), fmt::format("rotor_{}_joint", n));
+    }
+    EXPECT_EQ(plugins, 4);
+  }
+}
+#endif

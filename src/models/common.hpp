@@ -17,6 +17,7 @@ namespace quadid::models_detail {
 /// Shortest text that reads back to the same double, always with a decimal
 /// point or an exponent (TOML reads "1" as an integer; XML and Python do not care).
 inline std::string num(double x) {
+  if (x == 0.0) x = 0.0;  // no "-0.0"
   std::string s = fmt::format("{}", x);
   if (std::isfinite(x) && s.find_first_of(".e") == std::string::npos) s += ".0";
   return s;
@@ -59,6 +60,7 @@ std::string mjcf(const IdentifiedModel& m);
 std::string rotorpy(const IdentifiedModel& m);
 std::string urdf(const IdentifiedModel& m);
 std::string px4_sih(const IdentifiedModel& m, const ModelOptions& opt, bool qgc);
+std::string sdf(const IdentifiedModel& m, bool classic);
 std::vector<std::string> px4_sih_warnings(const IdentifiedModel& m, const ModelOptions& opt);
 
 }  // namespace quadid::models_detail

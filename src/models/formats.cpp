@@ -8,7 +8,7 @@
 
 namespace quadid {
 
-std::vector<std::string> model_format_names() { return {"vehicle", "mjcf", "rotorpy", "urdf", "px4-sih", "px4-sih-qgc"}; }
+std::vector<std::string> model_format_names() { return {"vehicle", "mjcf", "rotorpy", "urdf", "px4-sih", "px4-sih-qgc", "sdf", "sdf-classic"}; }
 
 void ModelOptions::validate() const {
   if (!(sih_scale > 0.0) || !std::isfinite(sih_scale))
@@ -22,6 +22,8 @@ ModelFormat parse_model_format(std::string_view name) {
   if (name == "urdf") return ModelFormat::kUrdf;
   if (name == "px4-sih") return ModelFormat::kPx4Sih;
   if (name == "px4-sih-qgc") return ModelFormat::kPx4SihQgc;
+  if (name == "sdf") return ModelFormat::kSdf;
+  if (name == "sdf-classic") return ModelFormat::kSdfClassic;
   throw std::invalid_argument(fmt::format("model format '{}': expected one of {}", name, fmt::join(model_format_names(), ", ")));
 }
 
@@ -36,6 +38,8 @@ std::string model_text(const IdentifiedModel& m, ModelFormat f, const ModelOptio
     case ModelFormat::kUrdf: return models_detail::urdf(m);
     case ModelFormat::kPx4Sih: return models_detail::px4_sih(m, opt, false);
     case ModelFormat::kPx4SihQgc: return models_detail::px4_sih(m, opt, true);
+    case ModelFormat::kSdf: return models_detail::sdf(m, false);
+    case ModelFormat::kSdfClassic: return models_detail::sdf(m, true);
   }
   throw std::logic_error("model_text: unknown format");
 }
