@@ -17,6 +17,7 @@ void run(const OptionValues& v) {
   const ModelFormat f = parse_model_format(*v.string("format"));
   ModelOptions opt;
   opt.sih_scale = *v.number("sih-scale");
+  opt.mjcf_motor_lag = v.flag("mjcf-motor-lag");
   const std::string text = model_text(m, f, opt);
   if (!v.flag("quiet"))
     for (const auto& w : model_warnings(m, f, opt)) fmt::print(stderr, "quadid model: warning: {}\n", w);

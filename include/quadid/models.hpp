@@ -58,6 +58,10 @@ struct ModelOptions {
   /// same; a small vehicle's tensor then clears SIH's determinant threshold
   /// (model_warnings names the factor needed). 1: as identified.
   double sih_scale = 1.0;
+  /// MJCF only: each motor a first-order filter actuator (MuJoCo dyntype
+  /// "filter", its time constant the rotors' time_constant) in place of a
+  /// motor that gives the commanded thrust at once.
+  bool mjcf_motor_lag = false;
   /// Throws std::invalid_argument naming the field.
   void validate() const;
 };

@@ -212,3 +212,16 @@ def test_python_model_warns_for_sih_and_the_advised_scale_clears_it(identified):
         warnings.simplefilter("error")
         text = quadid.model(res, "px4-sih", sih_scale=s)
     assert "cannot rotate" not in text
+
+
+def test_mjcf_motor_lag_is_a_filter_actuator_with_the_rotors_time_constant(identified):
+    res, j, _, _ = identified
+    root = ET.fromstring(run_cli("model", str(res), "--format", "mjcf", "--mjcf-motor-lag").stdout)
+    acts = list(root.find("actuator"))
+    assert len(acts) == 4 and all(a.tag == "general" for a in acts)
+    for i, a in enumerate(acts):
+        # MuJoCo's filter dynamics: act' = (ctrl - act) / dynprm[0]; force = gainprm[0] act along the gear.
+        assert a.get("dyntype") == "filter"
+        assert float(a.get("dynprm")) == j["rotors"]["time_constant"]
+        assert a.get("gaintype") == "fixed" and float(a.get("gainprm")) == 1.0 and a.get("biastype") == "none"
+        assert a.get("site") == f"rotor{i + 1}"

@@ -56,7 +56,7 @@ inline std::string provenance(const IdentifiedModel& m) {
 }
 
 std::string vehicle_toml(const IdentifiedModel& m);
-std::string mjcf(const IdentifiedModel& m);
+std::string mjcf(const IdentifiedModel& m, bool motor_lag);
 std::string rotorpy(const IdentifiedModel& m);
 std::string urdf(const IdentifiedModel& m);
 std::string px4_sih(const IdentifiedModel& m, const ModelOptions& opt, bool qgc);

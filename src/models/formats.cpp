@@ -33,7 +33,7 @@ std::string model_text(const IdentifiedModel& m, ModelFormat f, const ModelOptio
   opt.validate();
   switch (f) {
     case ModelFormat::kVehicle: return models_detail::vehicle_toml(m);
-    case ModelFormat::kMjcf: return models_detail::mjcf(m);
+    case ModelFormat::kMjcf: return models_detail::mjcf(m, opt.mjcf_motor_lag);
     case ModelFormat::kRotorpy: return models_detail::rotorpy(m);
     case ModelFormat::kUrdf: return models_detail::urdf(m);
     case ModelFormat::kPx4Sih: return models_detail::px4_sih(m, opt, false);

@@ -10,7 +10,7 @@
 
 namespace quadid::models_detail {
 
-std::string mjcf(const IdentifiedModel& m) {
+std::string mjcf(const IdentifiedModel& m, bool motor_lag) {
   const std::string name = model_name(m);
   const Mat3& I = m.params.I;
   std::string x = fmt::format("<!-- {} -->\n<mujoco model=\"{}\">\n", provenance(m), name);
@@ -31,12 +31,23 @@ std::string mjcf(const IdentifiedModel& m) {
   x += "    </body>\n  </worldbody>\n  <actuator>\n";
   if (!(r.max_thrust() > 0.0))
     x += "    <!-- the vehicle file gives no thrust_max: the motors' control range is left unlimited -->\n";
-  if (r.time_constant > 0.0)
-    x += fmt::format("    <!-- the motors' lag (time_constant {} s) is not modelled: control is the thrust itself -->\n",
+  const bool lag = motor_lag && r.time_constant > 0.0;
+  if (motor_lag && !(r.time_constant > 0.0))
+    throw InputError(fmt::format("{}: --mjcf-motor-lag needs rotors.time_constant in the vehicle file", m.source));
+  if (lag)
+    x += fmt::format("    <!-- each motor a first-order filter on the thrust command, time constant {} s (quadid's lag is on "
+                     "the rotor speed: the same for small changes about a thrust) -->\n",
+                     num(r.time_constant));
+  else if (r.time_constant > 0.0)
+    x += fmt::format("    <!-- the motors' lag (time_constant {} s) is not modelled: control is the thrust itself "
+                     "(quadid model - -mjcf-motor-lag adds it) -->\n",
                      num(r.time_constant));
   for (size_t i = 0; i < r.positions.size(); ++i) {
     const double yaw = r.spin[i] * r.torque_ratio;
-    x += fmt::format("    <motor name=\"thrust{}\" site=\"rotor{}\" gear=\"0 0 1 0 0 {}\"", i + 1, i + 1, num(yaw));
+    x += lag ? fmt::format("    <general name=\"thrust{}\" site=\"rotor{}\" gear=\"0 0 1 0 0 {}\" dyntype=\"filter\" "
+                           "dynprm=\"{}\" gaintype=\"fixed\" gainprm=\"1\" biastype=\"none\"",
+                           i + 1, i + 1, num(yaw), num(r.time_constant))
+             : fmt::format("    <motor name=\"thrust{}\" site=\"rotor{}\" gear=\"0 0 1 0 0 {}\"", i + 1, i + 1, num(yaw));
     if (r.max_thrust() > 0.0) x += fmt::format(" ctrllimited=\"true\" ctrlrange=\"0 {}\"", num(r.max_thrust()));
     x += "/>\n";
   }

@@ -636,6 +636,9 @@ Defs model_options() {
           .def(1.0)
           .above(0)
           .cli(),
+      B("mjcf-motor-lag", K::Flag,
+        "mjcf: each motor a first-order filter actuator with the rotors' time constant (default: thrust at once)")
+          .cli(),
       quiet_flag(),
   };
 }
