@@ -46,6 +46,7 @@ void register_model(CLI::App& app) {
       "  px4-sih   PX4 SIH: SIH_* parameters (FRD) as a param set script; px4-sih-qgc: a QGroundControl .params file\n"
       "  sdf       Gazebo (gz-sim): links, revolute rotor joints, MulticopterMotorModel plugins; sdf-classic: PX4\n"
       "            SITL_gazebo-classic's libgazebo_motor_model.so\n"
+      "  ardupilot-sitl  ArduPilot SITL's frame JSON (diagonal inertia, FRD motor positions, yaw factors, hoverThrOut)\n"
       "Body FLU, SI units; each target's conventions in docs/models.md. Numbers round-trip.\n\n"
       "Examples:\n"
       "  quadid identify flight.ulg --vehicle x500 -o result.json\n"

@@ -42,11 +42,11 @@ IdentifiedModel identified_model_from_json(const nlohmann::ordered_json& result,
 /// The same from a file.
 IdentifiedModel load_identified_model(const std::string& path, const std::string& set = "");
 
-enum class ModelFormat { kVehicle, kMjcf, kRotorpy, kUrdf, kPx4Sih, kPx4SihQgc, kSdf, kSdfClassic };
+enum class ModelFormat { kVehicle, kMjcf, kRotorpy, kUrdf, kPx4Sih, kPx4SihQgc, kSdf, kSdfClassic, kArdupilotSitl };
 /// "vehicle", "mjcf", "rotorpy", "urdf", "px4-sih" (a `param set` script),
 /// "px4-sih-qgc" (a QGroundControl .params file), "sdf" (Gazebo, gz-sim's
 /// MulticopterMotorModel), "sdf-classic" (PX4 SITL_gazebo-classic's motor
-/// plugin); throws std::invalid_argument listing them.
+/// plugin), "ardupilot-sitl" (SITL's frame JSON); throws std::invalid_argument listing them.
 ModelFormat parse_model_format(std::string_view name);
 std::string to_string(ModelFormat f);
 /// The formats' names, in the order above.

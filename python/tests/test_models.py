@@ -225,3 +225,28 @@ def test_mjcf_motor_lag_is_a_filter_actuator_with_the_rotors_time_constant(ident
         assert float(a.get("dynprm")) == j["rotors"]["time_constant"]
         assert a.get("gaintype") == "fixed" and float(a.get("gainprm")) == 1.0 and a.get("biastype") == "none"
         assert a.get("site") == f"rotor{i + 1}"
+
+
+def test_ardupilot_sitl_frame_json_in_frd_with_derived_hover_and_yaw(identified):
+    import re
+
+    res, j, s, scale = identified
+    text = model(res, "ardupilot-sitl")
+    # SIM_Frame strips '#' comments before parsing the JSON.
+    f = json.loads("\n".join(re.sub(r"#.*", "", line) for line in text.splitlines()))
+    e, r = j["estimates"][s], j["rotors"]
+    assert f["mass"] == e["m"]
+    assert f["moment_inertia"] == [e["Ixx"], e["Iyy"], e["Izz"]]  # diagonal only, the file says the products are dropped
+    assert "products of inertia" in text
+    t_max = r["thrust_max"] * scale
+    assert f["hoverThrOut"] * 4 * t_max == pytest.approx(e["m"] * 9.81, rel=1e-14)
+    arm = max(math.hypot(p[0], p[1]) for p in r["positions"])
+    assert f["diagonal_size"] == pytest.approx(2 * arm, rel=1e-15)
+    ex = 0.65  # SITL's default propExpo: (1 - e) c + e c^2 = hoverThrOut at hover
+    c_h = (-(1 - ex) + math.sqrt((1 - ex) ** 2 + 4 * ex * f["hoverThrOut"])) / (2 * ex)
+    for i, p in enumerate(r["positions"]):
+        assert f[f"motor{i + 1}_position"] == [p[0], -p[1], -p[2]]  # FLU -> FRD
+        yaw = f[f"motor{i + 1}_yaw"]
+        assert math.copysign(1, yaw) == (1 if r["spin"][i] == "ccw" else -1)  # AP_MotorsMatrix: CCW +1
+        # SITL's yaw torque yaw 0.05 D c T equals torque_ratio T at hover.
+        assert abs(yaw) * 0.05 * f["diagonal_size"] * c_h == pytest.approx(r["torque_ratio"], rel=1e-12)

@@ -61,6 +61,7 @@ std::string rotorpy(const IdentifiedModel& m);
 std::string urdf(const IdentifiedModel& m);
 std::string px4_sih(const IdentifiedModel& m, const ModelOptions& opt, bool qgc);
 std::string sdf(const IdentifiedModel& m, bool classic);
+std::string ardupilot_sitl(const IdentifiedModel& m);
 std::vector<std::string> px4_sih_warnings(const IdentifiedModel& m, const ModelOptions& opt);
 
 }  // namespace quadid::models_detail

@@ -8,7 +8,7 @@
 
 namespace quadid {
 
-std::vector<std::string> model_format_names() { return {"vehicle", "mjcf", "rotorpy", "urdf", "px4-sih", "px4-sih-qgc", "sdf", "sdf-classic"}; }
+std::vector<std::string> model_format_names() { return {"vehicle", "mjcf", "rotorpy", "urdf", "px4-sih", "px4-sih-qgc", "sdf", "sdf-classic", "ardupilot-sitl"}; }
 
 void ModelOptions::validate() const {
   if (!(sih_scale > 0.0) || !std::isfinite(sih_scale))
@@ -24,6 +24,7 @@ ModelFormat parse_model_format(std::string_view name) {
   if (name == "px4-sih-qgc") return ModelFormat::kPx4SihQgc;
   if (name == "sdf") return ModelFormat::kSdf;
   if (name == "sdf-classic") return ModelFormat::kSdfClassic;
+  if (name == "ardupilot-sitl") return ModelFormat::kArdupilotSitl;
   throw std::invalid_argument(fmt::format("model format '{}': expected one of {}", name, fmt::join(model_format_names(), ", ")));
 }
 
@@ -40,6 +41,7 @@ std::string model_text(const IdentifiedModel& m, ModelFormat f, const ModelOptio
     case ModelFormat::kPx4SihQgc: return models_detail::px4_sih(m, opt, true);
     case ModelFormat::kSdf: return models_detail::sdf(m, false);
     case ModelFormat::kSdfClassic: return models_detail::sdf(m, true);
+    case ModelFormat::kArdupilotSitl: return models_detail::ardupilot_sitl(m);
   }
   throw std::logic_error("model_text: unknown format");
 }
