@@ -36,22 +36,15 @@ double hover_command(double hover_out, double e) {
 }  // namespace
 
 std::string ardupilot_sitl(const IdentifiedModel& m) {
-  if (!m.rotors)
-    throw InputError(fmt::format("{}: ardupilot-sitl needs the rotors (positions, spins, thrust); the result has no "
-                                 "rotor model (identify with --vehicle)",
-                                 m.source));
-  const RotorModel& r = *m.rotors;
-  if (!(r.max_thrust() > 0.0))
-    throw InputError(fmt::format("{}: ardupilot-sitl needs each rotor's largest thrust (SITL's hoverThrOut follows from "
-                                 "it): give rotors.thrust_max in the vehicle file",
-                                 m.source));
+  const RotorModel& r = require_rotors(m, "ardupilot-sitl", "positions, spins, thrust");
+  const double t_max = require_max_thrust(m, "ardupilot-sitl", "hoverThrOut (it follows from it)");
   const double g = 9.81;  // quadid's (ProcessingOptions::g)
   const auto n = static_cast<double>(r.positions.size());
-  const double hover_out = m.params.m * g / (n * r.max_thrust());
+  const double hover_out = m.params.m * g / (n * t_max);
   if (!(hover_out < 1.0))
     throw InputError(fmt::format("{}: the rotors' thrust_max ({} N each) cannot hold the vehicle's weight ({} N): SITL's "
                                  "hoverThrOut would be {:.3g} (must be below 1)",
-                                 m.source, num(r.max_thrust()), num(m.params.m * g), hover_out));
+                                 m.source, num(t_max), num(m.params.m * g), hover_out));
   double arm = 0.0;
   for (const Vec3& p : r.positions) arm = std::max(arm, std::hypot(p(0), p(1)));
   const double diagonal = 2.0 * arm;

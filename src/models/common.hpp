@@ -11,6 +11,7 @@
 #include <numbers>
 #include <optional>
 #include <string>
+#include <string_view>
 
 namespace quadid::models_detail {
 
@@ -37,6 +38,50 @@ inline std::optional<double> max_speed_rad(const RotorModel& r) {
   const auto k = thrust_per_rad2(r);
   if (!k || !(r.thrust_max > 0.0)) return std::nullopt;
   return std::sqrt(r.thrust_max / *k);
+}
+
+/// The rotor model a target needs, or an InputError naming the target, what it
+/// takes from the rotors (`what`) and the way to get them.
+inline const RotorModel& require_rotors(const IdentifiedModel& m, std::string_view target, std::string_view what) {
+  if (!m.rotors)
+    throw InputError(fmt::format("{}: {} needs the rotors ({}); the result has no rotor model (identify with --vehicle)",
+                                 m.source, target, what));
+  return *m.rotors;
+}
+
+/// Each rotor's largest thrust (thrust_max, N), or an InputError naming the
+/// target's parameter that needs it (`param`) and the vehicle-file key.
+inline double require_max_thrust(const IdentifiedModel& m, std::string_view target, std::string_view param) {
+  const double t = require_rotors(m, target, "thrust").max_thrust();
+  if (!(t > 0.0))
+    throw InputError(fmt::format("{}: {} needs {}, each rotor's largest thrust: give rotors.thrust_max in the vehicle file",
+                                 m.source, target, param));
+  return t;
+}
+
+/// The motors' time constant (s), or an InputError naming the target's parameter.
+inline double require_time_constant(const IdentifiedModel& m, std::string_view target, std::string_view param) {
+  const double tau = require_rotors(m, target, "time constant").time_constant;
+  if (!(tau > 0.0))
+    throw InputError(fmt::format("{}: {} needs {}: give rotors.time_constant in the vehicle file", m.source, target, param));
+  return tau;
+}
+
+/// A rotor speed model in rad/s: the thrust coefficient per (rad/s)^2 and the
+/// largest speed, or an InputError naming the target's parameters.
+struct SpeedModel {
+  double k_rad = 0.0;      // N/(rad/s)^2
+  double max_speed = 0.0;  // rad/s
+};
+inline SpeedModel require_speed_model(const IdentifiedModel& m, std::string_view target, std::string_view k_param,
+                                      std::string_view max_param) {
+  const RotorModel& r = require_rotors(m, target, "thrust coefficient, positions, spins");
+  const auto k = thrust_per_rad2(r);
+  if (!k)
+    throw InputError(fmt::format("{}: {} needs {} (N/(rad/s)^2): rotors.input = \"{}\" gives no rotor speed", m.source,
+                                 target, k_param, to_string(r.input)));
+  require_max_thrust(m, target, max_param);
+  return {*k, *max_speed_rad(r)};
 }
 
 /// A name usable as an identifier in XML and file names.

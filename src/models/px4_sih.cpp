@@ -66,19 +66,9 @@ std::pair<double, double> arms(const IdentifiedModel& m) {
 }
 
 SihParams sih_params(const IdentifiedModel& m, const ModelOptions& opt) {
-  if (!m.rotors)
-    throw InputError(fmt::format("{}: px4-sih needs the rotors (thrust, arm lengths); the result has no rotor model "
-                                 "(identify with --vehicle)",
-                                 m.source));
-  const RotorModel& r = *m.rotors;
-  if (!(r.max_thrust() > 0.0))
-    throw InputError(fmt::format("{}: px4-sih needs SIH_T_MAX, each rotor's largest thrust: give rotors.thrust_max in "
-                                 "the vehicle file",
-                                 m.source));
-  if (!(r.time_constant > 0.0))
-    throw InputError(fmt::format("{}: px4-sih needs SIH_T_TAU (SIH divides by it): give rotors.time_constant in the "
-                                 "vehicle file",
-                                 m.source));
+  const RotorModel& r = require_rotors(m, "px4-sih", "thrust, arm lengths");
+  require_max_thrust(m, "px4-sih", "SIH_T_MAX");
+  require_time_constant(m, "px4-sih", "SIH_T_TAU (SIH divides by it)");
   const auto [lx, ly] = arms(m);
   const double s = opt.sih_scale;
   const Mat3& I = m.params.I;

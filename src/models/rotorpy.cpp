@@ -15,17 +15,9 @@
 namespace quadid::models_detail {
 
 std::string rotorpy(const IdentifiedModel& m) {
-  if (!m.rotors)
-    throw InputError(fmt::format("{}: rotorpy needs the rotors (k_eta, positions, directions); the result has no rotor "
-                                 "model (identify with --vehicle)",
-                                 m.source));
-  const RotorModel& r = *m.rotors;
-  const auto k = thrust_per_rad2(r);
-  const auto wmax = max_speed_rad(r);
-  if (!k) throw InputError(fmt::format("{}: rotorpy needs k_eta (N/(rad/s)^2): rotors.input = \"{}\" gives no rotor speed", m.source, to_string(r.input)));
-  if (!wmax) throw InputError(fmt::format("{}: rotorpy needs rotor_speed_max: give rotors.thrust_max in the vehicle file", m.source));
-  if (!(r.time_constant > 0.0))
-    throw InputError(fmt::format("{}: rotorpy needs tau_m (it divides by it): give rotors.time_constant in the vehicle file", m.source));
+  const RotorModel& r = require_rotors(m, "rotorpy", "k_eta, positions, directions");
+  const SpeedModel sp = require_speed_model(m, "rotorpy", "k_eta", "rotor_speed_max");
+  const double tau = require_time_constant(m, "rotorpy", "tau_m (it divides by it)");
   const Mat3& I = m.params.I;
   std::string t = fmt::format("\"\"\"RotorPy quad_params, {}.\nBody frame FLU, SI units.\"\"\"\nimport numpy as np\n\n", provenance(m));
   t += "quad_params = {\n";
@@ -39,8 +31,8 @@ std::string rotorpy(const IdentifiedModel& m) {
   }
   t += fmt::format("    }},\n    'rotor_directions': np.array([{}]),\n", fmt::join(r.spin, ", "));
   t += "    'rI': np.array([0.0, 0.0, 0.0]),\n";
-  t += fmt::format("    'k_eta': {},\n    'k_m': {},\n    'tau_m': {},\n", num(*k), num(r.torque_ratio * *k), num(r.time_constant));
-  t += fmt::format("    'rotor_speed_min': 0.0,\n    'rotor_speed_max': {},\n", num(*wmax));
+  t += fmt::format("    'k_eta': {},\n    'k_m': {},\n    'tau_m': {},\n", num(sp.k_rad), num(r.torque_ratio * sp.k_rad), num(tau));
+  t += fmt::format("    'rotor_speed_min': 0.0,\n    'rotor_speed_max': {},\n", num(sp.max_speed));
   t += "    # Not identified, so not written (RotorPy's defaults, 0, apply): c_Dx c_Dy c_Dz, k_d, k_z, k_h, k_flap.\n";
   t += "}\n";
   return t;

@@ -97,17 +97,9 @@ std::string motor_plugin(const IdentifiedModel& m, size_t i, bool classic, doubl
 }  // namespace
 
 std::string sdf(const IdentifiedModel& m, bool classic) {
-  if (!m.rotors)
-    throw InputError(fmt::format("{}: sdf needs the rotors for its motor plugins; the result has no rotor model "
-                                 "(identify with --vehicle)",
-                                 m.source));
-  const RotorModel& r = *m.rotors;
-  const auto k = thrust_per_rad2(r);
-  const auto wmax = max_speed_rad(r);
-  if (!k) throw InputError(fmt::format("{}: sdf needs motorConstant (N/(rad/s)^2): rotors.input = \"{}\" gives no rotor speed", m.source, to_string(r.input)));
-  if (!wmax) throw InputError(fmt::format("{}: sdf needs maxRotVelocity: give rotors.thrust_max in the vehicle file", m.source));
-  if (!(r.time_constant > 0.0))
-    throw InputError(fmt::format("{}: sdf needs timeConstantUp/Down: give rotors.time_constant in the vehicle file", m.source));
+  const RotorModel& r = require_rotors(m, "sdf", "motor plugins");
+  const SpeedModel sp = require_speed_model(m, "sdf", "motorConstant", "maxRotVelocity");
+  require_time_constant(m, "sdf", "timeConstantUp/Down");
   const Links l = split_links(m);
   const std::string name = model_name(m);
   std::string x = fmt::format("<?xml version=\"1.0\"?>\n<!-- {} -->\n<sdf version=\"{}\">\n  <model name=\"{}\">\n",
@@ -126,7 +118,7 @@ std::string sdf(const IdentifiedModel& m, bool classic) {
                      "      </axis>\n    </joint>\n",
                      i);
   }
-  for (size_t i = 0; i < r.positions.size(); ++i) x += motor_plugin(m, i, classic, *k, *wmax);
+  for (size_t i = 0; i < r.positions.size(); ++i) x += motor_plugin(m, i, classic, sp.k_rad, sp.max_speed);
   x += "  </model>\n</sdf>\n";
   return x;
 }
