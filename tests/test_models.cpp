@@ -244,9 +244,15 @@ TEST_F(Models, SihWarnsForASmallTensorAndTheAdvisedScaleKeepsEveryAcceleration) 
 TEST_F(Models, LibsdformatComposesTheLinksBackToTheIdentifiedBody) {
   identify_crazyflie();
   const quadid::IdentifiedModel im = quadid::load_identified_model(path("result.json"));
-  for (const char* fmt_name : {"sdf", "sdf-classic"}) {
+  for (const char* fmt_name : {"sdf", "sdf-classic", "sdf --gazebo classic"}) {
     SCOPED_TRACE(fmt_name);
     ASSERT_EQ(run("model " + path("result.json") + " --format " + fmt_name + " -o " + path("cf.sdf")).rc, 0);
+    if (std::string(fmt_name).find("classic") != std::string::npos) {
+      std::ifstream in(path("cf.sdf"));
+      std::stringstream ss;
+      ss << in.rdbuf();
+      EXPECT_NE(ss.str().find("libgazebo_motor_model.so"), std::string::npos);
+    }
     sdf::Root root;
     const sdf::Errors errors = root.Load(path("cf.sdf"));
     ASSERT_TRUE(errors.empty()) << errors.front().Message();

@@ -14,7 +14,8 @@ namespace {
 void run(const OptionValues& v) {
   const std::string result = *v.string("result");
   const IdentifiedModel m = load_identified_model(result, v.string("set").value_or(""));
-  const ModelFormat f = parse_model_format(*v.string("format"));
+  ModelFormat f = parse_model_format(*v.string("format"));
+  if (f == ModelFormat::kSdf && *v.string("gazebo") == "classic") f = ModelFormat::kSdfClassic;  // --gazebo classic
   ModelOptions opt;
   opt.sih_scale = *v.number("sih-scale");
   opt.mjcf_motor_lag = v.flag("mjcf-motor-lag");
@@ -44,8 +45,8 @@ void register_model(CLI::App& app) {
       "  rotorpy   a RotorPy quad_params dict (Python), for rotorpy.vehicles.multirotor.Multirotor\n"
       "  urdf      ROS: base_link <inertial> and a fixed link per rotor\n"
       "  px4-sih   PX4 SIH: SIH_* parameters (FRD) as a param set script; px4-sih-qgc: a QGroundControl .params file\n"
-      "  sdf       Gazebo (gz-sim): links, revolute rotor joints, MulticopterMotorModel plugins; sdf-classic: PX4\n"
-      "            SITL_gazebo-classic's libgazebo_motor_model.so\n"
+      "  sdf       Gazebo (gz-sim): links, revolute rotor joints, MulticopterMotorModel plugins; with --gazebo classic\n"
+      "            (or --format sdf-classic) PX4 SITL_gazebo-classic's libgazebo_motor_model.so\n"
       "  ardupilot-sitl  ArduPilot SITL's frame JSON (diagonal inertia, FRD motor positions, yaw factors, hoverThrOut)\n"
       "Body FLU, SI units; each target's conventions in docs/models.md. Numbers round-trip.\n\n"
       "Examples:\n"

@@ -636,6 +636,10 @@ Defs model_options() {
           .def(1.0)
           .above(0)
           .cli(),
+      B("gazebo", K::String, "sdf: gz (gz-sim's MulticopterMotorModel) or classic (PX4 SITL_gazebo-classic's motor plugin)")
+          .def("gz")
+          .choices({"gz", "classic"})
+          .cli(),
       B("mjcf-motor-lag", K::Flag,
         "mjcf: each motor a first-order filter actuator with the rotors' time constant (default: thrust at once)")
           .cli(),
