@@ -19,6 +19,7 @@ void run(const OptionValues& v) {
   ModelOptions opt;
   opt.sih_scale = *v.number("sih-scale");
   opt.mjcf_motor_lag = v.flag("mjcf-motor-lag");
+  if (const std::string fl = *v.string("flavour"); fl != "none") opt.urdf_flavour = fl;
   const std::string text = model_text(m, f, opt);
   if (!v.flag("quiet"))
     for (const auto& w : model_warnings(m, f, opt)) fmt::print(stderr, "quadid model: warning: {}\n", w);

@@ -62,6 +62,9 @@ struct ModelOptions {
   /// "filter", its time constant the rotors' time_constant) in place of a
   /// motor that gives the commanded thrust at once.
   bool mjcf_motor_lag = false;
+  /// URDF only: "" (plain URDF) or "gym-pybullet-drones" (its <properties>
+  /// and the element order its parser reads by position).
+  std::string urdf_flavour;
   /// Throws std::invalid_argument naming the field.
   void validate() const;
 };

@@ -250,3 +250,34 @@ def test_ardupilot_sitl_frame_json_in_frd_with_derived_hover_and_yaw(identified)
         assert math.copysign(1, yaw) == (1 if r["spin"][i] == "ccw" else -1)  # AP_MotorsMatrix: CCW +1
         # SITL's yaw torque yaw 0.05 D c T equals torque_ratio T at hover.
         assert abs(yaw) * 0.05 * f["diagonal_size"] * c_h == pytest.approx(r["torque_ratio"], rel=1e-12)
+
+
+def test_gym_pybullet_drones_flavour_reads_as_its_positional_parser_does(identified):
+    res, j, s, scale = identified
+    tree = ET.fromstring(run_cli("model", str(res), "--format", "urdf", "--flavour", "gym-pybullet-drones").stdout)
+    # BaseAviary._parseURDFParameters: [0] properties by name; [1][0][1] mass; [1][0][2] inertia;
+    # [1][2][1][0] the collision cylinder; [1][2][0] its origin (xyz split on single spaces).
+    props = tree[0].attrib
+    assert tree[0].tag == "properties"
+    for k in ("arm", "kf", "km", "thrust2weight", "max_speed_kmh", "gnd_eff_coeff", "prop_radius", "drag_coeff_xy",
+              "drag_coeff_z", "dw_coeff_1", "dw_coeff_2", "dw_coeff_3"):
+        float(props[k])
+    e, r = j["estimates"][s], j["rotors"]
+    m = float(tree[1][0][1].attrib["value"])
+    assert m == e["m"]
+    assert [float(tree[1][0][2].attrib[a]) for a in ("ixx", "iyy", "izz")] == [e["Ixx"], e["Iyy"], e["Izz"]]
+    float(tree[1][2][1][0].attrib["length"]), float(tree[1][2][1][0].attrib["radius"])
+    float(tree[1][2][0].attrib["xyz"].split(" ")[2])
+    kf, km, t2w = float(props["kf"]), float(props["km"]), float(props["thrust2weight"])
+    # kf in N/RPM^2 (crazyflie21's kf is per rpm already, times the thrust scale); km = torque_ratio kf.
+    assert kf == pytest.approx(r["kf"] * scale, rel=1e-12)
+    assert km == pytest.approx(r["torque_ratio"] * kf, rel=1e-12)
+    # gym: MAX_RPM = sqrt(thrust2weight m 9.8 / (4 kf)); kf MAX_RPM^2 is each rotor's largest thrust.
+    assert kf * (t2w * m * 9.8 / (4 * kf)) == pytest.approx(r["thrust_max"] * scale, rel=1e-12)
+    # prop0..prop3 counter-clockwise from front left, at the rotors' positions.
+    props_xyz = [[float(v) for v in tree[2 + 2 * k][0][0].attrib["xyz"].split()] for k in range(4)]
+    angles = [math.atan2(p[1], p[0]) for p in props_xyz]
+    assert props_xyz[0][0] > 0 and props_xyz[0][1] > 0
+    assert sorted(map(tuple, props_xyz)) == sorted(map(tuple, r["positions"]))
+    assert all(((angles[k + 1] - angles[k]) % (2 * math.pi)) < math.pi for k in range(3))
+    assert tree[10].attrib["name"] == "center_of_mass_link"

@@ -12,6 +12,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace quadid::models_detail {
 
@@ -107,6 +108,10 @@ std::string urdf(const IdentifiedModel& m);
 std::string px4_sih(const IdentifiedModel& m, const ModelOptions& opt, bool qgc);
 std::string sdf(const IdentifiedModel& m, bool classic);
 std::string ardupilot_sitl(const IdentifiedModel& m);
+std::string gym_pybullet_urdf(const IdentifiedModel& m);
+/// The base link's <inertial> (origin at the centre of mass, the tensor's entries), 4-space indented.
+std::string urdf_base_inertial(const IdentifiedModel& m);
+std::vector<std::string> gym_pybullet_warnings(const IdentifiedModel& m);
 std::vector<std::string> px4_sih_warnings(const IdentifiedModel& m, const ModelOptions& opt);
 
 }  // namespace quadid::models_detail

@@ -13,6 +13,8 @@ std::vector<std::string> model_format_names() { return {"vehicle", "mjcf", "roto
 void ModelOptions::validate() const {
   if (!(sih_scale > 0.0) || !std::isfinite(sih_scale))
     throw std::invalid_argument(fmt::format("sih_scale = {}: must be a positive factor", sih_scale));
+  if (!urdf_flavour.empty() && urdf_flavour != "gym-pybullet-drones")
+    throw std::invalid_argument(fmt::format("urdf_flavour = '{}': expected '' or gym-pybullet-drones", urdf_flavour));
 }
 
 ModelFormat parse_model_format(std::string_view name) {
@@ -36,7 +38,8 @@ std::string model_text(const IdentifiedModel& m, ModelFormat f, const ModelOptio
     case ModelFormat::kVehicle: return models_detail::vehicle_toml(m);
     case ModelFormat::kMjcf: return models_detail::mjcf(m, opt.mjcf_motor_lag);
     case ModelFormat::kRotorpy: return models_detail::rotorpy(m);
-    case ModelFormat::kUrdf: return models_detail::urdf(m);
+    case ModelFormat::kUrdf:
+      return opt.urdf_flavour.empty() ? models_detail::urdf(m) : models_detail::gym_pybullet_urdf(m);
     case ModelFormat::kPx4Sih: return models_detail::px4_sih(m, opt, false);
     case ModelFormat::kPx4SihQgc: return models_detail::px4_sih(m, opt, true);
     case ModelFormat::kSdf: return models_detail::sdf(m, false);
@@ -49,6 +52,7 @@ std::string model_text(const IdentifiedModel& m, ModelFormat f, const ModelOptio
 std::vector<std::string> model_warnings(const IdentifiedModel& m, ModelFormat f, const ModelOptions& opt) {
   opt.validate();
   if (f == ModelFormat::kPx4Sih || f == ModelFormat::kPx4SihQgc) return models_detail::px4_sih_warnings(m, opt);
+  if (f == ModelFormat::kUrdf && !opt.urdf_flavour.empty()) return models_detail::gym_pybullet_warnings(m);
   return {};
 }
 

@@ -9,14 +9,18 @@
 
 namespace quadid::models_detail {
 
-std::string urdf(const IdentifiedModel& m) {
+std::string urdf_base_inertial(const IdentifiedModel& m) {
   const Mat3& I = m.params.I;
-  std::string x = fmt::format("<?xml version=\"1.0\"?>\n<!-- {} -->\n<robot name=\"{}\">\n", provenance(m), model_name(m));
-  x += "  <link name=\"base_link\">\n    <inertial>\n      <origin xyz=\"0 0 0\" rpy=\"0 0 0\"/>\n";
+  std::string x = "    <inertial>\n      <origin xyz=\"0 0 0\" rpy=\"0 0 0\"/>\n";
   x += fmt::format("      <mass value=\"{}\"/>\n", num(m.params.m));
   x += fmt::format("      <inertia ixx=\"{}\" ixy=\"{}\" ixz=\"{}\" iyy=\"{}\" iyz=\"{}\" izz=\"{}\"/>\n", num(I(0, 0)),
                    num(I(0, 1)), num(I(0, 2)), num(I(1, 1)), num(I(1, 2)), num(I(2, 2)));
-  x += "    </inertial>\n  </link>\n";
+  return x + "    </inertial>\n";
+}
+
+std::string urdf(const IdentifiedModel& m) {
+  std::string x = fmt::format("<?xml version=\"1.0\"?>\n<!-- {} -->\n<robot name=\"{}\">\n", provenance(m), model_name(m));
+  x += "  <link name=\"base_link\">\n" + urdf_base_inertial(m) + "  </link>\n";
   if (m.rotors) {
     const RotorModel& r = *m.rotors;
     for (size_t i = 0; i < r.positions.size(); ++i) {

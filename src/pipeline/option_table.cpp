@@ -640,6 +640,10 @@ Defs model_options() {
           .def("gz")
           .choices({"gz", "classic"})
           .cli(),
+      B("flavour", K::String, "urdf: none (plain URDF) or gym-pybullet-drones (its <properties>, its element order)")
+          .def("none")
+          .choices({"none", "gym-pybullet-drones"})
+          .cli(),
       B("mjcf-motor-lag", K::Flag,
         "mjcf: each motor a first-order filter actuator with the rotors' time constant (default: thrust at once)")
           .cli(),
