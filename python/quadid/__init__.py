@@ -283,7 +283,8 @@ def validate(log=None, params=None, **options) -> dict:
 from . import fleet  # noqa: E402  (imports identify)
 
 
-def model(result, format: str, *, set: str | None = None, sih_scale: float = 1.0) -> str:
+def model(result, format: str, *, set: str | None = None, sih_scale: float = 1.0, mjcf_motor_lag: bool = False,
+          flavour: str | None = None, gazebo: str = "gz") -> str:
     """`quadid model RESULT --format FORMAT` as text: the identified vehicle for a simulator.
 
     RESULT is identify's result, a path to its JSON (`quadid identify LOG -o RESULT.json`)
@@ -292,8 +293,18 @@ def model(result, format: str, *, set: str | None = None, sih_scale: float = 1.0
     `set`: the parameter set to write (default: the result's recommended one).
     `sih_scale`: px4-sih only, every mass, inertia, thrust, torque, drag and damping
     parameter times this factor (a UserWarning names the one a small vehicle needs).
-    See docs/models.md for each target's frames, units and signs.
+    `mjcf_motor_lag`: mjcf, filter actuators with the motors' time constant.
+    `flavour`: urdf, None or "gym-pybullet-drones". `gazebo`: sdf, "gz" or "classic".
+    The same options as the command line's (--sih-scale, --mjcf-motor-lag, --flavour,
+    --gazebo). See docs/models.md for each target's frames, units and signs.
     """
     if not isinstance(result, dict):
         result = _path(result)
-    return _quadid.model(result, str(format), "" if set is None else str(set), float(sih_scale))
+    if flavour not in (None, "none", "gym-pybullet-drones"):
+        raise ValueError(f"flavour={flavour!r}: expected None or 'gym-pybullet-drones'")
+    if gazebo not in ("gz", "classic"):
+        raise ValueError(f"gazebo={gazebo!r}: expected 'gz' or 'classic'")
+    if format == "sdf" and gazebo == "classic":
+        format = "sdf-classic"
+    return _quadid.model(result, str(format), "" if set is None else str(set), float(sih_scale), bool(mjcf_motor_lag),
+                         "" if flavour in (None, "none") else str(flavour))

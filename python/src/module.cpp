@@ -390,10 +390,13 @@ PYBIND11_MODULE(_quadid, m) {
   m.def("normalize_option_key", &quadid::normalize_option_key, py::arg("key"));
   m.def(
       "model",
-      [](const py::object& result, const std::string& format, const std::string& set, double sih_scale) {
+      [](const py::object& result, const std::string& format, const std::string& set, double sih_scale,
+         bool mjcf_motor_lag, const std::string& flavour) {
         const quadid::ModelFormat f = quadid::parse_model_format(format);
         quadid::ModelOptions opt;
         opt.sih_scale = sih_scale;
+        opt.mjcf_motor_lag = mjcf_motor_lag;
+        opt.urdf_flavour = flavour;
         const quadid::IdentifiedModel im =
             py::isinstance<py::dict>(result)
                 ? quadid::identified_model_from_json(from_py(result, "result"), "the result dict", set)
@@ -402,7 +405,8 @@ PYBIND11_MODULE(_quadid, m) {
           PyErr_WarnEx(PyExc_UserWarning, w.c_str(), 1);
         return quadid::model_text(im, f, opt);
       },
-      py::arg("result"), py::arg("format"), py::arg("set"), py::arg("sih_scale"));
+      py::arg("result"), py::arg("format"), py::arg("set"), py::arg("sih_scale"), py::arg("mjcf_motor_lag"),
+      py::arg("flavour"));
   m.def(
       "summarize_fleet",
       [](const std::string& records_json, const std::string& set, double level) {

@@ -281,3 +281,19 @@ def test_gym_pybullet_drones_flavour_reads_as_its_positional_parser_does(identif
     assert sorted(map(tuple, props_xyz)) == sorted(map(tuple, r["positions"]))
     assert all(((angles[k + 1] - angles[k]) % (2 * math.pi)) < math.pi for k in range(3))
     assert tree[10].attrib["name"] == "center_of_mass_link"
+
+
+def test_python_model_options_equal_the_command_line_s(identified):
+    import quadid
+
+    res = identified[0]
+    assert quadid.model(res, "urdf", flavour="gym-pybullet-drones") == run_cli(
+        "model", str(res), "--format", "urdf", "--flavour", "gym-pybullet-drones").stdout
+    assert quadid.model(res, "mjcf", mjcf_motor_lag=True) == run_cli(
+        "model", str(res), "--format", "mjcf", "--mjcf-motor-lag").stdout
+    assert quadid.model(res, "sdf", gazebo="classic") == run_cli(
+        "model", str(res), "--format", "sdf", "--gazebo", "classic").stdout
+    with pytest.warns(UserWarning, match="diagonal"):
+        quadid.model(res, "urdf", flavour="gym-pybullet-drones")
+    with pytest.raises(ValueError, match="flavour='pybullet'"):
+        quadid.model(res, "urdf", flavour="pybullet")
