@@ -293,7 +293,7 @@ def test_python_model_options_equal_the_command_line_s(identified):
         "model", str(res), "--format", "mjcf", "--mjcf-motor-lag").stdout
     assert quadid.model(res, "sdf", gazebo="classic") == run_cli(
         "model", str(res), "--format", "sdf", "--gazebo", "classic").stdout
-    with pytest.warns(UserWarning, match="diagonal"):
+    with pytest.warns(UserWarning, match="use ixx iyy izz only"):
         quadid.model(res, "urdf", flavour="gym-pybullet-drones")
     with pytest.raises(ValueError, match="flavour='pybullet'"):
         quadid.model(res, "urdf", flavour="pybullet")
