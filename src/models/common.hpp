@@ -25,12 +25,15 @@ inline std::string num(double x) {
   return s;
 }
 
+/// rpm per rad/s: one place for the models' unit change (w_rpm = w_rad 30 / pi).
+inline constexpr double kRpmPerRadPerSecond = 30.0 / std::numbers::pi;
+
 /// kf per (rad/s)^2: the rotor model's kf when its speeds are in rad/s, kf x
 /// (30/pi)^2 when in rpm (w_rpm = w_rad 30/pi); none for a command-driven
 /// rotor, whose speed the model does not know.
 inline std::optional<double> thrust_per_rad2(const RotorModel& r) {
   if (r.input == RotorInput::kCommand || !(r.kf > 0.0)) return std::nullopt;
-  if (r.speed_in_rpm()) return r.kf * (30.0 / std::numbers::pi) * (30.0 / std::numbers::pi);
+  if (r.speed_in_rpm()) return r.kf * kRpmPerRadPerSecond * kRpmPerRadPerSecond;
   return r.kf;
 }
 

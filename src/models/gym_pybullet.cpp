@@ -55,8 +55,7 @@ std::string gym_pybullet_urdf(const IdentifiedModel& m) {
   if (r.positions.size() != 4)
     throw InputError(fmt::format("{}: gym-pybullet-drones models quadrotors; this vehicle has {} rotors", m.source, r.positions.size()));
   const SpeedModel sp = require_speed_model(m, "urdf --flavour gym-pybullet-drones", "kf", "thrust2weight");
-  const double rad_per_rpm = 2.0 * std::numbers::pi / 60.0;
-  const double kf = sp.k_rad * rad_per_rpm * rad_per_rpm;  // N/RPM^2
+  const double kf = sp.k_rad / (kRpmPerRadPerSecond * kRpmPerRadPerSecond);  // N/RPM^2
   const double km = r.torque_ratio * kf;
   const double t2w = 4.0 * r.max_thrust() / (m.params.m * kGymG);  // so that gym's MAX_RPM is this vehicle's
   double arm = 0.0;

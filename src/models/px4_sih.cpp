@@ -106,6 +106,21 @@ SihParams sih_params(const IdentifiedModel& m, const ModelOptions& opt) {
 // QGroundControl writes floats in fixed notation with 18 decimals (ParameterManager): the same here.
 std::string qgc_value(double v) { return fmt::format("{:.18f}", v); }
 
+// SIH's determinant threshold (sih_params' det100): the warning naming the --sih-scale that clears it.
+std::vector<std::string> sih_warnings(const SihParams& p, const ModelOptions& opt) {
+  std::vector<std::string> w;
+  if (!(std::abs(p.det100) >= kFltEpsilon)) {
+    // Scaling every parameter by s multiplies det(100 I) by s^3; 10 % above the threshold.
+    const double need = std::cbrt(1.1 * kFltEpsilon / std::abs(p.det100)) * opt.sih_scale;
+    w.push_back(fmt::format(
+        "SIH cannot rotate this vehicle: it inverts 100 x its inertia, and PX4's matrix library returns zero below a "
+        "determinant of {:.4g} (FLT_EPSILON); this tensor's is {:.3g}. Give --sih-scale {:.3g} (or more): every mass, "
+        "inertia, thrust, torque, drag and damping parameter times that factor, every acceleration unchanged",
+        kFltEpsilon, p.det100, std::ceil(need * 100.0) / 100.0));
+  }
+  return w;
+}
+
 }  // namespace
 
 std::string px4_sih(const IdentifiedModel& m, const ModelOptions& opt, bool qgc) {
@@ -128,7 +143,7 @@ std::string px4_sih(const IdentifiedModel& m, const ModelOptions& opt, bool qgc)
     comments.push_back(fmt::format("Scaled by --sih-scale {}: mass, inertia, thrust, torque, drag and damping x {} "
                                    "(every acceleration unchanged).",
                                    num(opt.sih_scale), num(opt.sih_scale)));
-  for (const auto& w : px4_sih_warnings(m, opt)) comments.push_back("WARNING: " + w);
+  for (const auto& w : sih_warnings(p, opt)) comments.push_back("WARNING: " + w);
   std::string t;
   if (qgc) {
     t = "# Onboard parameters for Vehicle 1\n#\n";
@@ -145,18 +160,7 @@ std::string px4_sih(const IdentifiedModel& m, const ModelOptions& opt, bool qgc)
 }
 
 std::vector<std::string> px4_sih_warnings(const IdentifiedModel& m, const ModelOptions& opt) {
-  const SihParams p = sih_params(m, opt);
-  std::vector<std::string> w;
-  if (!(std::abs(p.det100) >= kFltEpsilon)) {
-    // Scaling every parameter by s multiplies det(100 I) by s^3; 10 % above the threshold.
-    const double need = std::cbrt(1.1 * kFltEpsilon / std::abs(p.det100)) * opt.sih_scale;
-    w.push_back(fmt::format(
-        "SIH cannot rotate this vehicle: it inverts 100 x its inertia, and PX4's matrix library returns zero below a "
-        "determinant of {:.4g} (FLT_EPSILON); this tensor's is {:.3g}. Give --sih-scale {:.3g} (or more): every mass, "
-        "inertia, thrust, torque, drag and damping parameter times that factor, every acceleration unchanged",
-        kFltEpsilon, p.det100, std::ceil(need * 100.0) / 100.0));
-  }
-  return w;
+  return sih_warnings(sih_params(m, opt), opt);
 }
 
 }  // namespace quadid::models_detail
