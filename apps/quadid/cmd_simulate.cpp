@@ -94,6 +94,12 @@ void run(const OptionValues& v) {
              a.vehicle.empty() || a.plant_given ? a.plant : "vehicle " + a.vehicle,
              a.vehicle.empty() || a.controller_given ? a.controller_params : "vehicle " + a.vehicle,
              overridden ? a.noise + " with overrides" : a.noise, o.sensors.seed);
+  double mass = o.plant.m;  // kg, the plant's true mass through the changes
+  for (const PayloadChange& c : o.payload_changes) {
+    fmt::print("payload change at t = {:g} s: {:+g} kg, mass {:g} -> {:g} kg (the controller is not told)\n", c.t, c.dm,
+               mass, mass + c.dm);
+    mass += c.dm;
+  }
   fmt::print("RMS position error (t >= {:g} s): x {:.2f} mm, y {:.2f} mm, z {:.2f} mm, |p| {:.2f} mm (max {:.2f} mm)\n",
              s.summary_from, 1e3 * s.rms_position_error(0), 1e3 * s.rms_position_error(1),
              1e3 * s.rms_position_error(2), 1e3 * s.rms_position_error_norm, 1e3 * s.max_position_error_norm);
@@ -130,7 +136,8 @@ void register_simulate(CLI::App& app) {
       "Examples:\n"
       "  quadid simulate --trajectory table2 --duration 50 -o log.csv\n"
       "  quadid simulate --trajectory circle --radius 0.8 --altitude 0.9 -o c.csv --truth c_truth.csv\n"
-      "  quadid simulate --trajectory traj.json --noise none --plant qball2-nominal --json\n");
+      "  quadid simulate --trajectory traj.json --noise none --plant qball2-nominal --json\n"
+      "  quadid simulate --trajectory table2 --payload-change 25:0.2 -o log.csv --truth truth.csv\n");
   auto given = add_table_options(sub, "simulate");
   sub->callback([given] { run(given->read()); });
 }

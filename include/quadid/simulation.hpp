@@ -19,8 +19,38 @@
 #include <stdexcept>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace quadid {
+
+// --- Payload changes (SimulationOptions::payload_changes) ------------------------
+
+/// A payload picked up (dm > 0) or dropped (dm < 0) during a flight (simulate --payload-change), so
+/// that an online estimator can be tested on a known change of mass, inertia and centre of mass.
+struct PayloadChange {
+  double t = 0.0;   // s from the log's start; takes effect at the first controller tick at or after t
+  double dm = 0.0;  // kg added (negative: dropped), nonzero
+  /// m, body FLU: the payload's own centre of mass from the vehicle's centre of mass before the change.
+  Vec3 offset = Vec3::Zero();
+  /// kg m^2, body axes: the payload's own principal moments about its own centre (0: a point mass).
+  /// A dropped payload (dm < 0) is the body that leaves: its inertia is taken away.
+  Vec3 inertia = Vec3::Zero();
+};
+
+/// The vehicle's true mass properties during a flight with payload changes.
+struct MassProperties {
+  Params params;               // m, and the inertia about the present centre of mass
+  Vec3 com = Vec3::Zero();     // m, body FLU: the centre of mass from the point the rotors' wrench is about
+};
+
+/// The vehicle after `change`: mass m + dm; centre of mass moved by c = dm offset / (m + dm); inertia about
+/// the new centre by the parallel-axis theorem (the vehicle's and the payload's tensors both moved there,
+/// products included). Does not check the result (SimulationOptions::validate does).
+MassProperties after_payload_change(const MassProperties& before, const PayloadChange& change);
+
+/// "T:DM", "T:DM:X,Y,Z" or "T:DM:X,Y,Z:IXX,IYY,IZZ" (s, kg, m, kg m^2; simulate --payload-change).
+/// Throws std::invalid_argument quoting `text` and the expected form.
+PayloadChange parse_payload_change(std::string_view text);
 
 // --- Plant -------------------------------------------------------------------
 
@@ -45,9 +75,16 @@ class Plant {
   const Input& applied() const { return applied_; }
   void set_applied(const Input& u) { applied_ = u; }
   const Params& params() const { return P_; }
+  /// New true mass properties (a payload change): eqs. (1)-(2) then hold about the new centre of
+  /// mass, and the wrench given to derivative()/step() is taken about the point `com` away from it
+  /// (the rotors' geometric centre), so the torque about the centre of mass gains (-com) x [0 0 Fz].
+  void set_mass_properties(const MassProperties& mp);
+  const Vec3& com() const { return com_; }
 
  private:
   Params P_;
+  Vec3 com_ = Vec3::Zero();  // m, body FLU: centre of mass from the wrench's reference point
+  bool com_offset_ = false;  // com_ != 0 (the common case skips the extra torque)
   Mat3 I_inv_;
   double g_, tau_a_;
   Input applied_;
@@ -185,6 +222,12 @@ struct SimulationOptions {
   /// body FLU, at the centre of mass: the applied thrust / m along body z, as the
   /// plant has no drag) with white noise of this standard deviation (--sigma-accel).
   std::optional<double> accelerometer_noise;
+  /// Changes of the plant's true mass properties during the flight, in time order (PayloadChange).
+  /// The controller is not told (its model stays; its integral action takes up the new weight). The
+  /// log's Fz tau_* stay the actuators' wrench about the vehicle's geometric centre (as a real log's),
+  /// so an identifier sees a mass step and, for an offset payload, a torque offset. With at least
+  /// one change the truth gains the true parameters per sample: m Ixx Ixy Ixz Iyy Iyz Izz.
+  std::vector<PayloadChange> payload_changes;
 
   /// Flies at a log rate of `hz`: controller.rate = hz, each sensor rate capped at
   /// hz (a sensor cannot be logged faster than the log), and the RK4 step nearest
@@ -223,7 +266,8 @@ struct SimulationResult {
   FlightLog log;
   /// True state at the same instants (empty unless record_truth): the standard
   /// columns with true values (Fz, tau = actuator output), then
-  /// u v w (body velocity), vx vy vz (inertial), u_dot v_dot w_dot p_dot q_dot r_dot.
+  /// u v w (body velocity), vx vy vz (inertial), u_dot v_dot w_dot p_dot q_dot r_dot, and with
+  /// payload changes m Ixx Ixy Ixz Iyy Iyz Izz (the true parameters at each sample).
   FlightLog truth;
   SimulationSummary summary;
 };

@@ -394,6 +394,11 @@ Defs simulate_options() {
             "); plant and controller model = its [nominal], gains scaled to it (docs/vehicles.md); the log gains "
             "its rotor columns")
           .text("none: the paper's QBall 2 with wrench actuation"),
+      B("payload-change", K::List,
+        "change the plant's mass mid-flight, unknown to the controller: T:DM (s, kg; 25:0.2 picks up 0.2 kg at "
+        "25 s, 25:-0.2 drops it), T:DM:X,Y,Z (the payload's centre of mass from the vehicle's, m, body FLU) or "
+        "T:DM:X,Y,Z:IXX,IYY,IZZ (and its own principal moments, kg m^2); the truth gains m Ixx..Izz (repeatable)")
+          .text("none"),
       json_flag("print the summary as JSON on stdout (nothing else there)"),
       quiet_flag(),
   };

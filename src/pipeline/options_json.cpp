@@ -20,6 +20,7 @@
 #include <optional>
 #include <set>
 #include <stdexcept>
+#include <string_view>
 
 namespace quadid {
 namespace {
@@ -997,8 +998,17 @@ SimulateRequest simulate_request(const OptionValues& r) {
       "velocity-source", [&] { return velocity_source_from_string(*r.string("velocity-source")); });
   if (const double sp = *r.number("speedup"); sp != 1.0 && *spec != "circle")
     req.trajectory = r.with_option("speedup", [&] { return std::shared_ptr<const Trajectory>(time_scaled(*req.trajectory, sp)); });
+  for (const std::string& text : r.list("payload-change"))
+    o.payload_changes.push_back(r.with_option("payload-change", [&] { return parse_payload_change(text); }));
   o.record_truth = false;
-  validate_as(r, [&] { o.validate(); });
+  try {
+    o.validate();
+  } catch (const std::invalid_argument& e) {
+    // The library names the field (payload_changes[1].dm); say which option set it.
+    if (std::string_view(e.what()).starts_with("payload_changes["))
+      throw std::invalid_argument(r.prefix("payload-change") + e.what());
+    fail(r, e.what());
+  }
   return req;
 }
 

@@ -67,6 +67,12 @@ json simulation_json(const SimulationOptions& o) {
     j["rotors"] = to_json(*o.rotors);
     j["rotor_noise"] = o.rotor_noise;
   }
+  if (!o.payload_changes.empty()) {  // only then: logs without changes keep their header byte for byte
+    json changes = json::array();
+    for (const PayloadChange& c : o.payload_changes)
+      changes.push_back({{"t", c.t}, {"dm", c.dm}, {"offset", vec(c.offset)}, {"inertia", vec(c.inertia)}});
+    j["payload_changes"] = changes;
+  }
   return j;
 }
 
@@ -102,6 +108,25 @@ struct Reader {
     }
   }
 };
+
+// [{"t": s, "dm": kg, "offset": [m x3], "inertia": [kg m^2 x3]}, ...]; offset and inertia may be left out (0).
+std::vector<PayloadChange> payload_changes_from_json(const json& a, const std::string& source) {
+  if (!a.is_array()) throw InputError(fmt::format("{}.payload_changes: must be an array", source));
+  std::vector<PayloadChange> out;
+  for (size_t i = 0; i < a.size(); ++i) {
+    const std::string at = fmt::format("{}.payload_changes[{}]", source, i);
+    if (!a[i].is_object()) throw InputError(fmt::format("{}: must be an object", at));
+    const Reader c{a[i], at};
+    if (!c.has("t") || !c.has("dm")) throw InputError(fmt::format("{}: needs fields \"t\" and \"dm\"", at));
+    PayloadChange ch;
+    c.num("t", ch.t);
+    c.num("dm", ch.dm);
+    c.vec3("offset", ch.offset);
+    c.vec3("inertia", ch.inertia);
+    out.push_back(ch);
+  }
+  return out;
+}
 
 }  // namespace
 
@@ -189,6 +214,7 @@ SimulationOptions simulation_options_from_json(const json& j, const std::string&
     if (!j.at("record_truth").is_boolean()) throw InputError(fmt::format("{}.record_truth: must be true or false", source));
     o.record_truth = j.at("record_truth").get<bool>();
   }
+  if (r.has("payload_changes")) o.payload_changes = payload_changes_from_json(j.at("payload_changes"), source);
   if (r.has("initial_state")) {
     const Reader s = r.sub("initial_state");
     State x;

@@ -35,10 +35,22 @@ State::Vector Plant::derivative(const State& x, const Input& u) const {
   dx(6) = w(0) + sf * tt * w(1) + cf * tt * w(2);
   dx(7) = cf * w(1) - sf * w(2);
   dx(8) = (sf * w(1) + cf * w(2)) / ct;
-  // eq. (2): w_dot = I^-1 (tau - w x I w)
+  // eq. (2): w_dot = I^-1 (tau - w x I w), tau about the centre of mass. After an offset payload
+  // change the wrench u is about the rotors' geometric centre, com_ away from the centre of mass:
+  // tau_cm = tau + (-com_) x [0 0 Fz] = tau + Fz [-com_y, com_x, 0] (N m, body FLU).
   const Vec3 Iw = P_.I * w;
-  dx.segment<3>(9) = I_inv_ * (u.tau - w.cross(Iw));
+  Vec3 tau = u.tau;
+  if (com_offset_) tau += u.Fz * Vec3(-com_(1), com_(0), 0.0);
+  dx.segment<3>(9) = I_inv_ * (tau - w.cross(Iw));
   return dx;
+}
+
+void Plant::set_mass_properties(const MassProperties& mp) {
+  mp.params.validate("plant params after a payload change");
+  P_ = mp.params;
+  I_inv_ = P_.I.inverse();
+  com_ = mp.com;
+  com_offset_ = !com_.isZero(0.0);
 }
 
 namespace {

@@ -1,5 +1,6 @@
 #include "quadid/simulation.hpp"
 
+#include "payload.hpp"
 #include "sensors.hpp"
 
 #include <fmt/format.h>
@@ -91,6 +92,7 @@ void SimulationOptions::validate() const {
         fmt::format("--summary-from = {} s must be in [0, --duration = {} s)", summary_from, duration));
   if (initial_state && !initial_state->to_vector().allFinite())
     throw std::invalid_argument("initial_state has a non-finite entry");
+  detail::validate_payload_changes(*this);
 }
 
 State initial_state_at_rest(const Trajectory& traj) {
@@ -137,6 +139,38 @@ const std::vector<std::string>& truth_columns() {
   return c;
 }
 
+// With payload changes the truth's last columns: the true parameters at each sample, in Theta order.
+const std::vector<std::string>& truth_parameter_columns() {
+  static const std::vector<std::string> c(kThetaNames.begin(), kThetaNames.end());
+  return c;
+}
+
+// The result with its columns and comments, sized for `rows` samples.
+SimulationResult start_result(const Trajectory& traj, const SimulationOptions& opt, const RotorActuators* rotors,
+                              Eigen::Index rows) {
+  SimulationResult res;
+  res.log.comments = simulation_log_comments(traj, opt);
+  res.log.columns = log_columns();
+  const std::vector<std::string> rotor_logged = rotors ? rotors->logged_columns() : std::vector<std::string>{};
+  res.log.columns.insert(res.log.columns.end(), rotor_logged.begin(), rotor_logged.end());
+  if (opt.accelerometer_noise) res.log.columns.insert(res.log.columns.end(), {"ax_b", "ay_b", "az_b"});
+  res.log.data.resize(rows, static_cast<Eigen::Index>(res.log.columns.size()));
+  if (opt.record_truth) {
+    res.truth.comments = res.log.comments;
+    res.truth.comments.push_back("true state (not what the sensors saw); Fz and tau = actuator output");
+    res.truth.columns = truth_columns();
+    if (!opt.payload_changes.empty()) {
+      res.truth.comments.push_back(
+          "payload changes: m Ixx Ixy Ixz Iyy Iyz Izz = the true parameters (kg, kg m^2 about the present centre "
+          "of mass); the motion is the reference point's, Fz and tau are about it");
+      res.truth.columns.insert(res.truth.columns.end(), truth_parameter_columns().begin(),
+                               truth_parameter_columns().end());
+    }
+    res.truth.data.resize(rows, static_cast<Eigen::Index>(res.truth.columns.size()));
+  }
+  return res;
+}
+
 // Running sums for the summary.
 struct Stats {
   Vec3 sq_p = Vec3::Zero(), sq_eta = Vec3::Zero(), max_eta = Vec3::Zero();
@@ -148,8 +182,8 @@ struct Stats {
 // (with their noise), then the accelerometer's specific force at the centre of
 // mass (the plant has no drag: the applied thrust / m along body z).
 void log_rotors_and_accelerometer(Eigen::MatrixXd& data, Eigen::Index row, const SimulationOptions& opt,
-                                  const RotorActuators* rotors, double Fz_applied, detail::Rng& rotor_rng,
-                                  detail::Rng& accel_rng) {
+                                  const RotorActuators* rotors, double Fz_applied, double mass,
+                                  detail::Rng& rotor_rng, detail::Rng& accel_rng) {
   auto L = data.row(row);
   Eigen::Index at = static_cast<Eigen::Index>(log_columns().size());
   if (rotors) {
@@ -163,7 +197,7 @@ void log_rotors_and_accelerometer(Eigen::MatrixXd& data, Eigen::Index row, const
   const double s = *opt.accelerometer_noise;
   L(at) = s * accel_rng.normal();
   L(at + 1) = s * accel_rng.normal();
-  L(at + 2) = Fz_applied / opt.plant.m + s * accel_rng.normal();
+  L(at + 2) = Fz_applied / mass + s * accel_rng.normal();  // mass: the true one now (payload changes)
 }
 
 }  // namespace
@@ -183,23 +217,10 @@ SimulationResult simulate(const Trajectory& traj, const SimulationOptions& opt) 
   State x = opt.initial_state ? *opt.initial_state : initial_state_at_rest(traj);
   if (const std::string why = check_state(x, opt.safety); !why.empty()) throw SimulationDiverged(0.0, why);
 
-  SimulationResult res;
+  detail::PayloadSchedule payload(opt);  // x is the centre of mass's state; logs show the reference point's
   const Eigen::Index rows = static_cast<Eigen::Index>(tm.ticks + 1);
-  res.log.comments = simulation_log_comments(traj, opt);
-  res.log.columns = log_columns();
-  const std::vector<std::string> rotor_logged = rotors ? rotors->logged_columns() : std::vector<std::string>{};
-  const Eigen::Index n_rotors = static_cast<Eigen::Index>(rotor_logged.size());
-  res.log.columns.insert(res.log.columns.end(), rotor_logged.begin(), rotor_logged.end());
-  const Eigen::Index n_accel = opt.accelerometer_noise ? 3 : 0;
-  if (n_accel) res.log.columns.insert(res.log.columns.end(), {"ax_b", "ay_b", "az_b"});
+  SimulationResult res = start_result(traj, opt, rotors ? &*rotors : nullptr, rows);
   detail::Rng accel_rng(opt.sensors.seed, 5);  // its own stream: the other sensors' noise is unchanged
-  res.log.data.resize(rows, static_cast<Eigen::Index>(log_columns().size()) + n_rotors + n_accel);
-  if (opt.record_truth) {
-    res.truth.comments = res.log.comments;
-    res.truth.comments.push_back("true state (not what the sensors saw); Fz and tau = actuator output");
-    res.truth.columns = truth_columns();
-    res.truth.data.resize(rows, static_cast<Eigen::Index>(truth_columns().size()));
-  }
 
   SimulationSummary& sum = res.summary;
   sum.samples = rows;
@@ -219,7 +240,9 @@ SimulationResult simulate(const Trajectory& traj, const SimulationOptions& opt) 
     const double t = static_cast<double>(k) / rate;
     const Eigen::Index row = static_cast<Eigen::Index>(k);
     const FlatOutput d = traj.eval(t);
-    sensors.sample(k, t, x, rd, meas);
+    payload.apply_due(t, plant, x);
+    const State xr = payload.at_reference(x);  // what is logged and sensed: the reference point's motion
+    sensors.sample(k, t, xr, rd, meas);
     const ControllerOutput out = ctrl.update(d, meas);
     if (k == 0) plant.set_applied(out.command);  // actuators start at the first command, not at zero thrust
     Input applied = opt.actuator_tau > 0.0 ? plant.applied() : out.command;
@@ -234,14 +257,17 @@ SimulationResult simulate(const Trajectory& traj, const SimulationOptions& opt) 
     auto L = res.log.data.row(row);
     L.head(18) << t, rd.p(0), rd.p(1), rd.p(2), rd.phi, rd.theta, rd.psi, rd.gyro(0), rd.gyro(1), rd.gyro(2),
         logged.Fz, logged.tau(0), logged.tau(1), logged.tau(2), d(kX, 0), d(kY, 0), d(kZ, 0), d(kPsi, 0);
-    log_rotors_and_accelerometer(res.log.data, row, opt, rotors ? &*rotors : nullptr, applied.Fz, rotor_rng, accel_rng);
+    log_rotors_and_accelerometer(res.log.data, row, opt, rotors ? &*rotors : nullptr, applied.Fz, plant.params().m,
+                                 rotor_rng, accel_rng);
     if (opt.record_truth) {
       const State::Vector xd = plant.derivative(x, applied);
-      const Vec3 vi = rotation(x.eta) * x.v;
+      const Vec3 vi = rotation(xr.eta) * xr.v;
+      const Vec3 a = payload.reference_acceleration(xd.segment<3>(3), xd.segment<3>(9));  // body, m/s^2
       auto T = res.truth.data.row(row);
-      T << t, x.p(0), x.p(1), x.p(2), x.eta(0), x.eta(1), x.eta(2), x.omega(0), x.omega(1), x.omega(2), applied.Fz,
-          applied.tau(0), applied.tau(1), applied.tau(2), x.v(0), x.v(1), x.v(2), vi(0), vi(1), vi(2), xd(3), xd(4),
-          xd(5), xd(9), xd(10), xd(11);
+      T.head(26) << t, xr.p(0), xr.p(1), xr.p(2), xr.eta(0), xr.eta(1), xr.eta(2), xr.omega(0), xr.omega(1),
+          xr.omega(2), applied.Fz, applied.tau(0), applied.tau(1), applied.tau(2), xr.v(0), xr.v(1), xr.v(2), vi(0),
+          vi(1), vi(2), a(0), a(1), a(2), xd(9), xd(10), xd(11);
+      if (payload.any()) T.tail(7) = plant.params().theta().transpose();
     }
 
     // Summary: saturation over the whole flight, tracking errors in the window.
@@ -252,10 +278,10 @@ SimulationResult simulate(const Trajectory& traj, const SimulationOptions& opt) 
     sum.Fz_max = std::max(sum.Fz_max, logged.Fz);
     sum.tau_abs_max = sum.tau_abs_max.cwiseMax(logged.tau.cwiseAbs());
     if (t >= opt.summary_from - 1e-12) {
-      const Vec3 e_p = x.p - d.col(0).head<3>();
+      const Vec3 e_p = xr.p - d.col(0).head<3>();
       // eta_d of eqs. (26)-(27): the consistent command law at zero error with m = 1.
       const Eigen::Vector2d pt_d = attitude_command(Vec3(d(kX, 2), d(kY, 2), d(kZ, 2) + opt.g), d(kPsi, 0));
-      Vec3 e_eta = x.eta - Vec3(pt_d(0), pt_d(1), d(kPsi, 0));
+      Vec3 e_eta = xr.eta - Vec3(pt_d(0), pt_d(1), d(kPsi, 0));
       e_eta(2) = std::remainder(e_eta(2), 2.0 * M_PI);
       st.sq_p += e_p.cwiseAbs2();
       st.sq_norm += e_p.squaredNorm();
@@ -274,7 +300,7 @@ SimulationResult simulate(const Trajectory& traj, const SimulationOptions& opt) 
       } else {
         plant.step(x, out.command, dt);
       }
-      if (const std::string why = check_state(x, opt.safety); !why.empty())
+      if (const std::string why = check_state(payload.at_reference(x), opt.safety); !why.empty())
         throw SimulationDiverged(t + static_cast<double>(s + 1) * dt, why);
     }
   }
