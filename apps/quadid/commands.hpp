@@ -18,5 +18,6 @@ void register_batch(CLI::App& app);
 void register_montecarlo(CLI::App& app);
 void register_export(CLI::App& app);
 void register_model(CLI::App& app);
+void register_follow(CLI::App& app);
 
 }  // namespace quadid::cli

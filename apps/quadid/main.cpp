@@ -110,6 +110,7 @@ int main(int argc, char** argv) {
       {"import", quadid::cli::register_import},       {"log-info", quadid::cli::register_log_info},
       {"batch", quadid::cli::register_batch},         {"montecarlo", quadid::cli::register_montecarlo},
       {"export", quadid::cli::register_export},       {"model", quadid::cli::register_model},
+      {"follow", quadid::cli::register_follow},
   };
   const std::string_view first = argc > 1 ? std::string_view(argv[1]) : std::string_view();
   bool one = false;

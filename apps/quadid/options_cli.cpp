@@ -71,7 +71,7 @@ void add_one(CLI::App* sub, const std::shared_ptr<GivenOptions>& g, const Option
     const std::string& def = d.default_text.empty() ? d.default_value : d.default_text;
     if (!d.required) o->default_str(def.empty() ? "none" : def);
   }
-  if (listing != Listing::Shown) o->group("");
+  if (listing != Listing::Shown || d.hidden) o->group("");
   // A positional input may also be given as --NAME: either satisfies it
   // (checked once the command line is read, below).
   else if (d.required && !d.positional) o->required();

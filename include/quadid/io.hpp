@@ -8,6 +8,7 @@
 #include "quadid/signal.hpp"
 
 #include <filesystem>
+#include <istream>
 #include <map>
 #include <memory>
 #include <nlohmann/json.hpp>
@@ -84,6 +85,30 @@ FlightLog read_flight_log(const std::filesystem::path& path, const CsvReadOption
 /// The header line's column names of a CSV flight log (comments skipped), as
 /// read_flight_log splits them; empty for a file without one.
 std::vector<std::string> read_csv_header(const std::filesystem::path& path);
+/// A flight-log CSV one line at a time, as it arrives (quadid follow -: a
+/// live telemetry bridge writing rows): '#' comments skipped, the header
+/// line's delimiter and --map as read_flight_log, then each row's `required`
+/// columns (their order in opt.required), with --map's negations applied.
+/// InputError naming `source`, the line and the column on a missing column or
+/// a field that is not a finite number.
+class CsvRowReader {
+ public:
+  CsvRowReader(std::istream& in, std::string source, const CsvReadOptions& opt = {});
+  /// The next row's values; false at the end of the input.
+  bool next(std::vector<double>& values);
+  long long line() const { return line_; }
+
+ private:
+  std::istream& in_;
+  std::string source_, text_;
+  char delim_ = ',';
+  long long line_ = 0;
+  std::vector<int> index_;  // the required columns' indices in the file
+  std::vector<double> sign_;
+  std::vector<std::string> names_, fields_;
+  size_t width_ = 0;
+};
+
 /// Columns `names` of `log` read at t + delay (s; linear interpolation in t,
 /// clamped at the log's ends): the one shift of a late stream (--gyro-delay).
 void read_columns_later(FlightLog& log, const std::vector<std::string>& names, double delay);

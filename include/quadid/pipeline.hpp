@@ -22,6 +22,7 @@
 #include "quadid/identification.hpp"
 #include "quadid/logs.hpp"
 #include "quadid/montecarlo.hpp"
+#include "quadid/online.hpp"
 #include "quadid/pipeline/options.hpp"
 #include "quadid/precision.hpp"
 #include "quadid/vehicle.hpp"
@@ -152,6 +153,33 @@ IdentificationResult identify_prepared(const IdentificationInput& in);
 void add_input_json(nlohmann::ordered_json& j, const IdentificationInput& in);
 /// Text: where the wrench came from (and the rotor model), then the timing.
 std::string format_input(const IdentificationInput& in);
+
+/// `quadid follow`: identify's request (the log, the vehicle, the terms, the
+/// processing) and the online estimator's options (docs/follow.md).
+struct FollowRequest {
+  IdentifyRequest identify;
+  OnlineOptions online;
+  double every = 1.0;  // s between the estimates printed and tracked
+};
+FollowRequest follow_request(const OptionValues& v);
+/// The online options for a prepared log: the request's, with the log's
+/// processing (the moment rows' cutoff when it has its own: one causal
+/// filter for all rows), terms and reference set.
+OnlineOptions online_options(const IdentificationOptions& in, const OnlineOptions& base);
+/// {t, t_start, rows, m, Ixx, .., terms, "std_error": {..}, "determined": [..]}: null where unknown.
+nlohmann::ordered_json to_json(const OnlineEstimate& e);
+/// The result of following a log: {"changes": [{t, t_detected, row, parameters, before, after}],
+/// "segments": [{t_start, t_end, estimate}], "track": [estimates]}.
+nlohmann::ordered_json follow_json(const OnlineEstimator& est, const std::vector<OnlineEstimate>& track);
+/// Follows a log: `path`, any log identify reads (prepare_identification:
+/// vehicle files, rotor models), or "-" for flight-log CSV rows read from
+/// `in` as they arrive (the wrench columns must be there: a rotor model's
+/// lag needs the whole log's timing estimate). `on_track(est, estimate)`
+/// every `every` seconds, `on_change(est)` when a change is detected. Returns
+/// follow_json; InputError names the file (or stdin), line and column.
+nlohmann::ordered_json follow(const std::string& path, const FollowRequest& r, std::istream& in,
+                              const std::function<void(const OnlineEstimator&, const OnlineEstimate&)>& on_track,
+                              const std::function<void(const OnlineEstimator&)>& on_change);
 
 /// `quadid simulate`: the trajectory (required: table2, circle1..3, circle,
 /// or a trajectory JSON file) and the SimulationOptions.

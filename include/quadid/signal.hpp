@@ -77,6 +77,25 @@ Eigen::VectorXd lfilter_zi(const TransferFunction& tf);
 Eigen::VectorXd sosfilt(const Sos& sos, const Eigen::VectorXd& x, const Eigen::MatrixXd* zi = nullptr);
 // Steady state of every section for a unit step input, as scipy.signal.sosfilt_zi.
 Eigen::MatrixXd sosfilt_zi(const Sos& sos);
+// sosfilt one sample at a time on `channels` signals at once: the causal
+// filter of online estimation. Each channel starts in the steady state of its
+// first value (sosfilt(sos, x, sosfilt_zi(sos) * x[0]), equal bit for bit:
+// the same section step), so a constant in gives that constant out from the
+// first sample. No allocation after construction.
+class SosStream {
+ public:
+  SosStream(const Sos& sos, int channels);
+  void step(double* x);  // filters x[0..channels) in place: one sample of each channel
+  void reset() { started_ = false; }  // the next step starts in steady state again
+  int channels() const { return channels_; }
+
+ private:
+  Sos sos_;
+  Eigen::MatrixXd zi_;
+  std::vector<double> z_;  // [channel][section][2]
+  int channels_;
+  bool started_ = false;
+};
 
 // Zero-phase forward-backward filtering. Both pad the signal at each end by odd
 // reflection (2 x[0] - x[padlen..1], 2 x[n-1] - x[n-2..n-1-padlen]) and start
@@ -193,6 +212,16 @@ HeldSamples interpolate_held_samples(double* x, Eigen::Index n);
 // from there on. Harmless on an angle already continuous (steps below pi, as
 // any yaw sampled faster than half a turn per sample). In place on a[0..n).
 void unwrap(double* a, Eigen::Index n);
+// unwrap one sample at a time (the online processing): step(a[k]) for k = 0, 1, ...
+// returns what unwrap leaves in a[k].
+class Unwrapper {
+ public:
+  double step(double raw);
+
+ private:
+  double offset_ = 0.0, prev_ = 0.0;
+  bool started_ = false;
+};
 
 // Eq. (33) at sample k of n samples: (x[k+1] - x[k-1]) / (2T) in the interior;
 // at the two ends the second-order one-sided (-3 x[0] + 4 x[1] - x[2]) / (2T)

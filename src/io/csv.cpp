@@ -13,6 +13,7 @@
 #include "quadid/core/parallel.hpp"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <algorithm>
 #include <array>
@@ -27,6 +28,8 @@
 #include <sys/mman.h>
 #include <sys/stat.h>
 #include <unistd.h>
+#include <istream>
+#include <string>
 #include <unordered_map>
 
 namespace quadid {
@@ -824,6 +827,65 @@ void write_flight_log(const FlightLog& log, const std::filesystem::path& path) {
     fs::remove(tmp, ec);
     throw InputError(fmt::format("{}: cannot replace file: {}", path.string(), ec.message()));
   }
+}
+
+CsvRowReader::CsvRowReader(std::istream& in, std::string source, const CsvReadOptions& opt)
+    : in_(in), source_(std::move(source)), names_(opt.required) {
+  while (std::getline(in_, text_)) {
+    ++line_;
+    if (!text_.empty() && text_.back() == '\r') text_.pop_back();
+    if (text_.empty() || text_[0] == '#') continue;
+    delim_ = header_delimiter(text_);
+    const std::vector<std::string> raw = split_header(text_, delim_);
+    ColumnMapping m;
+    try {
+      m = map_columns(raw, opt.map, true, "the input");
+    } catch (const InputError& e) {
+      throw InputError(fmt::format("{}:{}: {}", source_, line_, e.what()));
+    }
+    width_ = m.header.size();
+    for (const auto& name : names_) {
+      const auto it = std::find(m.header.begin(), m.header.end(), name);
+      if (it == m.header.end())
+        throw InputError(fmt::format("{}:{}: the header has no column '{}' (needed: {}; header: {})", source_, line_,
+                                     name, fmt::join(names_, " "), fmt::join(raw, " ")));
+      const int i = static_cast<int>(it - m.header.begin());
+      index_.push_back(i);
+      sign_.push_back(std::find(m.negated.begin(), m.negated.end(), i) != m.negated.end() ? -1.0 : 1.0);
+    }
+    return;
+  }
+  throw InputError(fmt::format("{}: no header line (expected the flight-log columns: {})", source_,
+                               fmt::join(names_, " ")));
+}
+
+bool CsvRowReader::next(std::vector<double>& values) {
+  while (std::getline(in_, text_)) {
+    ++line_;
+    if (!text_.empty() && text_.back() == '\r') text_.pop_back();
+    if (text_.empty() || text_[0] == '#') continue;
+    fields_.clear();
+    size_t start = 0;
+    while (true) {  // split in place: fields_ reuses its strings' storage
+      const size_t end = text_.find(delim_, start);
+      fields_.emplace_back(text_, start, end == std::string::npos ? std::string::npos : end - start);
+      if (end == std::string::npos) break;
+      start = end + 1;
+    }
+    if (fields_.size() != width_)
+      throw InputError(fmt::format("{}:{}: {} fields, the header has {}", source_, line_, fields_.size(), width_));
+    values.resize(index_.size());
+    for (size_t j = 0; j < index_.size(); ++j) {
+      const std::string& f = fields_[static_cast<size_t>(index_[j])];
+      double v = 0.0;
+      if (!parse_finite_double(f, v))
+        throw InputError(fmt::format("{}:{}:{}: '{}' in column {} is not a finite number", source_, line_,
+                                     index_[j] + 1, f, names_[j]));
+      values[j] = sign_[j] * v;
+    }
+    return true;
+  }
+  return false;
 }
 
 }  // namespace quadid

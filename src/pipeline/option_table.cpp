@@ -11,6 +11,7 @@
 #include "quadid/identification.hpp"
 #include "quadid/logs.hpp"
 #include "quadid/montecarlo.hpp"
+#include "quadid/online.hpp"
 #include "quadid/simulation.hpp"
 #include "quadid/vehicle.hpp"
 
@@ -318,6 +319,51 @@ Defs identify_options() {
              quiet_flag(),
          } +
          force_row_group();
+}
+
+}  // namespace
+
+const std::vector<std::string> kFollowUnused = {
+    "window", "error-window", "sigma", "gd-gain", "gd-rate", "gd-discretization", "gd-init", "cutoffs",
+    "cutoff-force", "moment-highpass", "term-signs", "jackknife-blocks", "evolution-interval", "wrench-offset",
+    "allow-rank-deficient", "lambda", "derivative-filter", "taps", "keep-edges", "force-from", "accel-bias-z",
+    "imu-position"};
+
+namespace {
+
+// quadid follow: identify's options of the log, the vehicle, the terms and the
+// processing (the batch estimators' are accepted and unused), then its own.
+Defs follow_options() {
+  const OnlineOptions o;
+  Defs d;
+  for (OptionDef x : identify_options()) {
+    if (x.name == "evolution" || x.name == "model" || x.name == "verbose" || x.name == "out" || x.name == "json" ||
+        x.name == "quiet")
+      continue;
+    if (std::find(kFollowUnused.begin(), kFollowUnused.end(), x.name) != kFollowUnused.end()) x.hidden = true;
+    if (x.name == "log")
+      x.help = "flight log as identify reads it (CSV, PX4 ULog, Crazyflie uSD, ArduPilot .bin), or - for flight-log "
+               "CSV rows on stdin as they arrive (a live telemetry bridge; header line first)";
+    d.push_back(std::move(x));
+  }
+  return d + Defs{
+      B("every", K::Number, "seconds between the estimates printed (and written to --track)").def(1.0).unit("s").above(0).cli(),
+      B("track", K::String, "write the tracking estimate every --every seconds as CSV: t, then each parameter and its "
+                            "std error").text("none").cli(),
+      B("memory", K::Number, "time constant of the tracking estimate's exponential forgetting (0 = forget nothing)")
+          .def(o.memory).unit("s").at_least(0),
+      B("warmup", K::Number, "no change reported in the first seconds (once the filter settled) and after each change")
+          .def(o.warmup).unit("s").at_least(0),
+      B("block", K::Number, "length of the change test's blocks (mean residual per row)").def(o.block).unit("s").above(0),
+      B("cusum-drift", K::Number, "the change test's drift, in block standard deviations (half the shift it is built for)")
+          .def(o.cusum_drift).at_least(0),
+      B("cusum-threshold", K::Number, "the change test's threshold (larger: fewer false alarms, later detection)")
+          .def(o.cusum_threshold).above(0),
+      B("no-changes", K::Flag, "no change detection: one segment, the tracking estimate only follows"),
+      out_file("write the result JSON (changes, segments, track)"),
+      json_flag(),
+      quiet_flag(),
+  };
 }
 
 Defs simulate_options() {
@@ -707,7 +753,8 @@ const OptionDef* OptionTable::alias_of(std::string_view name) const {
 const std::vector<std::string>& option_commands() {
   static const std::vector<std::string> c = {"design",   "check-trajectory", "simulate", "identify",
                                              "validate", "reproduce",        "import",   "log-info",
-                                             "batch",    "montecarlo",       "export",   "model"};
+                                             "batch",    "montecarlo",       "export",   "model",
+                                             "follow"};
   return c;
 }
 
@@ -726,6 +773,7 @@ const OptionTable& option_table(std::string_view command) {
     m.emplace("log-info", make("log-info", log_info_options()));
     m.emplace("export", make("export", export_options()));
     m.emplace("model", make("model", model_options()));
+    m.emplace("follow", make("follow", follow_options()));
     return m;
   }();
   const auto it = tables.find(command);

@@ -6,6 +6,8 @@
 // that is 144 MB + 10 MB beside the log.
 #include "quadid/regression.hpp"
 
+#include "body_signals.hpp"
+
 #include "quadid/core/parallel.hpp"
 
 #include <fmt/format.h>
@@ -255,18 +257,16 @@ void body_signals(const ProcessingOptions& opt, RegressionSignals& out) {
     out.world_axes.resize(n, 4);
   }
   for (Eigen::Index k = 0; k < n; ++k) {
-    const double phi = X(k, 8), theta = X(k, 9);
-    const Vec3 eta(phi, theta, X(k, 10));
+    const Vec3 eta(X(k, 8), X(k, 9), X(k, 10));
     const Vec3 pdot(X(k, 5), X(k, 6), X(k, 7));
-    const Mat3 R = rotation<double>(eta);
-    const Vec3 v = R.transpose() * pdot;
     const double p = X(k, 1), q = X(k, 2), r = X(k, 3);
-    X(k, 0) = v(2);
+    const detail::BodySample s = detail::body_sample(eta, pdot, p, q, g);
+    X(k, 0) = s.v(2);
     if (opt.keep_body_velocity) {
-      out.uv.row(k) = v.head<2>().transpose();
-      out.world_axes.row(k) << R(0, 0), R(1, 0), R(0, 1), R(1, 1);
+      out.uv.row(k) = s.v.head<2>().transpose();
+      out.world_axes.row(k) << s.R(0, 0), s.R(1, 0), s.R(0, 1), s.R(1, 1);
     }
-    X(k, 4) = p * v(1) - q * v(0) + g * std::cos(theta) * std::cos(phi);  // eq. (7): p v - q u + g_bz
+    X(k, 4) = s.c;
     X(k, 5) = p * q;
     X(k, 6) = p * r;
     X(k, 7) = q * r;

@@ -68,16 +68,18 @@ void df2t(const Normalized& f, double* z, double* p, std::ptrdiff_t count, std::
 
 // One second-order section [b0 b1 b2 1 a1 a2] in direct form II transposed, in
 // place, with scipy's sosfilt operation order; z[0..1] is the state.
+// One sample of one section [b0 b1 b2 1 a1 a2] (direct form II transposed,
+// scipy's operation order): the step behind section_pass and SosStream.
+inline double section_step(const double* c, double& z0, double& z1, double x) {
+  const double y = c[0] * x + z0;
+  z0 = c[1] * x - c[4] * y + z1;
+  z1 = c[2] * x - c[5] * y;
+  return y;
+}
+
 void section_pass(const double* c, double* z, double* p, std::ptrdiff_t count, std::ptrdiff_t step) {
-  const double b0 = c[0], b1 = c[1], b2 = c[2], a1 = c[4], a2 = c[5];
   double z0 = z[0], z1 = z[1];
-  for (std::ptrdiff_t i = 0; i < count; ++i, p += step) {
-    const double x = *p;
-    const double y = b0 * x + z0;
-    z0 = b1 * x - a1 * y + z1;
-    z1 = b2 * x - a2 * y;
-    *p = y;
-  }
+  for (std::ptrdiff_t i = 0; i < count; ++i, p += step) *p = section_step(c, z0, z1, *p);
   z[0] = z0;
   z[1] = z1;
 }
@@ -221,6 +223,33 @@ Eigen::VectorXd sosfilt(const Sos& sos, const Eigen::VectorXd& x, const Eigen::M
     section_pass(sos.row(i).data(), st, y.data(), y.size(), 1);
   }
   return y;
+}
+
+// ------------------------------------------------------------ SosStream
+
+SosStream::SosStream(const Sos& sos, int channels) : sos_(sos), channels_(channels) {
+  check_sos(sos, "SosStream");
+  if (channels < 1) throw std::invalid_argument(fmt::format("SosStream: channels={} must be >= 1", channels));
+  zi_ = sos_steady_state(sos);
+  z_.assign(static_cast<std::size_t>(sos.rows() * 2 * channels), 0.0);
+}
+
+void SosStream::step(double* x) {
+  const Eigen::Index sections = sos_.rows();
+  if (!started_) {  // steady state for each channel's first value (sosfilt_zi x[0])
+    for (int j = 0; j < channels_; ++j)
+      for (Eigen::Index i = 0; i < sections; ++i) {
+        double* z = &z_[static_cast<std::size_t>((j * sections + i) * 2)];
+        z[0] = zi_(i, 0) * x[j];
+        z[1] = zi_(i, 1) * x[j];
+      }
+    started_ = true;
+  }
+  for (int j = 0; j < channels_; ++j)
+    for (Eigen::Index i = 0; i < sections; ++i) {
+      double* z = &z_[static_cast<std::size_t>((j * sections + i) * 2)];
+      x[j] = section_step(sos_.row(i).data(), z[0], z[1], x[j]);
+    }
 }
 
 // ------------------------------------------------------------ ZeroPhaseFilter

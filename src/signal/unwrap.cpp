@@ -7,18 +7,23 @@
 
 namespace quadid::signal {
 
-void unwrap(double* a, Eigen::Index n) {
+double Unwrapper::step(double raw) {
   const double two_pi = 2.0 * std::numbers::pi;
-  double offset = 0.0;
-  double prev = n > 0 ? a[0] : 0.0;
-  for (Eigen::Index k = 1; k < n; ++k) {
-    const double raw = a[k];
-    const double d = raw - prev;  // the step as logged; more than half a turn is a wrap
-    if (d > std::numbers::pi) offset -= two_pi * std::round(d / two_pi);
-    else if (d < -std::numbers::pi) offset += two_pi * std::round(-d / two_pi);
-    prev = raw;
-    a[k] = raw + offset;
+  if (!started_) {
+    started_ = true;
+    prev_ = raw;
+    return raw;
   }
+  const double d = raw - prev_;  // the step as logged; more than half a turn is a wrap
+  if (d > std::numbers::pi) offset_ -= two_pi * std::round(d / two_pi);
+  else if (d < -std::numbers::pi) offset_ += two_pi * std::round(-d / two_pi);
+  prev_ = raw;
+  return raw + offset_;
+}
+
+void unwrap(double* a, Eigen::Index n) {
+  Unwrapper u;
+  for (Eigen::Index k = 0; k < n; ++k) a[k] = u.step(a[k]);
 }
 
 }  // namespace quadid::signal

@@ -55,6 +55,9 @@ struct OptionDef {
   bool positional = false;            // also given without its flag (an input: identify LOG)
   bool required = false;
   OptionScope scope = OptionScope::Both;
+  /// Read by the command's request reader but not its own (identify's batch options in follow): not in
+  /// --help, and refused when given (follow_request says which).
+  bool hidden = false;
 
   bool has_range() const { return min > -std::numeric_limits<double>::infinity() || max < std::numeric_limits<double>::infinity(); }
   /// "[0, 1]", "> 0", "1-8" style text of the range (empty: none).
@@ -76,6 +79,8 @@ struct OptionTable {
 /// The table of a command ("identify", "simulate", "design",
 /// "check-trajectory", "validate", "batch", "montecarlo", "reproduce",
 /// "import", "log-info", "export"); std::invalid_argument for another.
+/// identify's options that follow reads (through identify_request) but does not use: hidden, refused when given.
+extern const std::vector<std::string> kFollowUnused;
 const OptionTable& option_table(std::string_view command);
 /// Every command with a table, in the order of `quadid --help`.
 const std::vector<std::string>& option_commands();
