@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include <random>
+#include <sstream>
 
 using namespace quadid;
 
@@ -225,6 +226,89 @@ TEST(OnlineEstimator, ForgettingTracksASlowDrift) {
   EXPECT_NEAR(f.track.back().second.params.m, m_end, 0.02 * m_end);  // tracking: near the end's mass
   // The whole-flight estimate, which forgets nothing, lags it.
   EXPECT_LT(f.segments.back().estimate.params.m, m_end - 0.05);
+}
+
+}  // namespace
+
+// --- The command ---------------------------------------------------------------------
+
+#include "cli_fixture.hpp"
+#include "shared_data.hpp"
+
+#include <nlohmann/json.hpp>
+
+namespace {
+
+class CliFollow : public quadid::testing::CliTest {};
+
+TEST_F(CliFollow, StdinGivesTheFilesResult) {
+  ASSERT_EQ(run("simulate --trajectory table2 --duration 30 --payload-change 15:0.1 -o " + path("f.csv")).rc, 0);
+  const auto file = run("follow " + path("f.csv") + " --json");
+  ASSERT_EQ(file.rc, 0) << file.err;
+  const auto piped = run("follow - --json < " + path("f.csv"));
+  ASSERT_EQ(piped.rc, 0) << piped.err;
+  nlohmann::ordered_json a = nlohmann::ordered_json::parse(file.out), b = nlohmann::ordered_json::parse(piped.out);
+  a.erase("log");
+  a.erase("wrench_source");
+  EXPECT_EQ(a, b);
+  ASSERT_EQ(a["changes"].size(), 1u);
+  EXPECT_NEAR(a["changes"][0]["t"].get<double>(), 15.0, 0.5);
+  // The text form prints one line per --every as the rows arrive, then the segments.
+  const auto lines = run("follow - --every 5 < " + path("f.csv"));
+  ASSERT_EQ(lines.rc, 0) << lines.err;
+  EXPECT_NE(lines.out.find("change at t 15"), std::string::npos) << lines.out;
+  EXPECT_NE(lines.out.find("segments:"), std::string::npos) << lines.out;
+}
+
+TEST_F(CliFollow, TrackAndResultFilesAreWritten) {
+  ASSERT_EQ(run("simulate --trajectory table2 --duration 20 -o " + path("f.csv")).rc, 0);
+  const auto r = run("follow " + path("f.csv") + " --every 2 --track " + path("t.csv") + " -o " + path("r.json") + " -q");
+  ASSERT_EQ(r.rc, 0) << r.err;
+  // Header t,m,m_se,Ixx,...; one row per 2 s; the standard errors empty until the scales are known
+  // (warm-up 3 s + 6 blocks), then all there.
+  std::istringstream track(read_file(path("t.csv")));
+  std::string line;
+  std::getline(track, line);
+  EXPECT_EQ(line.rfind("t,m,m_se,Ixx,Ixx_se,", 0), 0u) << line;
+  int rows = 0;
+  std::string last;
+  while (std::getline(track, line)) {
+    ++rows;
+    last = line;
+  }
+  EXPECT_GE(rows, 8);  // every 2 s of ~19 s of rows
+  EXPECT_EQ(last.find(",,"), std::string::npos) << last;
+  const auto j = nlohmann::ordered_json::parse(read_file(path("r.json")));
+  EXPECT_EQ(j["segments"].size(), 1u);
+}
+
+TEST_F(CliFollow, BadInputNamesTheLineAndBatchOptionsAreRefused) {
+  write("bad.csv", "t,x,y,z,phi,theta,psi,p,q,r,Fz,tau_phi,tau_theta,tau_psi\n0,0,0,1,0,0,0,0,0,0,17,0,0,0\n0.002,0,0,1,0,0,0,0,x,0,17,0,0,0\n");
+  const auto r = run("follow - < " + path("bad.csv"));
+  EXPECT_NE(r.rc, 0);
+  EXPECT_NE(r.err.find("stdin:3:9"), std::string::npos) << r.err;
+  write("nohead.csv", "t,x\n0,1\n");
+  const auto h = run("follow - < " + path("nohead.csv"));
+  EXPECT_NE(h.rc, 0);
+  EXPECT_NE(h.err.find("no column 'y'"), std::string::npos) << h.err;
+  ASSERT_EQ(run("simulate --trajectory table2 --duration 5 -o " + path("f.csv")).rc, 0);
+  const auto w = run("follow " + path("f.csv") + " --window 1:2");
+  EXPECT_NE(w.rc, 0);
+  EXPECT_NE(w.err.find("--window"), std::string::npos) << w.err;
+  EXPECT_NE(w.err.find("does not apply to follow"), std::string::npos) << w.err;
+}
+
+// The shared real Crazyflie flights: none changes its mass, and none may raise an alarm.
+TEST_F(CliFollow, NoFalseAlarmOnTheRealCrazyflieFlights) {
+  const std::filesystem::path dir = std::filesystem::path(QUADID_SHARED_DATA) / "crazyflie-usd";
+  for (const char* f : {"jana00", "jana01", "jana04", "jana06"}) {
+    QUADID_REQUIRE_SHARED_FILE(dir / f);
+    const auto r = run("follow " + (dir / f).string() + " --vehicle crazyflie21 --json");
+    ASSERT_EQ(r.rc, 0) << f << ": " << r.err;
+    const auto j = nlohmann::ordered_json::parse(r.out);
+    EXPECT_EQ(j["changes"].size(), 0u) << f << ": " << j["changes"].dump();
+    EXPECT_NEAR(j["segments"][0]["estimate"]["m"].get<double>(), 0.035, 0.0035) << f;  // 10 %: the rotor model's kf
+  }
 }
 
 }  // namespace

@@ -42,6 +42,8 @@ __all__ = [
     "SimulationDiverged",
     "__version__",
     "IdentifyResult",
+    "OnlineEstimator",
+    "follow",
     "read_log",
     "import_log",
     "identify",
@@ -308,3 +310,41 @@ def model(result, format: str, *, set: str | None = None, sih_scale: float = 1.0
         format = "sdf-classic"
     return _quadid.model(result, str(format), "" if set is None else str(set), float(sih_scale), bool(mjcf_motor_lag),
                          "" if flavour in (None, "none") else str(flavour))
+
+
+class OnlineEstimator:
+    """Online estimation (`quadid follow`, docs/follow.md): feed one sample at a
+    time, read the estimate whenever you like.
+
+    Options are follow's keyword arguments (memory=10, warmup=3, block=0.5,
+    cusum_drift=3, cusum_threshold=12, no_changes=False, cutoff=4, terms=...,
+    known_mass=...). update(row) takes a dict {t, x, y, z, phi, theta, psi, p,
+    q, r, Fz, tau_phi, tau_theta, tau_psi} (SI, the flight-log columns) or 14
+    numbers in that order, and returns True when it detected a change.
+    estimate() is the current segment's (nothing forgotten), tracking() the
+    forgetting one; result() is `quadid follow --json`'s structure.
+    """
+
+    def __init__(self, **options):
+        self._e = _quadid.OnlineEstimator(_options("follow", options))
+
+    def update(self, row) -> bool:
+        return self._e.update(row)
+
+    def estimate(self) -> dict:
+        return self._e.estimate()
+
+    def tracking(self) -> dict:
+        return self._e.tracking()
+
+    def result(self) -> dict:
+        return self._e.result()
+
+    @property
+    def changed(self) -> bool:
+        return self._e.changed
+
+
+def follow(log, **options) -> dict:
+    """`quadid follow LOG --json` on a path: {"changes", "segments", "track", ...}."""
+    return _quadid.follow(_path(log), _options("follow", options))

@@ -11,15 +11,18 @@
 #include "quadid/io.hpp"
 #include "quadid/pipeline.hpp"
 #include "quadid/models.hpp"
+#include "quadid/online.hpp"
 #include "quadid/precision.hpp"
 #include "quadid/simulation.hpp"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
 #include <algorithm>
+#include <sstream>
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -354,6 +357,57 @@ py::list option_specs(const std::string& command) {
 
 }  // namespace
 
+// --- Online estimation (quadid follow) --------------------------------------------
+
+/// quadid.OnlineEstimator: the library's OnlineEstimator with follow's options.
+class PyOnline {
+ public:
+  explicit PyOnline(const py::dict& options) : est_(online_from(options)) {}
+  /// One sample: a dict {t, x, y, z, phi, theta, psi, p, q, r, Fz, tau_phi,
+  /// tau_theta, tau_psi[, Omega_r]} or 14 (15) numbers in that order.
+  bool update(const py::object& row) {
+    quadid::StreamSample s;
+    double v[15] = {};
+    const auto& names = quadid::standard_log_columns();
+    if (py::isinstance<py::dict>(row)) {
+      const py::dict d = row.cast<py::dict>();
+      for (size_t i = 0; i < names.size(); ++i) {
+        if (!d.contains(names[i].c_str()))
+          throw py::value_error(fmt::format("OnlineEstimator.update: the row has no '{}' (needs {})", names[i],
+                                            fmt::join(names, " ")));
+        v[i] = d[names[i].c_str()].cast<double>();
+      }
+      if (d.contains(quadid::kRotorMomentumColumn)) v[14] = d[quadid::kRotorMomentumColumn].cast<double>();
+    } else {
+      const std::vector<double> x = row.cast<std::vector<double>>();
+      if (x.size() != 14 && x.size() != 15)
+        throw py::value_error(fmt::format("OnlineEstimator.update: {} numbers; expected 14 ({}) or 15 (then Omega_r)",
+                                          x.size(), fmt::join(names, " ")));
+      std::copy(x.begin(), x.end(), v);
+    }
+    s.t = v[0];
+    s.position = quadid::Vec3(v[1], v[2], v[3]);
+    s.attitude = quadid::Vec3(v[4], v[5], v[6]);
+    s.rates = quadid::Vec3(v[7], v[8], v[9]);
+    s.wrench = quadid::Vec4(v[10], v[11], v[12], v[13]);
+    s.omega_r = v[14];
+    if (est_.update(s)) track_.push_back(est_.tracking());
+    return est_.changed();
+  }
+  py::object estimate() const { return to_py(quadid::to_json(est_.estimate())); }
+  py::object tracking() const { return to_py(quadid::to_json(est_.tracking())); }
+  py::object result() const { return to_py(quadid::follow_json(est_, track_)); }
+  bool changed() const { return est_.changed(); }
+
+ private:
+  static quadid::OnlineOptions online_from(const py::dict& options) {
+    const quadid::FollowRequest r = quadid::follow_request(quadid::OptionValues(options_json(options), "follow"));
+    return quadid::online_options(r.identify.options, r.online);
+  }
+  quadid::OnlineEstimator est_;
+  std::vector<quadid::OnlineEstimate> track_;  // one per closed block
+};
+
 PYBIND11_MODULE(_quadid, m) {
   m.doc() = "quadid's C++ library (use the quadid package, which wraps this module)";
   m.attr("__version__") = QUADID_VERSION;
@@ -379,6 +433,21 @@ PYBIND11_MODULE(_quadid, m) {
   m.def("check_trajectory", &check_trajectory, py::arg("trajectory"), py::arg("options"));
   m.def("validate", &validate, py::arg("log"), py::arg("options"), py::arg("warn"));
   m.def("option_specs", &option_specs, py::arg("command"));
+  py::class_<PyOnline>(m, "OnlineEstimator")
+      .def(py::init<const py::dict&>(), py::arg("options"))
+      .def("update", &PyOnline::update, py::arg("row"))
+      .def("estimate", &PyOnline::estimate)
+      .def("tracking", &PyOnline::tracking)
+      .def("result", &PyOnline::result)
+      .def_property_readonly("changed", &PyOnline::changed);
+  m.def(
+      "follow",
+      [](const std::string& path, const py::dict& options) {
+        const quadid::FollowRequest r = quadid::follow_request(quadid::OptionValues(options_json(options), "follow"));
+        std::istringstream none;
+        return to_py(quadid::follow(path, r, none, {}, {}));
+      },
+      py::arg("path"), py::arg("options"));
   m.def(
       "log_info",
       [](const std::string& path, bool allow_truncated) { return to_py(quadid::log_info_json(path, allow_truncated)); },
