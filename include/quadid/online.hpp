@@ -80,7 +80,9 @@ struct OnlineSegment {
 };
 
 struct OnlineChange {
-  double t = 0.0;           // s, when the change began (the CUSUM's last zero)
+  /// s: the change happened in [t, t + block] (the block after the firing
+  /// test's last zero); that block's rows join neither segment.
+  double t = 0.0;
   double t_detected = 0.0;  // s, when the test crossed its threshold
   std::string row;          // the row whose test fired: force, roll, pitch, yaw
   /// The parameters whose segment estimates differ by more than 3 standard

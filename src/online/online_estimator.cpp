@@ -182,19 +182,21 @@ void OnlineEstimator::segment_rows(long long first, long long last, Rows& out) c
       for (size_t i = 0; i < 4; ++i) out[i].add(block(id).rows[i], 1.0);
 }
 
-// The segment closes at the start of block `first` (after which the test
-// statistic that fired never returned to 0); the blocks from there on start
-// the new one, and the tracking estimate restarts from them.
+// The segment closes at the start of block `first`, the first after which the
+// test statistic that fired never returned to 0: the change happened during
+// that block, whose rows mix both vehicles and join neither segment. The new
+// segment starts with the block after it, and the tracking estimate restarts
+// from its rows.
 void OnlineEstimator::on_change(long long first, int row) {
   const double t_change = block(first).t_start;
   segment_rows(segment_first_, first - 1, seg_work_);
   closed_.push_back({segment_t_start_, t_change, estimate_of(seg_work_, segment_t_start_, t_change)});
   changes_.push_back({t_change, t_, kRowNames[static_cast<size_t>(row)], {}});
   for (auto& x : committed_) x.clear();
-  segment_first_ = first;
-  segment_t_start_ = t_change;
+  segment_first_ = first + 1;
+  segment_t_start_ = first < block_id_ ? block(first + 1).t_start : t_;
   for (auto& x : tracking_) x.clear();
-  for (long long id = first; id <= block_id_; ++id)
+  for (long long id = first + 1; id <= block_id_; ++id)
     for (size_t i = 0; i < 4; ++i) {
       tracking_[i].forget(std::pow(lambda_, block(id).samples));
       tracking_[i].add(block(id).rows[i], 1.0);

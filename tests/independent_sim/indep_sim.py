@@ -145,8 +145,10 @@ class Reference:
 
 # ---------------------------------------------------------------------------
 class Simulator:
-    def __init__(self, v, rng, aero, wind=0.0):
+    def __init__(self, v, rng, aero, wind=0.0, payload=None):
         self.v = v
+        # (t, dm): a point mass added at the centre of mass at t (the controller keeps m).
+        self.payload = payload
         self.rng = rng
         self.m = v["m"]
         self.I = np.array(v["I"])
@@ -200,7 +202,8 @@ class Simulator:
         h = self.I @ w + np.array([0.0, 0.0, self.J_r * Omega_r])
         # d/dt (I w + h_r) + w x (I w + h_r) = tau  (body and rotors together)
         w_dot = self.Iinv @ (tau - cross(w, h) - np.array([0.0, 0.0, self.J_r * Omega_r_dot]))
-        a = R @ F_b / self.m - np.array([0.0, 0.0, G])
+        m = self.m + (self.payload[1] if self.payload and t >= self.payload[0] else 0.0)
+        a = R @ F_b / m - np.array([0.0, 0.0, G])
         q_dot = 0.5 * quat_mul(q, np.array([0.0, *w]))
         return np.concatenate([v, a, q_dot, w_dot, Om_dot])
 
@@ -329,6 +332,7 @@ def main():
     ap.add_argument("--aero", action="store_true", help="rotor drag and blade flapping against the air-relative velocity")
     ap.add_argument("--wind", type=float, default=0.0, help="mean wind speed, m/s (with --aero), plus gusts")
     ap.add_argument("--kf-factor", type=float, default=1.0, help="scale the vehicle file's kf (a wrong thrust model)")
+    ap.add_argument("--payload", default="", help="T:DM: a point mass of DM kg joins the centre of mass at T s")
     ap.add_argument("--out", required=True, help="folder: log.csv, vehicle.toml, truth.json")
     a = ap.parse_args()
     v = VEHICLES[a.vehicle]
@@ -336,13 +340,15 @@ def main():
     os.makedirs(a.out, exist_ok=True)
     scale = {"heavy-x": 1.0, "mid-plus": 0.8, "nano-x": 0.7}[a.vehicle]
     ref = Reference(rng, a.duration, scale)
-    sim = Simulator(v, rng, a.aero, a.wind)
+    payload = tuple(float(x) for x in a.payload.split(":")) if a.payload else None
+    sim = Simulator(v, rng, a.aero, a.wind, payload)
     dt = 0.002
     states = sim.run(ref, a.duration, dt)
     write_log(os.path.join(a.out, "log.csv"), states, dt, rng)
     write_vehicle(os.path.join(a.out, "vehicle.toml"), a.vehicle, v, a.kf_factor)
     I = v["I"]
     truth = dict(m=v["m"], Ixx=I[0][0], Iyy=I[1][1], Izz=I[2][2], Ixy=I[0][1], Ixz=I[0][2], Iyz=I[1][2],
+                 payload_t=payload[0] if payload else None, payload_dm=payload[1] if payload else None,
                  kf_factor=a.kf_factor, aero=a.aero, wind=a.wind, seed=a.seed,
                  max_tilt_deg=max(math.degrees(math.acos(max(-1, min(1, quat_to_R(s[6:10])[2, 2])))) for s in states[::50]),
                  max_rpm=float(states[:, 13:17].max() * RPM_PER_RAD_S),
