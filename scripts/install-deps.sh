@@ -6,7 +6,8 @@ PKGS=(g++ cmake make libeigen3-dev libnlopt-cxx-dev libnlopt-dev libcli11-dev nl
       liburdfdom-dev libsdformat-dev  # tests read the exported URDF and SDF back with their parsers (quadid model)
       clang libclang-rt-dev
       pybind11-dev python3-dev python3-numpy python3-pytest python3-distributed
-      chromium)  # the report test renders pages in a real browser (ReportBrowser)
+      chromium  # the report test renders pages in a real browser (ReportBrowser)
+      npm)  # the build installs uPlot from npm for the reports' interactive charts (cmake/Uplot.cmake)
 missing=()
 for p in "${PKGS[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -2,6 +2,9 @@
 // `chromium` package) loads report.html, and the DOM it built holds every
 // figure and table. Skipped where Chromium is not installed.
 #include "cli_fixture.hpp"
+#include "quadid/report.hpp"
+
+#include <nlohmann/json.hpp>
 
 #include <regex>
 
@@ -50,4 +53,46 @@ TEST_F(ReportBrowser, ChromiumRendersEveryFigureAndTable) {
   EXPECT_NE(dom.find("time (s)"), std::string::npos);
   ASSERT_TRUE(std::filesystem::exists(png));
   EXPECT_GT(std::filesystem::file_size(png), 100000u);  // a blank 1600x4000 page compresses to a few kB
+}
+
+// identify --report: one page, every chart drawn by uPlot without a console error, and the
+// recommended set's numbers those of the result JSON (issue 42).
+TEST_F(ReportBrowser, IdentifyReportRendersItsChartsAndShowsTheResultsNumbers) {
+  const char* chrome = chromium();
+  if (!chrome) GTEST_SKIP() << "chromium is not installed (apt-get install chromium)";
+  ASSERT_EQ(run("simulate --trajectory table2 --duration 30 --seed 2 -o " + path("f.csv")).rc, 0);
+  const CliRun r = run("identify " + path("f.csv") + " --window 2:28 -q -o " + path("r.json") + " --report " + path("rep"));
+  ASSERT_EQ(r.rc, 0) << r.err;
+  const std::string page = quadid::read_file(path("rep/report.html"));
+  EXPECT_EQ(page.find("src=\"http"), std::string::npos);  // one file: nothing fetched
+  const std::string flags = std::string("--headless --no-sandbox --disable-gpu --disable-quic --no-first-run "
+                                        "--disable-background-networking --disable-component-update --disable-sync "
+                                        "--enable-logging=stderr --v=0 --user-data-dir=") + path("profile") +
+                            " --window-size=1400,6000 ";
+  const std::string url = "file://" + path("rep/report.html");
+  std::system((std::string(chrome) + " " + flags + "--dump-dom " + url + " > " + path("dom.html") + " 2> " +
+               path("console.txt")).c_str());
+  const std::string dom = quadid::read_file(path("dom.html")), console = quadid::read_file(path("console.txt"));
+  EXPECT_EQ(console.find("Uncaught"), std::string::npos) << console;
+  // 4 axes x (time series + spectrum), each a uPlot chart with a canvas (static SVG in a build without uPlot).
+  if (quadid::report::have_uplot()) {
+    EXPECT_EQ(count(dom, "class=\"uplot"), 8u);
+    EXPECT_EQ(count(dom, "<canvas"), 8u);
+  } else {
+    EXPECT_EQ(count(dom, "<svg"), 8u);
+  }
+  // The recommended set's values, as the page holds them (data-value, full precision), equal the JSON's.
+  const auto j = nlohmann::ordered_json::parse(quadid::read_file(path("r.json")));
+  const std::string set = j["recommended"]["set"].get<std::string>();
+  const std::regex cell("<tr><th>([A-Za-z]+)</th><td data-value=\"([^\"]+)\"");
+  int matched = 0;
+  for (auto it = std::sregex_iterator(page.begin(), page.end(), cell); it != std::sregex_iterator(); ++it) {
+    const std::string name = (*it)[1];
+    EXPECT_EQ(std::stod((*it)[2]), j["estimates"][set][name].get<double>()) << name;
+    ++matched;
+  }
+  EXPECT_EQ(matched, 7);
+  // Every chart's axes carry a unit.
+  for (const char* label : {"time (s)", "frequency (Hz)", "Fz (N)", "tau_phi (N m)", "PSD ((N m)^2/Hz)"})
+    EXPECT_NE(page.find(label), std::string::npos) << label;
 }

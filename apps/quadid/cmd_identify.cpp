@@ -10,6 +10,7 @@
 #include <fmt/format.h>
 
 #include <cstdio>
+#include <filesystem>
 #include <map>
 #include <memory>
 #include <optional>
@@ -22,7 +23,7 @@ namespace {
 
 /// What the command line adds to the library's request: the input, the outputs, -q.
 struct IdentifyArgs {
-  std::string log, out, evolution, gd_discretization, model_file;
+  std::string log, out, evolution, gd_discretization, model_file, report;
   std::optional<ModelFormat> model_format;  // --model FORMAT:FILE
   bool json = false, quiet = false, verbose = false;
 };
@@ -32,6 +33,7 @@ void run(const OptionValues& v) {
   a.log = *v.string("log");
   a.out = v.string("out").value_or("");
   a.evolution = v.string("evolution").value_or("");
+  a.report = v.string("report").value_or("");
   if (const auto spec = v.string("model")) {
     const auto colon = spec->find(':');
     if (colon == std::string::npos || colon + 1 >= spec->size())
@@ -53,6 +55,7 @@ void run(const OptionValues& v) {
   if (!a.out.empty()) check_output_file(a.out, "-o/--out");
   if (!a.evolution.empty()) check_output_file(a.evolution, "--evolution");
   if (a.model_format) check_output_file(a.model_file, "--model");
+  if (!a.report.empty()) check_output_directory(a.report, "--report");
   // The wrench from a rotor model (--vehicle, or a ULog's CA_ROTOR* parameters), the
   // motor time constant and the time offsets estimated and applied (timing.hpp).
   const IdentificationInput in = prepare_identification(a.log, req);
@@ -73,6 +76,10 @@ void run(const OptionValues& v) {
   // Files first (atomically), so that a failed write leaves no partial report.
   if (!a.evolution.empty()) write_file_atomic(a.evolution, format_evolution_csv(res.evolution));
   if (!a.out.empty()) write_file_atomic(a.out, j.dump(2) + "\n");
+  if (!a.report.empty()) {
+    std::filesystem::create_directories(a.report);
+    write_file_atomic(std::filesystem::path(a.report) / "report.html", identification_report(in, res, j, a.log));
+  }
   if (a.model_format)
     write_file_atomic(a.model_file,
                       model_text(identified_model_from_json(j, a.out.empty() ? a.log : a.out), *a.model_format));

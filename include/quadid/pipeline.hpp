@@ -154,6 +154,15 @@ void add_input_json(nlohmann::ordered_json& j, const IdentificationInput& in);
 /// Text: where the wrench came from (and the rotor model), then the timing.
 std::string format_input(const IdentificationInput& in);
 
+/// identify --report: one self-contained HTML page (docs/report.md): the
+/// recommended set with intervals, a sentence per parameter and the 3x3
+/// tensor; the physical checks; the warnings; per axis measured vs predicted
+/// over time and their spectra (interactive, uPlot); the parameter
+/// correlations; the log. `j` is the result JSON (to_json(res) +
+/// add_input_json), whose numbers the page shows.
+std::string identification_report(const IdentificationInput& in, const IdentificationResult& res,
+                                  const nlohmann::ordered_json& j, const std::string& log_name);
+
 /// `quadid follow`: identify's request (the log, the vehicle, the terms, the
 /// processing) and the online estimator's options (docs/follow.md).
 struct FollowRequest {

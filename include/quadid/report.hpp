@@ -3,6 +3,7 @@
 #pragma once
 
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace quadid::report {
@@ -53,6 +54,27 @@ std::string markdown_escape(const std::string& s);
 /// Escapes &, <, >, " for HTML.
 std::string html_escape(const std::string& s);
 
+/// uPlot (npm `uplot`, MIT licence), inlined at build time (cmake/Uplot.cmake):
+/// false when the build had no npm; charts then fall back to static SVG.
+bool have_uplot();
+std::string_view uplot_version();
+std::string_view uplot_license();
+std::string_view uplot_js();
+std::string_view uplot_css();
+
+/// An interactive time series or spectrum: uPlot in the page (drag to zoom,
+/// double-click to reset, values on hover), one shared x for every series.
+/// Axis labels carry units. Log axes need positive values (others are dropped).
+struct Chart {
+  std::string title;
+  std::string xlabel, ylabel;
+  std::vector<double> x;
+  std::vector<Series> series;  // each y the size of x; label, colour and dash are used
+  bool log_x = false, log_y = false;
+  int height = 280;       // px; the width follows the page
+  int max_points = 4000;  // longer data are decimated (every k-th point)
+};
+
 /// A self-contained HTML document built section by section.
 class HtmlDocument {
  public:
@@ -63,12 +85,15 @@ class HtmlDocument {
   void table(const Table& t);
   void figure(const Plot& p, const std::string& caption = {});
   void figure_row(const std::vector<Plot>& plots, const std::string& caption = {});
+  /// An interactive chart (the library inlined once per page), or its SVG plot without uPlot.
+  void chart(const Chart& c, const std::string& caption = {});
   std::string str() const;
 
  private:
   std::string title_;
   std::string body_;
   int figure_count_ = 0;
+  int chart_count_ = 0;
 };
 
 /// Formats a number for a table: fixed with `digits` decimals; "n/a" when not finite.

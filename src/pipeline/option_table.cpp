@@ -311,6 +311,11 @@ Defs identify_options() {
                "also write the identified vehicle for a simulator, FORMAT:FILE (formats of quadid model: "
                "vehicle, mjcf, rotorpy, urdf; docs/models.md)")
                  .text("none").cli(),
+             B("report", K::String,
+               "write DIR/report.html: one self-contained page (works offline) with the recommended set, its "
+               "intervals and conclusions, measured vs predicted per axis and their spectra (interactive), the "
+               "parameter correlations, the log and every warning (docs/report.md)")
+                 .text("none").cli(),
              B("verbose", K::Flag,
                "print every set (LS, GD, FMLS, FMGD, PC, FMPC), the wrench and timing, the intervals' method, "
                "physical consistency and Tables 5-6; without it a short summary of the recommended set")
@@ -338,6 +343,7 @@ Defs follow_options() {
   Defs d;
   for (OptionDef x : identify_options()) {
     if (x.name == "evolution" || x.name == "model" || x.name == "verbose" || x.name == "out" || x.name == "json" ||
+        x.name == "report" ||
         x.name == "quiet")
       continue;
     if (std::find(kFollowUnused.begin(), kFollowUnused.end(), x.name) != kFollowUnused.end()) x.hidden = true;

@@ -25,6 +25,15 @@ void HtmlDocument::figure_row(const std::vector<Plot>& plots, const std::string&
   body_ += "</figure>\n";
 }
 
+namespace {
+// uPlot's styles and script, once in the page's head when it has charts.
+std::string chart_head(bool charts) {
+  if (!charts || !have_uplot()) return {};
+  return fmt::format("<!-- uPlot {} (MIT licence, https://github.com/leeoniya/uPlot):\n{}\n-->\n<style>{}</style>\n<script>{}</script>\n",
+                     uplot_version(), uplot_license(), uplot_css(), uplot_js());
+}
+}  // namespace
+
 std::string HtmlDocument::str() const {
   return fmt::format(R"(<!DOCTYPE html>
 <html lang="en">
@@ -32,7 +41,7 @@ std::string HtmlDocument::str() const {
 <meta charset="utf-8">
 <meta name="viewport" content="width=device-width, initial-scale=1">
 <title>{0}</title>
-<style>
+{2}<style>
 body {{ font-family: Helvetica, Arial, sans-serif; max-width: 1600px; margin: 2em auto; padding: 0 1.5em; color: #222; line-height: 1.45; }}
 h1 {{ font-size: 1.7em; border-bottom: 2px solid #333; padding-bottom: .2em; }}
 h2 {{ font-size: 1.35em; margin-top: 2em; border-bottom: 1px solid #bbb; }}
@@ -51,6 +60,9 @@ figure .row {{ display: flex; flex-wrap: wrap; gap: 8px; }}
 figcaption {{ font-size: .92em; color: #444; margin-top: .3em; }}
 p.note {{ font-size: .88em; color: #555; margin-top: -.3em; }}
 code, pre {{ background: #f5f5f5; padding: 0 .2em; }}
+figure.chart {{ max-width: 1400px; }}
+.warn {{ border-left: 4px solid #d35400; background: #fff6ef; padding: .3em .8em; margin: .6em 0; }}
+.good {{ color: #1e7d32; }} .poor {{ color: #b03a2e; }}
 .conclusions {{ border: 2px solid #1f4fd6; background: #f4f7ff; padding: .4em 1.2em; border-radius: 6px; max-width: 1100px; }}
 </style>
 </head>
@@ -59,7 +71,7 @@ code, pre {{ background: #f5f5f5; padding: 0 .2em; }}
 {1}</body>
 </html>
 )",
-                     html_escape(title_), body_);
+                     html_escape(title_), body_, chart_head(chart_count_ > 0));
 }
 
 }  // namespace quadid::report

@@ -1,0 +1,118 @@
+// Interactive charts (HtmlDocument::chart): uPlot inlined in the page, with the
+// data as JSON arrays; static SVG (render_svg) where the build has no uPlot.
+#include "quadid/report.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <string_view>
+
+namespace quadid::report {
+namespace detail {
+extern const bool kHaveUplot;
+extern const char kUplotVersion[];
+std::string_view uplot_js_data();
+std::string_view uplot_css_data();
+std::string_view uplot_license_data();
+}  // namespace detail
+
+bool have_uplot() { return detail::kHaveUplot; }
+std::string_view uplot_version() { return detail::kUplotVersion; }
+std::string_view uplot_license() { return detail::uplot_license_data(); }
+std::string_view uplot_js() { return detail::uplot_js_data(); }
+std::string_view uplot_css() { return detail::uplot_css_data(); }
+
+namespace {
+
+// A JSON string literal (the labels), safe inside a <script> element.
+std::string js_string(const std::string& s) {
+  std::string o = "\"";
+  for (char c : s) {
+    if (c == '"' || c == '\\') o += '\\';
+    if (c == '<') {
+      o += "\\u003c";
+      continue;
+    }
+    if (c == '\n') {
+      o += "\\n";
+      continue;
+    }
+    o += c;
+  }
+  o += '"';
+  return o;
+}
+
+// One series' values as a JSON array; null where not finite (or, on a log
+// axis, not above `floor`: uPlot's log axis fails on a range of hundreds of decades).
+std::string js_array(const std::vector<double>& v, size_t step, bool positive, double floor = 0.0) {
+  std::string o = "[";
+  for (size_t i = 0; i < v.size(); i += step) {
+    if (i) o += ',';
+    const double x = v[i];
+    o += std::isfinite(x) && (!positive || x > floor) ? fmt::format("{:.7g}", x) : "null";
+  }
+  o += ']';
+  return o;
+}
+
+Plot as_plot(const Chart& c) {
+  Plot p;
+  p.title = c.title;
+  p.xlabel = c.xlabel;
+  p.ylabel = c.ylabel;
+  for (const auto& s : c.series) {
+    Series t = s;
+    t.x = c.x;
+    p.series.push_back(std::move(t));
+  }
+  p.width = 1200;
+  p.height = c.height;
+  return p;
+}
+
+}  // namespace
+
+void HtmlDocument::chart(const Chart& c, const std::string& caption) {
+  if (!have_uplot()) {
+    figure(as_plot(c), caption);
+    return;
+  }
+  ++figure_count_;
+  const int id = ++chart_count_;
+  const size_t step = std::max<size_t>(1, (c.x.size() + static_cast<size_t>(c.max_points) - 1) /
+                                              static_cast<size_t>(std::max(1, c.max_points)));
+  // A log y axis shows 12 decades below the largest value at most.
+  double top = 0.0;
+  for (const auto& s : c.series)
+    for (double y : s.y)
+      if (std::isfinite(y)) top = std::max(top, y);
+  const double floor = c.log_y ? top * 1e-12 : 0.0;
+  std::string data = "[";
+  data += js_array(c.x, step, c.log_x);
+  std::string series = fmt::format("[{{label:{}}}", js_string(c.xlabel));
+  for (size_t i = 0; i < c.series.size(); ++i) {
+    const Series& s = c.series[i];
+    data += ',';
+    data += js_array(s.y, step, c.log_y, floor);
+    series += fmt::format(",{{label:{},stroke:{},width:{:g}{}}}", js_string(s.label),
+                          js_string(s.color.empty() ? color_for(s.label, i) : s.color), s.width,
+                          s.dashed ? ",dash:[6,4]" : "");
+  }
+  data += "]";
+  series += "]";
+  body_ += fmt::format(
+      "<figure class=\"chart\"><div id=\"chart{0}\" class=\"chart-box\" data-title={1}></div>\n"
+      "<script>(function(){{var el=document.getElementById(\"chart{0}\");"
+      "var w=Math.max(480,Math.min(1400,el.parentNode.clientWidth||1200));"
+      "new uPlot({{title:{1},width:w,height:{2},scales:{{x:{{time:false{3}}},y:{{{4}}}}},"
+      "axes:[{{label:{5}}},{{label:{6},size:70}}],series:{7},cursor:{{drag:{{x:true,y:false}}}}}},{8},el);}})();</script>\n",
+      id, js_string(c.title), c.height, c.log_x ? ",distr:3" : "", c.log_y ? "distr:3" : "", js_string(c.xlabel),
+      js_string(c.ylabel), series, data);
+  if (!caption.empty())
+    body_ += fmt::format("<figcaption>Figure {}. {}</figcaption>\n", figure_count_, html_escape(caption));
+  body_ += "</figure>\n";
+}
+
+}  // namespace quadid::report
