@@ -105,3 +105,36 @@ TEST(Report, HtmlDocumentIsSelfContained) {
   EXPECT_EQ(h.find("<script"), std::string::npos);
   EXPECT_EQ(h.find("src=\"http"), std::string::npos);
 }
+
+// The one tick labelling of every figure (issue 42): short labels that tell the
+// ticks apart, and label x 10^e + offset gives the tick back.
+TEST(TickLabels, ShortDistinctLabelsThatReadBackToTheTicks) {
+  struct Case {
+    double first, step;
+    int n;
+  };
+  for (const Case& c : {Case{0.002688, 2e-6, 5}, Case{0.0, 20000.0, 4}, Case{0.0, 0.5, 3}, Case{-0.04, 0.02, 5},
+                        Case{1.2e-5, 2e-7, 6}, Case{-3.0, 1.0, 7}}) {
+    std::vector<double> t;
+    for (int i = 0; i < c.n; ++i) t.push_back(c.first + i * c.step);
+    const quadid::report::TickLabels l = quadid::report::tick_labels(t, c.step);
+    ASSERT_EQ(l.labels.size(), t.size());
+    // Read the shared exponent and offset back from the suffix.
+    int e = 0;
+    double offset = 0.0;
+    const auto x = l.suffix.find("10^");
+    if (x != std::string::npos) e = std::stoi(l.suffix.substr(x + 3));
+    const auto plus = l.suffix.find(" + "), minus = l.suffix.find(" - ");
+    if (plus != std::string::npos) offset = std::stod(l.suffix.substr(plus + 3));
+    if (minus != std::string::npos) offset = -std::stod(l.suffix.substr(minus + 3));
+    for (size_t i = 0; i < t.size(); ++i) {
+      EXPECT_LE(l.labels[i].size(), 6u) << l.labels[i] << " for " << t[i];
+      EXPECT_NE(l.labels[i], "-0") << "no negative zero";
+      EXPECT_NEAR(std::stod(l.labels[i]) * std::pow(10.0, e) + offset, t[i], 1e-3 * c.step) << l.labels[i] << l.suffix;
+      if (i) {
+        EXPECT_NE(l.labels[i], l.labels[i - 1]) << "ticks told apart";
+      }
+    }
+  }
+  EXPECT_EQ(quadid::report::tick_labels({0.0, 0.5, 1.0}, 0.5).suffix, "");
+}

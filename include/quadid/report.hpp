@@ -41,6 +41,17 @@ struct Plot {
   int max_points = 1500;          // per series; longer series are decimated (min/max kept)
 };
 
+/// Tick labels for evenly spaced ticks `step` apart, as matplotlib's
+/// ScalarFormatter labels them: the fewest decimals that tell the ticks apart,
+/// a shared power of ten (a multiple of 3) when the numbers are long, and an
+/// offset when the ticks differ only far down their digits; `suffix` (e.g.
+/// " x10^-3" or " + 0.00268") goes after the axis label. The one labelling of every figure.
+struct TickLabels {
+  std::vector<std::string> labels;
+  std::string suffix;
+};
+TickLabels tick_labels(const std::vector<double>& ticks, double step);
+
 /// Renders a plot as a standalone <svg> element with axes, ticks, grid, labels and a legend.
 std::string render_svg(const Plot& plot);
 

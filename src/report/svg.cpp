@@ -39,13 +39,6 @@ void widen(Range& r) {
   }
 }
 
-std::string tick_label(double v, double step) {
-  if (std::abs(v) < step * 1e-9) v = 0.0;
-  const int dec = std::max(0, -static_cast<int>(std::floor(std::log10(step) + 1e-9)));
-  if (std::abs(v) >= 1e5 || (std::abs(v) > 0 && std::abs(v) < 1e-4)) return fmt::format("{:.2g}", v);
-  return fmt::format("{:.{}f}", v, dec);
-}
-
 // Keeps the first, last, min and max of each bucket, so peaks survive decimation.
 std::vector<std::pair<double, double>> decimate(const Series& s, int max_points) {
   const size_t n = std::min(s.x.size(), s.y.size());
@@ -70,6 +63,34 @@ std::vector<std::pair<double, double>> decimate(const Series& s, int max_points)
 }
 
 }  // namespace
+
+TickLabels tick_labels(const std::vector<double>& ticks, double step) {
+  TickLabels out;
+  if (ticks.empty() || !(step > 0.0)) return out;
+  double big = 0.0;
+  for (double t : ticks) big = std::max(big, std::abs(t));
+  // An offset when the ticks differ only far down their digits (0.002688, 0.002690, ...):
+  // the labels then count from the first tick, rounded to ten steps.
+  double offset = 0.0;
+  if (big > 0.0 && step / big < 1e-3) {
+    offset = std::floor(ticks.front() / (10.0 * step)) * 10.0 * step;
+    big = 0.0;
+    for (double t : ticks) big = std::max(big, std::abs(t - offset));
+  }
+  // A shared power of ten, a multiple of 3, when the labels would be long.
+  int e = 0;
+  if (big >= 1e4 || (big > 0.0 && big < 1e-2)) e = 3 * static_cast<int>(std::floor(std::log10(big) / 3.0));
+  const double scale = std::pow(10.0, -e);
+  const int dec = std::max(0, -static_cast<int>(std::floor(std::log10(step * scale) + 1e-9)));
+  for (double t : ticks) {
+    double v = (t - offset) * scale;
+    if (std::abs(v) < step * scale * 1e-9) v = 0.0;  // no "-0.0"
+    out.labels.push_back(fmt::format("{:.{}f}", v, dec));
+  }
+  if (e != 0) out.suffix += fmt::format(" \u00d710^{}", e);
+  if (offset != 0.0) out.suffix += fmt::format(" {} {}", offset > 0 ? "+" : "-", fmt::format("{:.6g}", std::abs(offset)));
+  return out;
+}
 
 std::string color_for(const std::string& name, size_t index) {
   if (name == "Exp" || name == "experiment" || name == "true" || name == "log") return "#000000";
@@ -138,25 +159,33 @@ std::string render_svg(const Plot& plot) {
   if (!plot.title.empty())
     o += fmt::format("<text x=\"{}\" y=\"19\" text-anchor=\"middle\" font-size=\"14\" font-weight=\"bold\">{}</text>\n",
                      ml + pw / 2, html_escape(plot.title));
-  // Grid and ticks.
+  // Grid and ticks: one labelling (tick_labels) for both axes, its shared
+  // offset and exponent written after the axis label.
+  const auto ticks = [](const Range& r, double step) {
+    std::vector<double> t;
+    for (double v = std::ceil(r.lo / step) * step; v <= r.hi + 1e-9 * step; v += step) t.push_back(v);
+    return t;
+  };
+  const std::vector<double> xt = ticks(xr, xs), yt = ticks(yr, ys);
+  const TickLabels xl = tick_labels(xt, xs), yl = tick_labels(yt, ys);
   o += "<g stroke=\"#e3e3e3\" stroke-width=\"1\">\n";
-  for (double t = std::ceil(xr.lo / xs) * xs; t <= xr.hi + 1e-9 * xs; t += xs)
+  for (double t : xt)
     o += fmt::format("<line x1=\"{0:.1f}\" y1=\"{1:.1f}\" x2=\"{0:.1f}\" y2=\"{2:.1f}\"/>\n", X(t), mt, mt + ph);
-  for (double t = std::ceil(yr.lo / ys) * ys; t <= yr.hi + 1e-9 * ys; t += ys)
+  for (double t : yt)
     o += fmt::format("<line x1=\"{0:.1f}\" y1=\"{1:.1f}\" x2=\"{2:.1f}\" y2=\"{1:.1f}\"/>\n", ml, Y(t), ml + pw);
   o += "</g>\n<g fill=\"#333\">\n";
-  for (double t = std::ceil(xr.lo / xs) * xs; t <= xr.hi + 1e-9 * xs; t += xs)
-    o += fmt::format("<text x=\"{:.1f}\" y=\"{:.1f}\" text-anchor=\"middle\">{}</text>\n", X(t), mt + ph + 15,
-                     tick_label(t, xs));
-  for (double t = std::ceil(yr.lo / ys) * ys; t <= yr.hi + 1e-9 * ys; t += ys)
-    o += fmt::format("<text x=\"{:.1f}\" y=\"{:.1f}\" text-anchor=\"end\">{}</text>\n", ml - 6, Y(t) + 4,
-                     tick_label(t, ys));
+  for (size_t i = 0; i < xt.size(); ++i)
+    o += fmt::format("<text x=\"{:.1f}\" y=\"{:.1f}\" text-anchor=\"middle\">{}</text>\n", X(xt[i]), mt + ph + 15,
+                     xl.labels[i]);
+  for (size_t i = 0; i < yt.size(); ++i)
+    o += fmt::format("<text x=\"{:.1f}\" y=\"{:.1f}\" text-anchor=\"end\">{}</text>\n", ml - 6, Y(yt[i]) + 4,
+                     yl.labels[i]);
   o += "</g>\n";
   o += fmt::format("<rect x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\" fill=\"none\" stroke=\"#555\"/>\n", ml, mt, pw, ph);
   o += fmt::format("<text x=\"{:.1f}\" y=\"{:.1f}\" text-anchor=\"middle\">{}</text>\n", ml + pw / 2, mt + ph + 33,
-                   html_escape(plot.xlabel));
+                   html_escape(plot.xlabel + xl.suffix));
   o += fmt::format("<text transform=\"translate(16,{:.1f}) rotate(-90)\" text-anchor=\"middle\">{}</text>\n",
-                   mt + ph / 2, html_escape(plot.ylabel));
+                   mt + ph / 2, html_escape(plot.ylabel + yl.suffix));
   // Curves, clipped to the plot area.
   static int clip_counter = 0;
   const int clip_id = ++clip_counter;
