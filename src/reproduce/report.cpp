@@ -262,16 +262,20 @@ std::vector<Plot> residual_plots(const Reproduction& r) {
     for (size_t i = 0; i < 4; ++i) e[i].push_back(res(static_cast<Eigen::Index>(i)));
   });
   const char* names[] = {"Fz row (N)", "τφ row (N m)", "τθ row (N m)", "τψ row (N m)"};
-  Plot pf, pt, ps;
+  Plot pf, pt, psf, psm;
   pf.title = "LS residual, force row";
   pt.title = "LS residual, moment rows";
-  ps.title = "Power spectral density of the residuals (Welch)";
+  psf.title = "PSD of the force row's residual (Welch)";
+  psm.title = "PSD of the moment rows' residuals (Welch)";
   pf.xlabel = pt.xlabel = "time (s)";
-  pf.ylabel = "N";
-  pt.ylabel = "N m";
-  ps.xlabel = "frequency (Hz)";
-  ps.ylabel = "log10 PSD (unit²/Hz)";
-  pf.width = pt.width = ps.width = 500;
+  pf.ylabel = "residual (N)";
+  pt.ylabel = "residual (N m)";
+  // Log-frequency axes (log10 of the frequency: 0 is 1 Hz), so that the
+  // 0-4 Hz band the fit uses is as wide as the rest; N and N m apart.
+  psf.xlabel = psm.xlabel = "log10 of frequency (Hz): -1 = 0.1 Hz, 0 = 1 Hz, 1 = 10 Hz";
+  psf.ylabel = "log10 PSD (N²/Hz)";
+  psm.ylabel = "log10 PSD ((N m)²/Hz)";
+  pf.width = pt.width = psf.width = psm.width = 680;
   pf.series.push_back({names[0], t, e[0], report::color_for("", 0), false, 1.0});
   for (size_t i = 1; i < 4; ++i) pt.series.push_back({names[i], t, e[i], report::color_for("", i), false, 1.0});
   const double fs = 1.0 / reg.T();
@@ -284,13 +288,13 @@ std::vector<Plot> residual_plots(const Reproduction& r) {
       std::vector<double> f, lp;
       for (size_t k = 1; k < psd.size(); ++k) {
         if (!(psd[k] > 0.0)) continue;
-        f.push_back(static_cast<double>(k) * fs / static_cast<double>(nseg));
+        f.push_back(std::log10(static_cast<double>(k) * fs / static_cast<double>(nseg)));
         lp.push_back(std::log10(psd[k]));
       }
-      ps.series.push_back({names[i], f, lp, report::color_for("", i), false, 1.2});
+      (i == 0 ? psf : psm).series.push_back({names[i], f, lp, report::color_for("", i), false, 1.2});
     }
   }
-  return {pf, pt, ps};
+  return {pf, pt, psf, psm};
 }
 
 Plot evolution_plot(const Reproduction& r, int param) {
@@ -519,8 +523,9 @@ void uncertainty_section(report::HtmlDocument& d, const Reproduction& r) {
   if (!id.input_findings.empty()) pre(format_findings(id.input_findings));
   const auto rp = residual_plots(r);
   d.figure_row({rp[0], rp[1]}, "Residuals Γθ − Υ of LS over the estimation window (standard regression, eq. 34).");
-  d.figure(rp[2], "Their power spectral density (Welch, Hann, 50 % overlap): a white residual would be flat; "
-                  "the slope shows the pre-filter's band and the correlation the intervals account for.");
+  d.figure_row({rp[2], rp[3]}, "Their power spectral density (Welch, Hann, 50 % overlap), force and moment rows "
+                              "apart, on a log-frequency axis: a white residual would be flat; the slope shows the "
+                              "pre-filter's band and the correlation the intervals account for.");
 }
 
 // The path flown, the desired one and each re-flight's, in the x-y plane (paper Fig. 6).
