@@ -4,6 +4,7 @@
 #include "cli_fixture.hpp"
 #include "quadid/report.hpp"
 
+#include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
 #include <regex>
@@ -96,4 +97,25 @@ TEST_F(ReportBrowser, IdentifyReportRendersItsChartsAndShowsTheResultsNumbers) {
   // Every chart's axes carry a unit.
   for (const char* label : {"time (s)", "frequency (Hz)", "Fz (N)", "tau_phi (N m)", "PSD ((N m)^2/Hz)"})
     EXPECT_NE(page.find(label), std::string::npos) << label;
+}
+
+// follow --report: the segments' table and the tracking estimate's four charts, no console error.
+TEST_F(ReportBrowser, FollowReportRendersTheTrackingCharts) {
+  const char* chrome = chromium();
+  if (!chrome) GTEST_SKIP() << "chromium is not installed (apt-get install chromium)";
+  ASSERT_EQ(run("simulate --trajectory table2 --duration 20 --payload-change 10:0.2 -o " + path("f.csv")).rc, 0);
+  const CliRun r = run("follow " + path("f.csv") + " -q --json --report " + path("rep"));
+  ASSERT_EQ(r.rc, 0) << r.err;
+  const std::string flags = std::string("--headless --no-sandbox --disable-gpu --disable-quic --no-first-run "
+                                        "--disable-background-networking --disable-component-update --disable-sync "
+                                        "--enable-logging=stderr --v=0 --user-data-dir=") + path("profile") +
+                            " --window-size=1300,2000 ";
+  std::system((std::string(chrome) + " " + flags + "--dump-dom file://" + path("rep/report.html") + " > " +
+               path("dom.html") + " 2> " + path("console.txt")).c_str());
+  const std::string dom = quadid::read_file(path("dom.html")), console = quadid::read_file(path("console.txt"));
+  EXPECT_EQ(console.find("Uncaught"), std::string::npos) << console;
+  EXPECT_EQ(count(dom, quadid::report::have_uplot() ? "<canvas" : "<svg"), 4u);
+  const auto j = nlohmann::ordered_json::parse(r.out);
+  ASSERT_EQ(j["changes"].size(), 1u);
+  EXPECT_NE(dom.find(fmt::format("At {:.2f} s", j["changes"][0]["t"].get<double>())), std::string::npos);
 }

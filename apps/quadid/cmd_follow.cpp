@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 
 #include <cstdio>
+#include <filesystem>
 #include <iostream>
 #include <string>
 
@@ -48,10 +49,12 @@ std::string track_csv(const nlohmann::ordered_json& j) {
 void run(const OptionValues& v) {
   const std::string log = *v.string("log");
   const std::string out = v.string("out").value_or(""), track = v.string("track").value_or("");
+  const std::string report = v.string("report").value_or("");
   const bool json = v.flag("json"), quiet = v.flag("quiet");
   const FollowRequest r = follow_request(v);
   if (!out.empty()) check_output_file(out, "-o/--out");
   if (!track.empty()) check_output_file(track, "--track");
+  if (!report.empty()) check_output_directory(report, "--report");
   const bool lines = !json;
   const auto on_track = [&](const OnlineEstimator&, const OnlineEstimate& e) {
     if (!lines) return;
@@ -67,6 +70,10 @@ void run(const OptionValues& v) {
   const nlohmann::ordered_json j = follow(log, r, std::cin, on_track, on_change);
   if (!out.empty()) write_file_atomic(out, j.dump(2) + "\n");
   if (!track.empty()) write_file_atomic(track, track_csv(j));
+  if (!report.empty()) {
+    std::filesystem::create_directories(report);
+    write_file_atomic(std::filesystem::path(report) / "report.html", follow_report(j, log));
+  }
   if (json) {
     fmt::print("{}\n", j.dump(2));
     return;

@@ -180,6 +180,8 @@ nlohmann::ordered_json to_json(const OnlineEstimate& e);
 /// The result of following a log: {"changes": [{t, t_detected, row, parameters, before, after}],
 /// "segments": [{t_start, t_end, estimate}], "track": [estimates]}.
 nlohmann::ordered_json follow_json(const OnlineEstimator& est, const std::vector<OnlineEstimate>& track);
+/// follow --report: the changes, the segments' table and the tracking estimate over time (interactive).
+std::string follow_report(const nlohmann::ordered_json& j, const std::string& log_name);
 /// Follows a log: `path`, any log identify reads (prepare_identification:
 /// vehicle files, rotor models), or "-" for flight-log CSV rows read from
 /// `in` as they arrive (the wrench columns must be there: a rotor model's

@@ -2,9 +2,12 @@
 #include "quadid/core/json.hpp"
 #include "quadid/identification/extended.hpp"
 #include "quadid/pipeline.hpp"
+#include "quadid/report.hpp"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
+#include <cmath>
 #include <istream>
 
 namespace quadid {
@@ -150,6 +153,60 @@ nlohmann::ordered_json follow(const std::string& path, const FollowRequest& r, s
   j["log"] = path;
   j["wrench_source"] = prepared.wrench_source;
   return j;
+}
+
+}  // namespace quadid
+
+namespace quadid {
+
+std::string follow_report(const nlohmann::ordered_json& j, const std::string& log_name) {
+  report::HtmlDocument doc("quadid follow: " + log_name);
+  doc.heading("Changes");
+  if (j["changes"].empty()) doc.paragraph("None detected.");
+  for (const auto& c : j["changes"])
+    doc.paragraph(fmt::format("At {:.2f} s (detected at {:.2f} s by the {} row's test): {}.", c["t"].get<double>(),
+                              c["t_detected"].get<double>(), c["row"].get<std::string>(),
+                              c["parameters"].empty() ? std::string("no parameter moved beyond 3 standard errors")
+                                                      : fmt::format("{} changed", fmt::join(c["parameters"], ", "))));
+  doc.heading("Segments");
+  report::Table t{"", {"segment (s)", "m (kg)", "Ixx", "Iyy", "Izz (kg m^2)"}, {}, "value +- 95 % interval (1.96 standard errors)"};
+  const auto cell = [](const nlohmann::ordered_json& e, const char* k) {
+    if (e[k].is_null()) return std::string("-");
+    const auto& se = e["std_error"][k];
+    return se.is_null() ? report::sig(e[k].get<double>())
+                        : fmt::format("{} +- {:.2g}", report::sig(e[k].get<double>()), kZ95 * se.get<double>());
+  };
+  for (const auto& s : j["segments"]) {
+    const auto& e = s["estimate"];
+    t.rows.push_back({fmt::format("{:.2f} to {:.2f}", s["t_start"].get<double>(), s["t_end"].get<double>()),
+                      cell(e, "m"), cell(e, "Ixx"), cell(e, "Iyy"), cell(e, "Izz")});
+  }
+  doc.table(t);
+  doc.heading("The tracking estimate over time");
+  doc.paragraph("Every --every seconds, the estimate that forgets (--memory), with its 95 % band where its standard "
+                "errors are known. A change restarts it from the rows after the change.");
+  const char* names[] = {"m", "Ixx", "Iyy", "Izz"};
+  const char* units[] = {"kg", "kg m^2", "kg m^2", "kg m^2"};
+  for (int p = 0; p < 4; ++p) {
+    report::Chart c;
+    c.title = names[p];
+    c.xlabel = "time (s)";
+    c.ylabel = fmt::format("{} ({})", names[p], units[p]);
+    std::vector<double> v, lo, hi;
+    for (const auto& e : j["track"]) {
+      c.x.push_back(e["t"].get<double>());
+      const double x = e[names[p]].is_null() ? std::nan("") : e[names[p]].get<double>();
+      const double se = e["std_error"][names[p]].is_null() ? std::nan("") : e["std_error"][names[p]].get<double>();
+      v.push_back(x);
+      lo.push_back(x - kZ95 * se);
+      hi.push_back(x + kZ95 * se);
+    }
+    c.series = {{"tracking", {}, v, "#1f4fd6"}, {"95 % low", {}, lo, "#9bb3ee", true, 1.0},
+                {"95 % high", {}, hi, "#9bb3ee", true, 1.0}};
+    doc.chart(c);
+  }
+  doc.paragraph(fmt::format("Options: {}.", j["options"].dump()));
+  return doc.str();
 }
 
 }  // namespace quadid

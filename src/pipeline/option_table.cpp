@@ -366,6 +366,8 @@ Defs follow_options() {
       B("cusum-threshold", K::Number, "the change test's threshold (larger: fewer false alarms, later detection)")
           .def(o.cusum_threshold).above(0),
       B("no-changes", K::Flag, "no change detection: one segment, the tracking estimate only follows"),
+      B("report", K::String, "write DIR/report.html: the changes, the segments and the tracking estimate over time "
+                             "(one self-contained page, docs/report.md)").text("none").cli(),
       out_file("write the result JSON (changes, segments, track)"),
       json_flag(),
       quiet_flag(),

@@ -57,6 +57,18 @@ std::string js_array(const std::vector<double>& v, size_t step, bool positive, d
   return o;
 }
 
+// uPlot's tick labels on a linear axis, as tick_labels does for the SVG figures:
+// the fewest decimals that tell the ticks apart (from the tick increment), and
+// a power of ten for long numbers (0.0120, 0.0122, ... not 0.012, 0.012, ...).
+constexpr const char* kTickValues =
+    ",values:function(u,s){var inc=s.length>1?Math.abs(s[1]-s[0]):1;var big=0;"
+    "s.forEach(function(v){if(v!=null)big=Math.max(big,Math.abs(v));});"
+    "var d=Math.max(0,-Math.floor(Math.log10(inc)+1e-9));"
+    "var sci=big>=1e4||(big>0&&big<1e-2);"
+    "var sd=Math.max(0,Math.min(8,Math.floor(Math.log10(big||1))-Math.floor(Math.log10(inc)+1e-9)));"
+    "return s.map(function(v){if(v==null)return '';if(Math.abs(v)<inc*1e-9)v=0;"
+    "return sci?(v===0?'0':v.toExponential(sd)):v.toFixed(Math.min(d,12));});}";
+
 Plot as_plot(const Chart& c) {
   Plot p;
   p.title = c.title;
@@ -107,9 +119,9 @@ void HtmlDocument::chart(const Chart& c, const std::string& caption) {
       "<script>(function(){{var el=document.getElementById(\"chart{0}\");"
       "var w=Math.max(480,Math.min(1400,el.parentNode.clientWidth||1200));"
       "new uPlot({{title:{1},width:w,height:{2},scales:{{x:{{time:false{3}}},y:{{{4}}}}},"
-      "axes:[{{label:{5}}},{{label:{6},size:70}}],series:{7},cursor:{{drag:{{x:true,y:false}}}}}},{8},el);}})();</script>\n",
+      "axes:[{{label:{5}{9}}},{{label:{6},size:80{10}}}],series:{7},cursor:{{drag:{{x:true,y:false}}}}}},{8},el);}})();</script>\n",
       id, js_string(c.title), c.height, c.log_x ? ",distr:3" : "", c.log_y ? "distr:3" : "", js_string(c.xlabel),
-      js_string(c.ylabel), series, data);
+      js_string(c.ylabel), series, data, c.log_x ? "" : kTickValues, c.log_y ? "" : kTickValues);
   if (!caption.empty())
     body_ += fmt::format("<figcaption>Figure {}. {}</figcaption>\n", figure_count_, html_escape(caption));
   body_ += "</figure>\n";
