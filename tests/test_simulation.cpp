@@ -1,5 +1,6 @@
 // Closed-loop simulator: plant physics, sensors, determinism, divergence, log metadata.
 #include "quadid/simulation.hpp"
+#include "sim_helpers.hpp"
 #include "random_model.hpp"
 
 #include <gtest/gtest.h>
@@ -9,27 +10,11 @@
 #include <set>
 
 using namespace quadid;
+using quadid::testing::hover;
+using quadid::testing::quiet;
 
 namespace {
 
-// A constant reference: hover at p with yaw psi (Fourier series with zero harmonics).
-FourierTrajectory hover(const Vec3& p, double psi) {
-  std::array<FourierTrajectory::AxisCoeffs, 4> axes;
-  const double c[4] = {p(0), p(1), p(2), psi};
-  for (int i = 0; i < 4; ++i) {
-    axes[static_cast<size_t>(i)].a = Eigen::VectorXd::Zero(1);
-    axes[static_cast<size_t>(i)].b = Eigen::VectorXd::Zero(1);
-    axes[static_cast<size_t>(i)].c = c[i];
-  }
-  return FourierTrajectory(0.5, axes);
-}
-
-SimulationOptions quiet(double duration) {
-  SimulationOptions o;
-  o.sensors.noise = NoiseSigmas::none();
-  o.duration = duration;
-  return o;
-}
 
 Eigen::VectorXd col(const FlightLog& log, const char* name) { return log.column(name); }
 

@@ -6,6 +6,7 @@
 #include "quadid/identification.hpp"
 #include "quadid/pipeline.hpp"
 #include "quadid/simulation.hpp"
+#include "sim_helpers.hpp"
 
 #include <gtest/gtest.h>
 
@@ -18,24 +19,8 @@ namespace {
 // Rounding only: the sums of a few products of numbers of order 1e-2..2 (kg, kg m^2).
 constexpr double kRounding = 1e-12;
 
-// A constant reference: hover at 1 m (a Fourier series with zero harmonics).
-FourierTrajectory hover() {
-  std::array<FourierTrajectory::AxisCoeffs, 4> axes;
-  const double c[4] = {0.0, 0.0, 1.0, 0.0};
-  for (size_t i = 0; i < 4; ++i) {
-    axes[i].a = Eigen::VectorXd::Zero(1);
-    axes[i].b = Eigen::VectorXd::Zero(1);
-    axes[i].c = c[i];
-  }
-  return FourierTrajectory(0.5, axes);
-}
-
-SimulationOptions quiet(double duration) {
-  SimulationOptions o;
-  o.sensors.noise = NoiseSigmas::none();
-  o.duration = duration;
-  return o;
-}
+FourierTrajectory hover() { return quadid::testing::hover(Vec3(0.0, 0.0, 1.0), 0.0); }  // at 1 m
+using quadid::testing::quiet;
 
 // The message of the std::invalid_argument that f throws ("" if none).
 template <class F>

@@ -104,6 +104,28 @@ std::string color_for(const std::string& name, size_t index) {
   return palette[index % 10];
 }
 
+namespace {
+// The grid lines at the ticks and the tick labels of both axes.
+template <class FX, class FY>
+std::string grid_and_tick_labels(const std::vector<double>& xt, const std::vector<double>& yt, const TickLabels& xl,
+                                 const TickLabels& yl, const FX& X, const FY& Y, double ml, double mt, double pw,
+                                 double ph) {
+  std::string o = "<g stroke=\"#e3e3e3\" stroke-width=\"1\">\n";
+  for (double t : xt)
+    o += fmt::format("<line x1=\"{0:.1f}\" y1=\"{1:.1f}\" x2=\"{0:.1f}\" y2=\"{2:.1f}\"/>\n", X(t), mt, mt + ph);
+  for (double t : yt)
+    o += fmt::format("<line x1=\"{0:.1f}\" y1=\"{1:.1f}\" x2=\"{2:.1f}\" y2=\"{1:.1f}\"/>\n", ml, Y(t), ml + pw);
+  o += "</g>\n<g fill=\"#333\">\n";
+  for (size_t i = 0; i < xt.size(); ++i)
+    o += fmt::format("<text x=\"{:.1f}\" y=\"{:.1f}\" text-anchor=\"middle\">{}</text>\n", X(xt[i]), mt + ph + 15,
+                     xl.labels[i]);
+  for (size_t i = 0; i < yt.size(); ++i)
+    o += fmt::format("<text x=\"{:.1f}\" y=\"{:.1f}\" text-anchor=\"end\">{}</text>\n", ml - 6, Y(yt[i]) + 4,
+                     yl.labels[i]);
+  return o + "</g>\n";
+}
+}  // namespace
+
 std::string render_svg(const Plot& plot) {
   const double W = plot.width, H = plot.height;
   const double ml = 70, mr = 20, mt = plot.title.empty() ? 14 : 30;
@@ -168,19 +190,7 @@ std::string render_svg(const Plot& plot) {
   };
   const std::vector<double> xt = ticks(xr, xs), yt = ticks(yr, ys);
   const TickLabels xl = tick_labels(xt, xs), yl = tick_labels(yt, ys);
-  o += "<g stroke=\"#e3e3e3\" stroke-width=\"1\">\n";
-  for (double t : xt)
-    o += fmt::format("<line x1=\"{0:.1f}\" y1=\"{1:.1f}\" x2=\"{0:.1f}\" y2=\"{2:.1f}\"/>\n", X(t), mt, mt + ph);
-  for (double t : yt)
-    o += fmt::format("<line x1=\"{0:.1f}\" y1=\"{1:.1f}\" x2=\"{2:.1f}\" y2=\"{1:.1f}\"/>\n", ml, Y(t), ml + pw);
-  o += "</g>\n<g fill=\"#333\">\n";
-  for (size_t i = 0; i < xt.size(); ++i)
-    o += fmt::format("<text x=\"{:.1f}\" y=\"{:.1f}\" text-anchor=\"middle\">{}</text>\n", X(xt[i]), mt + ph + 15,
-                     xl.labels[i]);
-  for (size_t i = 0; i < yt.size(); ++i)
-    o += fmt::format("<text x=\"{:.1f}\" y=\"{:.1f}\" text-anchor=\"end\">{}</text>\n", ml - 6, Y(yt[i]) + 4,
-                     yl.labels[i]);
-  o += "</g>\n";
+  o += grid_and_tick_labels(xt, yt, xl, yl, X, Y, ml, mt, pw, ph);
   o += fmt::format("<rect x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\" fill=\"none\" stroke=\"#555\"/>\n", ml, mt, pw, ph);
   o += fmt::format("<text x=\"{:.1f}\" y=\"{:.1f}\" text-anchor=\"middle\">{}</text>\n", ml + pw / 2, mt + ph + 33,
                    html_escape(plot.xlabel + xl.suffix));
