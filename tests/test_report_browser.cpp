@@ -50,8 +50,10 @@ TEST_F(ReportBrowser, ChromiumRendersEveryFigureAndTable) {
   // reproduction_html).
   EXPECT_EQ(count(dom, "<svg"), 33u);
   EXPECT_EQ(count(dom, "<figcaption>"), 14u);
-  // Table 2, the constraint check, Table 3 and its errors, Tables 4 to 12, and the conclusions.
-  EXPECT_EQ(count(dom, "<table>"), 14u);
+  // Table 2, the constraint check, Table 3 and its errors, Tables 4 to 12, and the conclusions; and
+  // in section 2 as tables, not text: LS's and FMLS's intervals, the physical checks, the recommended set.
+  EXPECT_EQ(count(dom, "<table>"), 18u);
+  EXPECT_EQ(dom.find("<pre"), std::string::npos);  // no terminal text dumped in the page
   EXPECT_NE(dom.find("time (s)"), std::string::npos);
   ASSERT_TRUE(std::filesystem::exists(png));
   EXPECT_GT(std::filesystem::file_size(png), 100000u);  // a blank 1600x4000 page compresses to a few kB

@@ -6,6 +6,7 @@
 
 #include "quadid/checks.hpp"
 #include "quadid/estimation.hpp"
+#include "quadid/report.hpp"
 #include "quadid/io.hpp"
 #include "quadid/regression.hpp"
 #include "quadid/signal.hpp"
@@ -205,6 +206,12 @@ nlohmann::ordered_json to_json(const IdentificationResult& r);
 std::string format_uncertainty_table(const IdentificationResult& r);
 /// One line per set: physically consistent or why not.
 std::string format_consistency(const IdentificationResult& r);
+/// The same for a page: LS's and FMLS's intervals (titled with how they were
+/// computed), each set's physical-consistency check, and the input checks'
+/// findings, as tables (the reproduce and identify reports).
+std::vector<report::Table> uncertainty_tables(const IdentificationResult& r);
+report::Table consistency_table(const IdentificationResult& r);
+report::Table findings_table(const std::vector<InputFinding>& f);
 /// The short report `identify` prints by default: the recommended set with
 /// its 95 % intervals (a consistent set PC / FMPC shows those of the set it
 /// was projected from, so marked), what the data determine poorly, how many

@@ -153,6 +153,70 @@ std::string format_estimates_table(const IdentificationResult& r) {
   return t.to_text();
 }
 
+// How an LS set's intervals were computed, in one sentence (the text and the HTML tables).
+std::string uncertainty_method(const IdentificationResult& r, const char* name, const Estimate& u) {
+  const double band_hz =
+      r.window_samples > 0 && r.processing.T > 0.0
+          ? static_cast<double>(u.frequencies) / (static_cast<double>(r.window_samples) * r.processing.T)
+          : 0.0;
+  const std::string how =
+      u.end_values_separated
+          ? fmt::format("{} sine tapers of the influences, band up to {:.3g} Hz, plus the variance of the window's "
+                        "end values from the variogram of their partial sums",
+                        2 * u.frequencies, band_hz)
+          : fmt::format("periodogram of the influences at the {} lowest frequencies, up to {:.3g} Hz", u.frequencies,
+                        band_hz);
+  return fmt::format("{}: 95% intervals (HAC: {}; correlation time {} samples{}; Student t, {:.0f} dof, quantile {:.3f}){}",
+                     name, how, u.correlation_time, u.correlation_time_capped ? " (search capped)" : "", u.dof,
+                     u.quantile,
+                     u.model_disagreement.size() != 7 ? ""
+                     : r.extended ? "\n   with |LS - FMLS| added in quadrature (model disagreement, docs/uncertainty.md)"
+                                  : "\n   with |LS - FMLS| beyond its own noise added in quadrature (model disagreement, "
+                                    "docs/uncertainty.md)");
+}
+
+std::vector<report::Table> uncertainty_tables(const IdentificationResult& r) {
+  std::vector<report::Table> out;
+  for (const char* name : {"LS", "FMLS"}) {
+    const LeastSquaresSolution& s = *r.least_squares_of(name);
+    const auto& u = s.uncertainty;
+    if (!u.computed) continue;
+    report::Table t{uncertainty_method(r, name, u), {"parameter", "estimate", "std err", "rel %", "95 % interval", ""}, {},
+                    "rel %: the std err against |m| for m, the mean principal moment for inertia entries"};
+    const Theta scales = determinedness_scale(s.theta);
+    for (int j = 0; j < 7; ++j) {
+      const std::string n = kThetaNames[static_cast<size_t>(j)];
+      const bool poor = std::find(s.poorly_determined.begin(), s.poorly_determined.end(), n) != s.poorly_determined.end();
+      const bool ok = std::isfinite(u.std_error(j));
+      t.rows.push_back({n, report::sig(s.theta(j)), ok ? fmt::format("{:.2g}", u.std_error(j)) : "-",
+                        ok && scales(j) > 0 ? fmt::format("{:.2f}", 100.0 * u.std_error(j) / scales(j)) : "-",
+                        std::isfinite(u.ci_low(j)) ? fmt::format("[{:.5g}, {:.5g}]", u.ci_low(j), u.ci_high(j)) : "-",
+                        poor ? "poorly determined" : ""});
+    }
+    out.push_back(std::move(t));
+  }
+  return out;
+}
+
+report::Table consistency_table(const IdentificationResult& r) {
+  report::Table t{"Physical consistency", {"set", "physical", "why"}, {}, ""};
+  for (const auto* e : r.all_sets()) {
+    if (!e->valid) {
+      t.rows.push_back({e->name, "-", e->note});
+      continue;
+    }
+    const PhysicalConsistency c = check_set_consistency(*e, r.options.physical.term_signs);
+    t.rows.push_back({e->name, c.physical ? "yes" : "no", c.why});
+  }
+  return t;
+}
+
+report::Table findings_table(const std::vector<InputFinding>& f) {
+  report::Table t{"Checks on the input", {"check", "severity", "what it saw", "what to do"}, {}, ""};
+  for (const auto& x : f) t.rows.push_back({x.check, to_string(x.severity), x.saw, x.action});
+  return t;
+}
+
 std::string format_uncertainty_table(const IdentificationResult& r) {
   fmt::memory_buffer out;
   auto it = std::back_inserter(out);
@@ -160,24 +224,7 @@ std::string format_uncertainty_table(const IdentificationResult& r) {
     const LeastSquaresSolution& s = *r.least_squares_of(name);
     const auto& u = s.uncertainty;
     if (!u.computed) continue;
-    const double band_hz =
-        r.window_samples > 0 && r.processing.T > 0.0
-            ? static_cast<double>(u.frequencies) / (static_cast<double>(r.window_samples) * r.processing.T)
-            : 0.0;
-    const std::string how =
-        u.end_values_separated
-            ? fmt::format("{} sine tapers of the influences, band up to {:.3g} Hz, plus the variance of the window's "
-                          "end values from the variogram of their partial sums",
-                          2 * u.frequencies, band_hz)
-            : fmt::format("periodogram of the influences at the {} lowest frequencies, up to {:.3g} Hz",
-                          u.frequencies, band_hz);
-    fmt::format_to(it, "{}: 95% intervals (HAC: {}; correlation time {} samples{}; Student t, {:.0f} dof, quantile {:.3f}){}\n",
-                   name, how, u.correlation_time, u.correlation_time_capped ? " (search capped)" : "", u.dof,
-                   u.quantile,
-                   u.model_disagreement.size() != 7 ? ""
-                   : r.extended ? "\n   with |LS - FMLS| added in quadrature (model disagreement, docs/uncertainty.md)"
-                                : "\n   with |LS - FMLS| beyond its own noise added in quadrature (model disagreement, "
-                                  "docs/uncertainty.md)");
+    fmt::format_to(it, "{}\n", uncertainty_method(r, name, u));
     const bool jk = u.jackknife_blocks > 0;
     if (jk)
       fmt::format_to(it,

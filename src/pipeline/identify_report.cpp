@@ -77,13 +77,10 @@ void recommended_section(report::HtmlDocument& doc, const json& j) {
   doc.table(t);
 }
 
-void checks_section(report::HtmlDocument& doc, const json& j) {
+void checks_section(report::HtmlDocument& doc, const IdentificationResult& res) {
   doc.raw("<a id=\"consistency\"></a>\n");
   doc.heading("Physical consistency");
-  Table t{"", {"set", "physical", "why"}, {}, ""};
-  for (const auto& [name, c] : j["consistency"].items())
-    t.rows.push_back({name, c["physical"].get<bool>() ? "yes" : "no", c["why"].get<std::string>()});
-  doc.table(t);
+  doc.table(consistency_table(res));
 }
 
 struct AxisSeries {
@@ -200,10 +197,7 @@ void log_section(report::HtmlDocument& doc, const IdentificationInput& in, const
                                                               1e3 * res.wrench_timing.applied)});
   doc.table(t);
   if (in.vehicle) doc.raw("<pre>" + report::html_escape(format_input(in)) + "</pre>\n");  // the rotor model and timing
-  if (res.input_findings.empty()) return;
-  Table f{"Input checks", {"check", "severity", "what it saw", "what to do"}, {}, ""};
-  for (const auto& x : res.input_findings) f.rows.push_back({x.check, to_string(x.severity), x.saw, x.action});
-  doc.table(f);
+  if (!res.input_findings.empty()) doc.table(findings_table(res.input_findings));
 }
 
 void warnings_section(report::HtmlDocument& doc, const IdentificationResult& res) {
@@ -228,7 +222,7 @@ std::string identification_report(const IdentificationInput& in, const Identific
   } else {
     recommended_section(doc, j);
   }
-  checks_section(doc, j);
+  checks_section(doc, res);
   warnings_section(doc, res);
   if (!set.empty()) {
     Theta th;

@@ -512,15 +512,19 @@ void uncertainty_section(report::HtmlDocument& d, const Reproduction& r) {
               "into account, docs/uncertainty.md), whether each set is physically consistent (m > 0, I positive "
               "definite, triangle inequalities), the set quadid recommends and why, and what the checks on the "
               "input found.");
-  // pre-wrap: the columns stay aligned, the long notes wrap instead of overflowing.
-  const auto pre = [&](const std::string& text) {
-    d.raw("<pre style=\"white-space: pre-wrap\">" + report::html_escape(text) + "</pre>\n");
-  };
-  pre(format_uncertainty_table(id));
-  pre(format_consistency(id));  // ends with the recommendation and its reason
-  d.paragraph(id.input_findings.empty() ? "Checks on the input: nothing found."
-                                        : "Checks on the input:");
-  if (!id.input_findings.empty()) pre(format_findings(id.input_findings));
+  for (const auto& t : uncertainty_tables(id)) d.table(t);
+  d.table(consistency_table(id));
+  if (!id.recommended.set.empty()) {
+    const SetEstimate& rec = id.estimate(id.recommended.set);
+    report::Table t{"identify recommends " + id.recommended.set, {"parameter", "value (kg, kg m²)"}, {},
+                    id.recommended.reason};
+    for (size_t j = 0; j < 7; ++j) t.rows.push_back({kThetaNames[j], report::sig(rec.theta(static_cast<Eigen::Index>(j)))});
+    d.table(t);
+  }
+  if (id.input_findings.empty())
+    d.paragraph("Checks on the input: nothing found.");
+  else
+    d.table(findings_table(id.input_findings));
   const auto rp = residual_plots(r);
   d.figure_row({rp[0], rp[1]}, "Residuals Γθ − Υ of LS over the estimation window (standard regression, eq. 34).");
   d.figure_row({rp[2], rp[3]}, "Their power spectral density (Welch, Hann, 50 % overlap), force and moment rows "
