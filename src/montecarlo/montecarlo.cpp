@@ -286,6 +286,12 @@ std::vector<report::Plot> montecarlo_histograms(const MonteCarloResult& r, int b
       report::Series se;
       se.label = s.name;
       se.color = report::color_for(s.name, idx++);
+      // The projections (PC, FMPC) often coincide with LS, FMLS: dashed and beneath
+      // them, so that the least-squares outlines stay visible on top.
+      const bool projection = s.name == "PC" || s.name == "FMPC";
+      se.dashed = projection;
+      se.layer = projection ? 0 : 1;
+      se.width = projection ? 1.5 : 2.0;
       for (int b = 0; b < bins; ++b) {  // a step outline
         se.x.push_back(lo + b * w);
         se.y.push_back(count[static_cast<size_t>(b)]);
