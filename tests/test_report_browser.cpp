@@ -96,6 +96,10 @@ TEST_F(ReportBrowser, IdentifyReportRendersItsChartsAndShowsTheResultsNumbers) {
     ++matched;
   }
   EXPECT_EQ(matched, 7);
+  // The sensitivity table: four cutoffs and the two halves of the window, each with its numbers.
+  const auto sens = page.find("id=\"sensitivity\"");
+  ASSERT_NE(sens, std::string::npos);
+  EXPECT_EQ(count(page.substr(sens, page.find("id=\"log\"") - sens), " se)"), 6u * 4u);
   // Every chart's axes carry a unit.
   for (const char* label : {"time (s)", "frequency (Hz)", "Fz (N)", "tau_phi (N m)", "PSD ((N m)^2/Hz)"})
     EXPECT_NE(page.find(label), std::string::npos) << label;

@@ -174,6 +174,65 @@ void correlation_section(report::HtmlDocument& doc, const IdentificationResult& 
   doc.raw(h + "</tbody></table></div>\n");
 }
 
+// One re-identification of the sensitivity table: `set`'s m, Ixx, Iyy, Izz, or why not.
+std::string sensitivity_row(const IdentificationInput& in, IdentificationOptions opt, const std::string& set,
+                            const Theta& base, const Theta& se, std::vector<std::string>& cells) {
+  IdentificationInput alt = in;
+  opt.record_evolution = false;
+  alt.options = opt;
+  try {
+    const IdentificationResult r = identify_prepared(alt);
+    const Theta th = r.estimate(set).theta;
+    for (int j : {0, 1, 4, 6})
+      cells.push_back(se(j) > 0.0 ? fmt::format("{} ({:+.1f} se)", report::sig(th(j)), (th(j) - base(j)) / se(j))
+                                  : report::sig(th(j)));
+    return {};
+  } catch (const std::exception& e) {
+    return e.what();
+  }
+}
+
+// How the recommended set moves with the pre-filter's cutoff and with the
+// window (first and second half): the dependence the warnings speak of, in
+// standard errors of the result shown.
+void sensitivity_section(report::HtmlDocument& doc, const IdentificationInput& in, const IdentificationResult& res,
+                         const json& j) {
+  const std::string set = j["recommended"]["set"].get<std::string>();
+  const std::string src = interval_source(j, set);
+  Theta base, se = Theta::Zero();
+  for (size_t i = 0; i < 7; ++i) {
+    base(static_cast<Eigen::Index>(i)) = j["estimates"][set][kThetaNames[i]].get<double>();
+    if (!src.empty() && !j["uncertainty"][src][kThetaNames[i]]["std_error"].is_null())
+      se(static_cast<Eigen::Index>(i)) = j["uncertainty"][src][kThetaNames[i]]["std_error"].get<double>();
+  }
+  doc.raw("<a id=\"sensitivity\"></a>\n");
+  doc.heading("Sensitivity to the cutoff and the window");
+  Table t{"", {"identified with", "m (kg)", "Ixx", "Iyy", "Izz (kg m^2)"}, {},
+          "in brackets: the change from the result above in its standard errors; a few are noise, many are model "
+          "error that the band or the part of the flight decides"};
+  const auto row = [&](const std::string& what, const IdentificationOptions& o) {
+    std::vector<std::string> cells{what};
+    const std::string why = sensitivity_row(in, o, set, base, se, cells);
+    if (!why.empty()) cells = {what, "not available: " + why, "", "", ""};
+    t.rows.push_back(cells);
+  };
+  for (double hz : {2.0, 3.0, 6.0, 8.0}) {
+    IdentificationOptions o = res.options;
+    o.processing.lowpass.cutoff_hz = hz;
+    o.force_cutoff_hz = o.moment_cutoff_hz = hz;
+    o.auto_cutoffs = false;
+    row(fmt::format("cutoff {:g} Hz", hz), o);
+  }
+  const double t0 = res.window.t0, t1 = std::isfinite(res.window.t1) ? res.window.t1 : res.processing.duration;
+  const double mid = 0.5 * (t0 + t1);
+  for (const TimeWindow w : {TimeWindow{t0, mid}, TimeWindow{mid, t1}}) {
+    IdentificationOptions o = res.options;
+    o.window = w;
+    row("window " + w.to_string(), o);
+  }
+  doc.table(t);
+}
+
 void log_section(report::HtmlDocument& doc, const IdentificationInput& in, const IdentificationResult& res,
                  const json& j, const std::string& log_name) {
   doc.raw("<a id=\"log\"></a>\n");
@@ -229,6 +288,7 @@ std::string identification_report(const IdentificationInput& in, const Identific
     for (size_t i = 0; i < 7; ++i) th(static_cast<Eigen::Index>(i)) = j["estimates"][set][kThetaNames[i]].get<double>();
     fit_section(doc, predictions(in, res, th), set, res.processing.fs, res.extended != nullptr);
     correlation_section(doc, res, interval_source(j, set));
+    sensitivity_section(doc, in, res, j);
   }
   log_section(doc, in, res, j, log_name);
   doc.paragraph(fmt::format("quadid {}; interactive charts: {}.", QUADID_VERSION,
