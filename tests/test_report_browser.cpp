@@ -26,9 +26,33 @@ size_t count(const std::string& s, const std::string& what) {
   return n;
 }
 
+// What the page's #layout-check found (HtmlDocument's self-check), for a failure message.
+std::string layout_findings(const std::string& dom) {
+  const auto a = dom.find("<pre id=\"layout-check\">");
+  if (a == std::string::npos) return "no layout-check result in the page";
+  return dom.substr(a, std::min<size_t>(2000, dom.find("</pre>", a) - a));
+}
+
 }  // namespace
 
 class ReportBrowser : public CliTest {};
+
+// The Monte Carlo page's histograms (seven SVG figures, 520 px wide): their tick labels
+// used to crowd each other ("0.0026880.002690...", 12 overlaps on the mass axis).
+TEST_F(ReportBrowser, MonteCarloHistogramsHaveNoOverlappingLabels) {
+  const char* chrome = chromium();
+  if (!chrome) GTEST_SKIP() << "chromium is not installed (apt-get install chromium)";
+  const CliRun r = run("montecarlo --runs 12 --duration 20 --out " + path("mc") + " -q");
+  ASSERT_EQ(r.rc, 0) << r.err;
+  const std::string flags = std::string("--headless --no-sandbox --disable-gpu --disable-quic --no-first-run "
+                                        "--disable-background-networking --disable-component-update --disable-sync "
+                                        "--user-data-dir=") + path("profile") + " --window-size=1600,4000 ";
+  std::system((std::string(chrome) + " " + flags + "--dump-dom file://" + path("mc/index.html") + "#layout-check > " +
+               path("layout.html") + " 2>/dev/null").c_str());
+  const std::string dom = quadid::read_file(path("layout.html"));
+  EXPECT_EQ(count(dom, "<svg"), 7u);
+  EXPECT_NE(dom.find("<pre id=\"layout-check\">ok</pre>"), std::string::npos) << layout_findings(dom);
+}
 
 TEST_F(ReportBrowser, ChromiumRendersEveryFigureAndTable) {
   const char* chrome = chromium();
@@ -55,6 +79,11 @@ TEST_F(ReportBrowser, ChromiumRendersEveryFigureAndTable) {
   EXPECT_EQ(count(dom, "<table>"), 18u);
   EXPECT_EQ(dom.find("<pre"), std::string::npos);  // no terminal text dumped in the page
   EXPECT_NE(dom.find("time (s)"), std::string::npos);
+  // Laid out as a person sees it: no tick labels crowding each other, no text outside its figure.
+  std::system((std::string(chrome) + " " + flags + "--dump-dom " + url + "#layout-check > " + path("layout.html") +
+               " 2>/dev/null").c_str());
+  EXPECT_NE(quadid::read_file(path("layout.html")).find("<pre id=\"layout-check\">ok</pre>"), std::string::npos)
+      << layout_findings(quadid::read_file(path("layout.html")));
   ASSERT_TRUE(std::filesystem::exists(png));
   EXPECT_GT(std::filesystem::file_size(png), 100000u);  // a blank 1600x4000 page compresses to a few kB
 }

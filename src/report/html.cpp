@@ -26,6 +26,36 @@ void HtmlDocument::figure_row(const std::vector<Plot>& plots, const std::string&
 }
 
 namespace {
+// Opened as page.html#layout-check, the page checks its own SVG figures once
+// laid out: a text outside its figure, or two texts that overlap (tick labels
+// crowding each other), and writes what it found into <pre id="layout-check">
+// ("ok" when nothing): the tests read it from a headless browser's DOM.
+constexpr const char* kLayoutCheck = R"(<script>
+if (location.hash === "#layout-check") window.addEventListener("load", function () {
+  var out = [];
+  document.querySelectorAll("svg").forEach(function (svg, si) {
+    var r = svg.getBoundingClientRect();
+    var ts = Array.prototype.slice.call(svg.querySelectorAll("text"));
+    var b = ts.map(function (t) { return t.getBoundingClientRect(); });
+    b.forEach(function (a, i) {
+      if (a.width === 0) return;
+      if (a.left < r.left - 1 || a.right > r.right + 1 || a.top < r.top - 1 || a.bottom > r.bottom + 1)
+        out.push("figure " + si + ": '" + ts[i].textContent + "' outside its figure");
+      for (var j = i + 1; j < b.length; j++) {
+        var c = b[j];
+        if (a.left < c.right - 0.5 && c.left < a.right - 0.5 && a.top < c.bottom - 0.5 && c.top < a.bottom - 0.5)
+          out.push("figure " + si + ": '" + ts[i].textContent + "' overlaps '" + ts[j].textContent + "'");
+      }
+    });
+  });
+  var p = document.createElement("pre");
+  p.id = "layout-check";
+  p.textContent = out.length ? out.join("\n") : "ok";
+  document.body.appendChild(p);
+});
+</script>
+)";
+
 // uPlot's styles and script, once in the page's head when it has charts.
 std::string chart_head(bool charts) {
   if (!charts || !have_uplot()) return {};
@@ -68,10 +98,10 @@ figure.chart {{ max-width: 1400px; }}
 </head>
 <body>
 <h1>{0}</h1>
-{1}</body>
+{1}{3}</body>
 </html>
 )",
-                     html_escape(title_), body_, chart_head(chart_count_ > 0));
+                     html_escape(title_), body_, chart_head(chart_count_ > 0), kLayoutCheck);
 }
 
 }  // namespace quadid::report

@@ -169,7 +169,7 @@ std::string render_svg(const Plot& plot) {
     yr.lo -= pad;
     yr.hi += pad;
   }
-  const double xs = nice_step(xr.hi - xr.lo, 8), ys = nice_step(yr.hi - yr.lo, 5);
+  const double ys = nice_step(yr.hi - yr.lo, 5);
   auto X = [&](double x) { return ml + (x - xr.lo) / (xr.hi - xr.lo) * pw; };
   auto Y = [&](double y) { return mt + (yr.hi - y) / (yr.hi - yr.lo) * ph; };
 
@@ -188,8 +188,20 @@ std::string render_svg(const Plot& plot) {
     for (double v = std::ceil(r.lo / step) * step; v <= r.hi + 1e-9 * step; v += step) t.push_back(v);
     return t;
   };
-  const std::vector<double> xt = ticks(xr, xs), yt = ticks(yr, ys);
-  const TickLabels xl = tick_labels(xt, xs), yl = tick_labels(yt, ys);
+  // x ticks: about 8, fewer when their labels (~7 px a character at 12 px, and a gap) would touch.
+  double xs = nice_step(xr.hi - xr.lo, 8);
+  std::vector<double> xt = ticks(xr, xs);
+  TickLabels xl = tick_labels(xt, xs);
+  for (int target = 7; target >= 2; --target) {
+    size_t longest = 0;
+    for (const auto& l : xl.labels) longest = std::max(longest, l.size());
+    if (xt.size() < 2 || pw / static_cast<double>(xt.size()) >= 7.0 * static_cast<double>(longest) + 12.0) break;
+    xs = nice_step(xr.hi - xr.lo, target);
+    xt = ticks(xr, xs);
+    xl = tick_labels(xt, xs);
+  }
+  const std::vector<double> yt = ticks(yr, ys);
+  const TickLabels yl = tick_labels(yt, ys);
   o += grid_and_tick_labels(xt, yt, xl, yl, X, Y, ml, mt, pw, ph);
   o += fmt::format("<rect x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\" fill=\"none\" stroke=\"#555\"/>\n", ml, mt, pw, ph);
   o += fmt::format("<text x=\"{:.1f}\" y=\"{:.1f}\" text-anchor=\"middle\">{}</text>\n", ml + pw / 2, mt + ph + 33,
