@@ -66,15 +66,10 @@ void run(const OptionValues& v) {
     write_file_atomic(dir / "montecarlo.json", j.dump(2) + "\n");
     write_file_atomic(dir / "runs.csv", format_montecarlo_runs_csv(r));
     write_file_atomic(dir / "summary.txt", format_montecarlo(r));
-    report::HtmlDocument doc("quadid Monte Carlo");
-    doc.heading("Monte Carlo identification flights", 1);
-    doc.raw("<pre>" + report::html_escape(format_montecarlo(r)) + "</pre>");
-    for (const auto& p : montecarlo_histograms(r)) {
+    for (const auto& p : montecarlo_histograms(r))
       write_file_atomic(dir / fmt::format("histogram_{}.svg", p.xlabel.substr(0, p.xlabel.find(' '))),
                         report::render_svg(p));
-      doc.figure(p);
-    }
-    write_file_atomic(dir / "index.html", doc.str());
+    write_file_atomic(dir / "index.html", montecarlo_html(r));
   }
   if (a.json) {
     fmt::print("{}\n", j.dump(2));

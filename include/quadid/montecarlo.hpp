@@ -88,6 +88,9 @@ nlohmann::ordered_json to_json(const MonteCarloResult& r);
 std::string format_montecarlo(const MonteCarloResult& r);
 /// One histogram per parameter (estimates of every set, truth as a line).
 std::vector<report::Plot> montecarlo_histograms(const MonteCarloResult& r, int bins = 30);
+/// The page of `montecarlo --out DIR` (index.html): the conclusions (each set's largest bias in its
+/// spread, its intervals' coverage), the statistics as tables, the histograms.
+std::string montecarlo_html(const MonteCarloResult& r);
 /// Per-run estimates as CSV: run,seed,ok,<SET>_<param>...
 std::string format_montecarlo_runs_csv(const MonteCarloResult& r);
 

@@ -355,3 +355,80 @@ std::string format_montecarlo_runs_csv(const MonteCarloResult& r) {
 }
 
 }  // namespace quadid
+
+namespace quadid {
+
+namespace {
+
+// The closing sentences: each set's coverage range and its largest bias, in its own spread.
+std::string montecarlo_conclusions(const MonteCarloResult& r) {
+  std::string h = "<div class=\"conclusions\">\n";
+  for (const auto& s : r.sets) {
+    if (s.runs == 0) continue;
+    int worst = 0;
+    double worst_z = 0.0;
+    for (int j = 0; j < 7; ++j) {
+      const double z = s.std(j) > 0.0 ? std::abs(s.bias(j)) / s.std(j) : 0.0;
+      if (z > worst_z) {
+        worst_z = z;
+        worst = j;
+      }
+    }
+    std::string cov;
+    if (s.has_intervals) {
+      Eigen::Index k = 0;
+      const double lo = 100.0 * s.coverage.minCoeff(&k), hi = 100.0 * s.coverage.maxCoeff();
+      // Below what 95 % coverage gives over this many runs (binomial, 95 %): too narrow, not chance.
+      const double floor = 100.0 * (0.95 - kZ95 * std::sqrt(0.95 * 0.05 / std::max(1, s.runs)));
+      cov = fmt::format(" Its 95 % intervals held the truth in {:.0f}-{:.0f} % of the runs{}.", lo, hi,
+                        lo < floor ? fmt::format(" ({} lowest, below the {:.0f} % that chance allows over {} runs: its "
+                                                 "intervals are too narrow)",
+                                                 kThetaNames[static_cast<size_t>(k)], floor, s.runs)
+                                   : std::string());
+    }
+    h += fmt::format("<p><b>{}</b> ({} runs): largest bias {} at {:.1f} of its standard deviations over the runs{}.{}</p>\n",
+                     report::html_escape(s.name), s.runs, kThetaNames[static_cast<size_t>(worst)], worst_z,
+                     worst_z > 2.0 ? ", beyond what noise gives" : "", cov);
+  }
+  if (const std::string note = unreachable_truth_note(r.truth); !note.empty()) h += "<p>" + report::html_escape(note) + "</p>\n";
+  return h + "</div>\n";
+}
+
+}  // namespace
+
+std::string montecarlo_html(const MonteCarloResult& r) {
+  report::HtmlDocument doc(fmt::format("quadid Monte Carlo: {} identification flights", r.options.runs));
+  doc.heading("Conclusions");
+  doc.raw(montecarlo_conclusions(r));
+  doc.heading("Statistics");
+  const Theta scale = determinedness_scale(r.truth);
+  const auto table = [&](const std::string& title, auto value) {
+    report::Table t{title, {"set"}, {}, ""};
+    for (const char* n : kThetaNames) t.header.emplace_back(n);
+    for (const auto& s : r.sets) {
+      if (s.runs == 0) continue;
+      std::vector<std::string> row{s.name};
+      bool any = false;
+      for (int j = 0; j < 7; ++j) {
+        const double v = value(s, j);
+        any |= std::isfinite(v);
+        row.push_back(std::isfinite(v) ? fmt::format("{:.3f}", v) : "-");
+      }
+      if (any) t.rows.push_back(std::move(row));
+    }
+    doc.table(t);
+  };
+  doc.paragraph("Relative to |m| (m) or to the mean principal moment (every inertia entry), in %, as identify's rel %.");
+  table("Bias (%)", [&](const MonteCarloSetStats& s, int j) { return 100.0 * s.bias(j) / scale(j); });
+  table("Standard deviation (%)", [&](const MonteCarloSetStats& s, int j) { return 100.0 * s.std(j) / scale(j); });
+  table("RMSE (%)", [&](const MonteCarloSetStats& s, int j) { return 100.0 * s.rmse(j) / scale(j); });
+  table("Coverage of the 95 % intervals (%)",
+        [&](const MonteCarloSetStats& s, int j) { return s.has_intervals ? 100.0 * s.coverage(j) : kNaN; });
+  doc.heading("Histograms");
+  for (const auto& p : montecarlo_histograms(r)) doc.figure(p);
+  doc.paragraph(fmt::format("The text summary (summary.txt):"));
+  doc.raw("<pre style=\"white-space: pre-wrap\">" + report::html_escape(format_montecarlo(r)) + "</pre>\n");
+  return doc.str();
+}
+
+}  // namespace quadid
