@@ -105,6 +105,15 @@ std::string color_for(const std::string& name, size_t index) {
 }
 
 namespace {
+// The multiples of `step` inside r.
+std::vector<double> ticks(const Range& r, double step) {
+  std::vector<double> t;
+  for (double v = std::ceil(r.lo / step) * step; v <= r.hi + 1e-9 * step; v += step) t.push_back(v);
+  return t;
+}
+}  // namespace
+
+namespace {
 // The grid lines at the ticks and the tick labels of both axes.
 template <class FX, class FY>
 std::string grid_and_tick_labels(const std::vector<double>& xt, const std::vector<double>& yt, const TickLabels& xl,
@@ -183,11 +192,6 @@ std::string render_svg(const Plot& plot) {
                      ml + pw / 2, html_escape(plot.title));
   // Grid and ticks: one labelling (tick_labels) for both axes, its shared
   // offset and exponent written after the axis label.
-  const auto ticks = [](const Range& r, double step) {
-    std::vector<double> t;
-    for (double v = std::ceil(r.lo / step) * step; v <= r.hi + 1e-9 * step; v += step) t.push_back(v);
-    return t;
-  };
   // x ticks: about 8, fewer when their labels (~7 px a character at 12 px, and a gap) would touch.
   double xs = nice_step(xr.hi - xr.lo, 8);
   std::vector<double> xt = ticks(xr, xs);
