@@ -5,6 +5,7 @@
 #include "quadid/batch.hpp"
 #include "quadid/estimation.hpp"
 #include "quadid/io.hpp"
+#include "quadid/report.hpp"
 #include "quadid/simulation.hpp"
 
 #include <fmt/format.h>
@@ -332,4 +333,40 @@ TEST_F(CliBatch, ComparesTheFlightsAndFlagsTheHeavyOne) {
   EXPECT_EQ(s["outliers"][0]["path"], path("heavy.csv"));
   EXPECT_EQ(s["outliers"][0]["parameter"], "m");
   EXPECT_NEAR(s["outliers"][0]["value"].get<double>() / s["outliers"][0]["others_mean"].get<double>(), 1.1, 0.01);
+}
+
+// batch --report DIR: the fleet page shows --summary's numbers (read back from
+// the cells' data-value), links every identified log to its own page (which
+// exists and is identify --report's page for that log), and lists a failed
+// log with the reason, so a person sees the fleet and each flight at a glance.
+TEST_F(CliBatch, ReportWritesTheFleetPageAndOnePagePerLog) {
+  quadid::write_flight_log(flight(3), path("c.csv"));
+  const auto r = run("batch --window " + std::string(kWindow) + " --summary " + path("summary.json") + " --report " +
+                     path("fleet") + " " + path("a.csv") + " " + path("b.csv") + " " + path("c.csv") + " " +
+                     path("corrupt.csv") + " -o " + path("out.jsonl"));
+  ASSERT_EQ(r.rc, 2) << r.err;  // one log failed; the others and the pages are written
+  const std::string page = quadid::read_file(path("fleet/index.html"));
+  const auto s = nlohmann::ordered_json::parse(quadid::read_file(path("summary.json")));
+  for (const char* p : {"m", "Ixx", "Izz"}) {
+    const double mean = s["parameters"][p]["mean"].get<double>();
+    EXPECT_NE(page.find(fmt::format("data-value=\"{:.17g}\"", mean)), std::string::npos) << p << " mean " << mean;
+  }
+  for (const auto& [k, log] : std::vector<std::pair<int, std::string>>{{1, "a"}, {2, "b"}, {3, "c"}}) {
+    const std::string rel = fmt::format("flights/{:03d}-{}.html", k, log);
+    EXPECT_NE(page.find("href=\"" + rel + "\""), std::string::npos) << rel;
+    const std::string own = quadid::read_file(path("fleet/" + rel));
+    EXPECT_NE(own.find("Recommended set"), std::string::npos) << rel;
+    EXPECT_NE(own.find(path(log + ".csv")), std::string::npos) << rel;
+  }
+  EXPECT_FALSE(std::filesystem::exists(path("fleet/flights/004-corrupt.html")));
+  EXPECT_NE(page.find("FAILED: " + quadid::report::html_escape(path("corrupt.csv"))), std::string::npos);
+  EXPECT_NE(page.find("3 of 4 logs identified"), std::string::npos);
+}
+
+TEST_F(CliBatch, ReportIntoAFileIsRefusedBeforeAnyLogIsRead) {
+  write("taken", "x");
+  const auto r = run("batch --report " + path("taken") + " " + path("a.csv"));
+  EXPECT_EQ(r.rc, 1);
+  EXPECT_EQ(r.out, "");
+  EXPECT_NE(r.err.find("--report"), std::string::npos) << r.err;
 }

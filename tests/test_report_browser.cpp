@@ -154,3 +154,34 @@ TEST_F(ReportBrowser, FollowReportRendersTheTrackingCharts) {
   ASSERT_EQ(j["changes"].size(), 1u);
   EXPECT_NE(dom.find(fmt::format("At {:.2f} s", j["changes"][0]["t"].get<double>())), std::string::npos);
 }
+
+// batch --report: the fleet page (a figure per parameter, the logs with links)
+// renders with no console error and passes its own layout check; each log's
+// own page does too.
+TEST_F(ReportBrowser, FleetReportRendersAndLinksEachLogsPage) {
+  const char* chrome = chromium();
+  if (!chrome) GTEST_SKIP() << "chromium is not installed (apt-get install chromium)";
+  std::string logs;
+  for (int seed : {1, 2, 3}) {
+    const std::string f = path(fmt::format("f{}.csv", seed));
+    ASSERT_EQ(run(fmt::format("simulate --trajectory table2 --duration 12 --seed {} -o {}", seed, f)).rc, 0);
+    logs += " " + f;
+  }
+  const CliRun r = run("batch -q --window 2:10 --report " + path("fleet") + logs + " -o " + path("out.jsonl"));
+  ASSERT_EQ(r.rc, 0) << r.err;
+  const std::string flags = std::string("--headless --no-sandbox --disable-gpu --disable-quic --no-first-run "
+                                        "--disable-background-networking --disable-component-update --disable-sync "
+                                        "--enable-logging=stderr --v=0 --user-data-dir=") + path("profile") +
+                            " --window-size=1400,2400 ";
+  for (const std::string page : {"fleet/index.html", "fleet/flights/002-f2.html"}) {
+    std::system((std::string(chrome) + " " + flags + "--dump-dom 'file://" + path(page) + "#layout-check' > " +
+                 path("dom.html") + " 2> " + path("console.txt")).c_str());
+    const std::string dom = quadid::read_file(path("dom.html")), console = quadid::read_file(path("console.txt"));
+    EXPECT_EQ(console.find("Uncaught"), std::string::npos) << page << console;
+    EXPECT_NE(dom.find("<pre id=\"layout-check\">ok</pre>"), std::string::npos) << page << layout_findings(dom);
+    if (page == "fleet/index.html") {
+      EXPECT_EQ(count(dom, "<svg"), 7u);  // one figure per parameter that varies over the flights
+      EXPECT_EQ(count(dom, "href=\"flights/"), 3u);
+    }
+  }
+}

@@ -10,7 +10,9 @@
 
 #include <fmt/format.h>
 
+#include <cctype>
 #include <cstdio>
+#include <filesystem>
 #include <iostream>
 #include <iterator>
 #include <map>
@@ -25,11 +27,38 @@ namespace {
 /// The command line's part: the logs, the outputs, the comparison of the flights.
 struct BatchArgs {
   std::vector<std::string> logs;
-  std::string list, out, summary;
+  std::string list, out, summary, report;
   int threads = 0;
   bool quiet = false;
   FleetSummaryOptions summary_opt;
 };
+
+// "NNN-NAME.html": the log's place in the input, then its file name's stem kept to
+// letters, digits, '-', '_' and '.' (two logs of one name stay apart).
+std::string flight_page_name(std::size_t index, const std::string& path) {
+  std::string stem = std::filesystem::path(path).stem().string(), safe;
+  for (char c : stem) safe += std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_' || c == '.' ? c : '_';
+  if (safe.size() > 60) safe.resize(60);
+  return fmt::format("{:03d}-{}.html", index + 1, safe);
+}
+
+// Writes an identified log's own page under DIR/flights and returns its line of the fleet page.
+FleetPageLog write_flight_page(const std::string& dir, std::size_t index, const BatchRecord& r,
+                               const nlohmann::ordered_json& j) {
+  FleetPageLog l;
+  l.path = r.path;
+  l.ok = r.ok;
+  l.error = r.error;
+  if (j.contains("warnings"))
+    for (const auto& w : j["warnings"]) l.warnings.push_back(w.get<std::string>());
+  if (r.ok && !r.report.empty()) {
+    const std::filesystem::path sub = std::filesystem::path(dir) / "flights";
+    std::filesystem::create_directories(sub);
+    l.page = "flights/" + flight_page_name(index, r.path);
+    write_file_atomic(std::filesystem::path(dir) / l.page, r.report);
+  }
+  return l;
+}
 
 void run(const OptionValues& v) {
   BatchArgs a;
@@ -37,6 +66,7 @@ void run(const OptionValues& v) {
   a.list = v.string("list").value_or("");
   a.out = v.string("out").value_or("");
   a.summary = v.string("summary").value_or("");
+  a.report = v.string("report").value_or("");
   a.threads = *v.integer32("threads");
   a.quiet = v.flag("quiet");
   a.summary_opt.set = *v.string("summary-set");
@@ -44,7 +74,9 @@ void run(const OptionValues& v) {
   const IdentifyRequest req = identify_request(v);  // identify's options, from batch's table (the same rows)
   BatchOptions bopt;
   bopt.threads = a.threads;
+  bopt.reports = !a.report.empty();
   bopt.validate();
+  if (!a.report.empty()) check_output_directory(a.report, "--report");
   a.summary_opt.validate();  // before any log is read
 
   std::vector<std::string> paths = a.logs;
@@ -60,11 +92,13 @@ void run(const OptionValues& v) {
   // Lines go to stdout as soon as every earlier log is done; with -o they are
   // collected and the file is written once, atomically, at the end.
   std::string collected;
-  const bool compare = !a.quiet || !a.summary.empty();  // the flights' comparison is printed or written
+  const bool compare = !a.quiet || !a.summary.empty() || !a.report.empty();  // the comparison is printed or written
   std::vector<nlohmann::ordered_json> records;                 // what it reads of each result, when it is
-  const BatchSink sink = [&](std::size_t, const BatchRecord& r) {
+  std::vector<FleetPageLog> pages;                              // --report: each log's line of the fleet page
+  const BatchSink sink = [&](std::size_t index, const BatchRecord& r) {
     nlohmann::ordered_json j = to_json(r);
     const std::string line = j.dump() + "\n";
+    if (!a.report.empty()) pages.push_back(write_flight_page(a.report, index, r, j));
     if (compare) {
       nlohmann::ordered_json kept = nlohmann::ordered_json::object();
       for (const char* key : {"path", "ok", "estimates", "uncertainty", "recommended"})
@@ -92,6 +126,11 @@ void run(const OptionValues& v) {
     if (!a.summary.empty()) write_file_atomic(a.summary, to_json(fs).dump(2) + "\n");
     if (table) fmt::print(stderr, "{}", fs.table());
   }
+  if (!a.report.empty()) {
+    const FleetSummary fs = summarize_fleet(records, a.summary_opt);
+    write_file_atomic(std::filesystem::path(a.report) / "index.html", fleet_report(fs, pages));
+    if (!a.quiet) fmt::print(stderr, "quadid batch: wrote {}\n", (std::filesystem::path(a.report) / "index.html").string());
+  }
   if (!a.quiet)
     fmt::print(stderr, "quadid batch: {} logs, {} ok, {} failed in {:.2f} s ({:.3g} logs/s, {} threads){}\n", s.total,
                s.ok, s.failed, s.seconds, s.seconds > 0 ? static_cast<double>(s.total) / s.seconds : 0.0, s.threads,
@@ -118,6 +157,7 @@ void register_batch(CLI::App& app) {
       "Examples:\n"
       "  quadid batch logs/*.csv > results.jsonl\n"
       "  find logs -name '*.csv' | quadid batch --list - --threads 2 --cutoff 3 -o results.jsonl\n"
+      "  quadid batch logs/*.csv --report fleet -o results.jsonl   # then open fleet/index.html\n"
       "See docs/fleet.md for a Dask cluster and a Slurm array job.");
   auto given = add_table_options(sub, "batch");
   sub->callback([given] { run(given->read()); });

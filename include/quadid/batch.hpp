@@ -8,6 +8,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <array>
 #include <cstddef>
 #include <functional>
 #include <limits>
@@ -23,11 +24,14 @@ FlightLog load_log_file(const std::string& path, const CsvReadOptions& csv);
 /// `quadid identify --json` for one file: read, identify, to_json(result) plus
 /// "log": path. Errors keep their type (InputError for bad data,
 /// std::invalid_argument for bad options) and their message starts with the path.
-/// `evolution`, when given, receives the estimates over time (not in the JSON).
-nlohmann::ordered_json identify_log_file(const std::string& path, const IdentifyRequest& req, Evolution* evolution = nullptr);
+/// `evolution`, when given, receives the estimates over time (not in the JSON);
+/// `report`, when given, the flight's page (identification_report, as identify --report writes it).
+nlohmann::ordered_json identify_log_file(const std::string& path, const IdentifyRequest& req, Evolution* evolution = nullptr,
+                                         std::string* report = nullptr);
 
 struct BatchOptions {
   int threads = 0;  // worker threads; 0 = one per core (std::thread::hardware_concurrency)
+  bool reports = false;  // each identified record carries its flight's page (BatchRecord::report; batch --report)
   void validate() const;  // throws std::invalid_argument naming --threads
 };
 
@@ -38,6 +42,7 @@ struct BatchRecord {
   std::string error;       // why it failed (empty when ok)
   nlohmann::ordered_json result;   // identify --json (null when failed)
   double seconds = 0.0;    // wall time of this log
+  std::string report;      // the flight's HTML page, with BatchOptions::reports (empty otherwise)
 };
 
 /// One JSON Lines object: {"path", "ok": true, ...identify --json...} or
@@ -108,11 +113,19 @@ struct FleetOutlier {
   double t = 0.0;
 };
 
+/// A flight as compared: its values in the compared set and their standard errors.
+struct FleetFlight {
+  std::string path;
+  std::string set;                                    // the set compared (the flight's recommended one, or as asked)
+  std::array<double, 7> value{}, std_error{};         // m, Ixx, Ixy, Ixz, Iyy, Iyz, Izz; std_error NaN when none
+};
+
 struct FleetSummary {
   std::string set;                   // as asked ("recommended" or a set name)
   double level = 0.0;                // FleetSummaryOptions::level
   std::size_t flights = 0;           // records that were identified and have the set
   double critical_t = std::numeric_limits<double>::quiet_NaN();  // flag when t exceeds it (NaN: no test)
+  std::vector<FleetFlight> members;  // the flights compared, in record order
   std::vector<std::string> skipped;  // "path: why" for records left out
   std::vector<FleetParameter> parameters;  // m, Ixx, ..., Izz
   std::vector<FleetOutlier> outliers;
@@ -128,5 +141,23 @@ nlohmann::ordered_json to_json(const FleetSummary& s);
 /// failed records and those without the set are listed in `skipped`. Outliers
 /// need 3 flights or more (the others' mean and spread need 2).
 FleetSummary summarize_fleet(const std::vector<nlohmann::ordered_json>& records, const FleetSummaryOptions& opt = {});
+
+/// A log of the fleet page: how it went, its warnings, and its own page (a
+/// path relative to the fleet page; empty when it has none).
+struct FleetPageLog {
+  std::string path;
+  bool ok = false;
+  std::string error;  // why it failed
+  std::vector<std::string> warnings;
+  std::string page;
+};
+
+/// batch --report: one self-contained HTML page (docs/report.md, "A fleet"):
+/// the conclusion (the flights that depart from the others, the notes), the
+/// comparison as tables, each parameter over the flights with each flight's
+/// 95 % interval beside the fleet's mean and spread, and every log with its
+/// warnings and a link to its own page. `s` is summarize_fleet's, whose
+/// numbers the page shows (the same as --summary writes).
+std::string fleet_report(const FleetSummary& s, const std::vector<FleetPageLog>& logs);
 
 }  // namespace quadid

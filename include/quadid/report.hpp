@@ -39,6 +39,7 @@ struct Plot {
   int width = 760, height = 300;  // px
   bool equal_aspect = false;      // same scale on x and y (paths in a plane)
   int max_points = 1500;          // per series; longer series are decimated (min/max kept)
+  bool integer_x = false;         // x counts things (flights, runs): ticks at whole numbers only
 };
 
 /// Tick labels for evenly spaced ticks `step` apart, as matplotlib's

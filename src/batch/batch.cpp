@@ -28,7 +28,8 @@ FlightLog load_log_file(const std::string& path, const CsvReadOptions& csv) {
   return logs::load_any_log(path, load);
 }
 
-nlohmann::ordered_json identify_log_file(const std::string& path, const IdentifyRequest& req, Evolution* evolution) {
+nlohmann::ordered_json identify_log_file(const std::string& path, const IdentifyRequest& req, Evolution* evolution,
+                                         std::string* report) {
   const IdentificationInput in = prepare_identification(path, req);  // InputError names the file
   IdentificationResult res;
   try {
@@ -43,6 +44,7 @@ nlohmann::ordered_json identify_log_file(const std::string& path, const Identify
   nlohmann::ordered_json j = to_json(res);
   j["log"] = path;
   add_input_json(j, in);
+  if (report) *report = identification_report(in, res, j, path);
   if (evolution) *evolution = std::move(res.evolution);
   return j;
 }
@@ -93,7 +95,7 @@ BatchSummary identify_batch(const std::vector<std::string>& paths, const Identif
     rec.path = paths[i];
     const auto s0 = Clock::now();
     try {
-      rec.result = identify_log_file(paths[i], per_log);
+      rec.result = identify_log_file(paths[i], per_log, nullptr, opt.reports ? &rec.report : nullptr);
       rec.ok = true;
     } catch (const std::bad_alloc&) {
       rec.error = fmt::format("{}: out of memory", paths[i]);

@@ -50,10 +50,7 @@ double median(std::vector<double> v) {
   return 0.5 * (*mid + *std::max_element(v.begin(), mid));
 }
 
-struct Flight {
-  std::string path, set;
-  std::array<double, 7> value{}, std_error{};
-};
+using Flight = FleetFlight;
 
 }  // namespace
 
@@ -224,6 +221,7 @@ FleetSummary summarize_fleet(const std::vector<nlohmann::ordered_json>& records,
   if (n < 3) s.notes.push_back(fmt::format("{} flight{}: outliers need 3 or more", n, n == 1 ? "" : "s"));
   for (std::size_t j = 0; j < 7; ++j) s.parameters.push_back(parameter_over(flights, j, s));
   if (n >= 3) flag_outliers(flights, opt, s);
+  s.members = std::move(flights);
   return s;
 }
 

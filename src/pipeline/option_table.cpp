@@ -559,6 +559,12 @@ Defs batch_options() {
         "standard errors; the flights that depart from the others")
           .text("none")
           .cli(),
+      B("report", K::String,
+        "write DIR/index.html: the flights compared (the same numbers as --summary), each parameter over the "
+        "flights with their intervals, every log with its warnings; and DIR/flights/NNN-NAME.html, each log's own "
+        "page as identify --report writes it (self-contained, works offline; docs/report.md)")
+          .text("none")
+          .cli(),
       B("summary-set", K::String,
         "the set compared across the flights: recommended (each flight's) or LS, GD, FMLS, FMGD, PC, FMPC")
           .def("recommended").cli(),

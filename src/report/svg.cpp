@@ -135,32 +135,47 @@ std::string grid_and_tick_labels(const std::vector<double>& xt, const std::vecto
 }
 }  // namespace
 
-std::string render_svg(const Plot& plot) {
+namespace {
+// Where everything goes for a left margin `ml`: the legend's rows, the plot
+// area and both axes' ranges, and the y ticks with their labels.
+struct Layout {
+  double ml = 0, mr = 20, mt = 0, mb = 0, pw = 0, ph = 0;
+  std::vector<std::pair<double, size_t>> legend_pos;  // x offset, row
+  size_t legend_rows = 0;
+  Range xr, yr;
+  double ys = 0;
+  std::vector<double> yt;
+  TickLabels yl;
+};
+
+Layout layout(const Plot& plot, double ml) {
+  Layout L;
   const double W = plot.width, H = plot.height;
-  const double ml = 70, mr = 20, mt = plot.title.empty() ? 14 : 30;
+  L.ml = ml;
+  L.mt = plot.title.empty() ? 14 : 30;
   // Legend rows below the x label: entries as wide as their labels, as many
   // per row as fit (a sample line of 24 px, 6 px gap, ~6.5 px per character at 12 px).
   const size_t nser = plot.series.size();
-  const double legend_w = W - ml - mr;
-  std::vector<std::pair<double, size_t>> legend_pos(nser);  // x offset, row
-  size_t legend_rows = 0;
+  const double legend_w = W - L.ml - L.mr;
+  L.legend_pos.resize(nser);
   if (nser > 1) {
     double x = 0.0;
-    legend_rows = 1;
+    L.legend_rows = 1;
     for (size_t k = 0; k < nser; ++k) {
       const double w = 24 + 6 + 6.5 * static_cast<double>(plot.series[k].label.size()) + 14;
       if (x > 0.0 && x + w > legend_w) {
         x = 0.0;
-        ++legend_rows;
+        ++L.legend_rows;
       }
-      legend_pos[k] = {x, legend_rows - 1};
+      L.legend_pos[k] = {x, L.legend_rows - 1};
       x += w;
     }
   }
-  const double mb = 48 + 18.0 * static_cast<double>(legend_rows);
-  const double pw = W - ml - mr, ph = H - mt - mb;
-
-  Range xr, yr;
+  L.mb = 48 + 18.0 * static_cast<double>(L.legend_rows);
+  L.pw = W - L.ml - L.mr;
+  L.ph = H - L.mt - L.mb;
+  Range& xr = L.xr;
+  Range& yr = L.yr;
   for (const auto& s : plot.series) {
     for (double v : s.x) xr.add(v);
     for (double v : s.y) yr.add(v);
@@ -169,16 +184,34 @@ std::string render_svg(const Plot& plot) {
   widen(yr);
   if (plot.equal_aspect) {
     // Same metres per pixel on both axes, centred.
-    const double sx = (xr.hi - xr.lo) / pw, sy = (yr.hi - yr.lo) / ph, s = std::max(sx, sy) * 1.05;
+    const double sx = (xr.hi - xr.lo) / L.pw, sy = (yr.hi - yr.lo) / L.ph, sc = std::max(sx, sy) * 1.05;
     const double cx = 0.5 * (xr.lo + xr.hi), cy = 0.5 * (yr.lo + yr.hi);
-    xr = {cx - 0.5 * s * pw, cx + 0.5 * s * pw};
-    yr = {cy - 0.5 * s * ph, cy + 0.5 * s * ph};
+    xr = {cx - 0.5 * sc * L.pw, cx + 0.5 * sc * L.pw};
+    yr = {cy - 0.5 * sc * L.ph, cy + 0.5 * sc * L.ph};
   } else {
     const double pad = 0.05 * (yr.hi - yr.lo);
     yr.lo -= pad;
     yr.hi += pad;
   }
-  const double ys = nice_step(yr.hi - yr.lo, 5);
+  L.ys = nice_step(yr.hi - yr.lo, 5);
+  L.yt = ticks(yr, L.ys);
+  L.yl = tick_labels(L.yt, L.ys);
+  return L;
+}
+}  // namespace
+
+std::string render_svg(const Plot& plot) {
+  const double W = plot.width, H = plot.height;
+  // The left margin holds the y tick labels (right-aligned 6 px from the axis,
+  // ~7 px a digit at 12 px) clear of the rotated y label (x 7-22 px).
+  Layout L = layout(plot, 70);
+  size_t longest_y = 0;
+  for (const auto& l : L.yl.labels) longest_y = std::max(longest_y, l.size());
+  if (const double need = 30.0 + 7.0 * static_cast<double>(longest_y); need > 70) L = layout(plot, need);
+  const double ml = L.ml, mt = L.mt, pw = L.pw, ph = L.ph;
+  const Range xr = L.xr, yr = L.yr;
+  const size_t nser = plot.series.size();
+  const auto& legend_pos = L.legend_pos;
   auto X = [&](double x) { return ml + (x - xr.lo) / (xr.hi - xr.lo) * pw; };
   auto Y = [&](double y) { return mt + (yr.hi - y) / (yr.hi - yr.lo) * ph; };
 
@@ -193,25 +226,27 @@ std::string render_svg(const Plot& plot) {
   // Grid and ticks: one labelling (tick_labels) for both axes, its shared
   // offset and exponent written after the axis label.
   // x ticks: about 8, fewer when their labels (~7 px a character at 12 px, and a gap) would touch.
-  double xs = nice_step(xr.hi - xr.lo, 8);
+  const auto x_step = [&](int target) {
+    const double st = nice_step(xr.hi - xr.lo, target);
+    return plot.integer_x ? std::max(st, 1.0) : st;
+  };
+  double xs = x_step(8);
   std::vector<double> xt = ticks(xr, xs);
   TickLabels xl = tick_labels(xt, xs);
   for (int target = 7; target >= 2; --target) {
     size_t longest = 0;
     for (const auto& l : xl.labels) longest = std::max(longest, l.size());
     if (xt.size() < 2 || pw / static_cast<double>(xt.size()) >= 7.0 * static_cast<double>(longest) + 12.0) break;
-    xs = nice_step(xr.hi - xr.lo, target);
+    xs = x_step(target);
     xt = ticks(xr, xs);
     xl = tick_labels(xt, xs);
   }
-  const std::vector<double> yt = ticks(yr, ys);
-  const TickLabels yl = tick_labels(yt, ys);
-  o += grid_and_tick_labels(xt, yt, xl, yl, X, Y, ml, mt, pw, ph);
+  o += grid_and_tick_labels(xt, L.yt, xl, L.yl, X, Y, ml, mt, pw, ph);
   o += fmt::format("<rect x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\" fill=\"none\" stroke=\"#555\"/>\n", ml, mt, pw, ph);
   o += fmt::format("<text x=\"{:.1f}\" y=\"{:.1f}\" text-anchor=\"middle\">{}</text>\n", ml + pw / 2, mt + ph + 33,
                    html_escape(plot.xlabel + xl.suffix));
   o += fmt::format("<text transform=\"translate(16,{:.1f}) rotate(-90)\" text-anchor=\"middle\">{}</text>\n",
-                   mt + ph / 2, html_escape(plot.ylabel + yl.suffix));
+                   mt + ph / 2, html_escape(plot.ylabel + L.yl.suffix));
   // Curves, clipped to the plot area.
   static int clip_counter = 0;
   const int clip_id = ++clip_counter;
