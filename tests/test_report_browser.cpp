@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include <cmath>
 #include <regex>
 
 using quadid::testing::CliRun;
@@ -68,11 +69,11 @@ TEST_F(ReportBrowser, ChromiumRendersEveryFigureAndTable) {
   std::system((std::string(chrome) + " " + flags + "--dump-dom " + url + " > " + dom_file + " 2>/dev/null").c_str());
   std::system((std::string(chrome) + " " + flags + "--screenshot=" + png + " " + url + " > /dev/null 2>&1").c_str());
   const std::string dom = quadid::read_file(dom_file);
-  // 14 figures of 2 + 1 + 3 + 3 + 2 + 2 + 1 + 3 + 3 + 3 + 3 + 2 + 2 + 3 = 33 plots (trajectory, mass,
-  // moments, products, LS residuals and their spectra (force and moment rows apart), path, position
+  // 14 captions; 2 + 2 + 6 + 6 + 2 + 2 + 1 + 3 + 3 + 3 + 3 + 2 + 2 + 3 = 40 plots (trajectory, mass,
+  // moments and products each as least squares beside gradient descent, one row per parameter, LS residuals and their spectra (force and moment rows apart), path, position
   // and its differences, attitude and its differences, inputs in two rows of two, circle paths; see
   // reproduction_html).
-  EXPECT_EQ(count(dom, "<svg"), 33u);
+  EXPECT_EQ(count(dom, "<svg"), 40u);
   EXPECT_EQ(count(dom, "<figcaption>"), 14u);
   // Table 2, the constraint check, Table 3 and its errors, Tables 4 to 12, and the conclusions; and
   // in section 2 as tables, not text: LS's and FMLS's intervals, the physical checks, the recommended set.
@@ -132,6 +133,50 @@ TEST_F(ReportBrowser, IdentifyReportRendersItsChartsAndShowsTheResultsNumbers) {
   // Every chart's axes carry a unit.
   for (const char* label : {"time (s)", "frequency (Hz)", "Fz (N)", "tau_phi (N m)", "PSD ((N m)^2/Hz)"})
     EXPECT_NE(page.find(label), std::string::npos) << label;
+  // The rendered charts: no canvas tick label overlaps its neighbour or is wider than its axis, every axis has a unit.
+  std::system((std::string(chrome) + " " + flags + "--dump-dom '" + url + "#layout-check' > " + path("layout.html") +
+               " 2>/dev/null").c_str());
+  const std::string laid = quadid::read_file(path("layout.html"));
+  EXPECT_NE(laid.find("<pre id=\"layout-check\">ok</pre>"), std::string::npos) << layout_findings(laid);
+}
+
+// The layout check of the canvas charts is real: a chart whose y axis has no
+// unit, and one whose tick labels are too wide for its axis (squeezed to 30 px),
+// are named; the same chart done right passes.
+TEST_F(ReportBrowser, LayoutCheckNamesAUnitlessAxisAndCrowdedCanvasTicks) {
+  const char* chrome = chromium();
+  if (!chrome) GTEST_SKIP() << "chromium is not installed (apt-get install chromium)";
+  if (!quadid::report::have_uplot()) GTEST_SKIP() << "this build has no uPlot (no npm at configure time)";
+  const auto page = [](const std::string& ylabel, double offset) {
+    quadid::report::HtmlDocument doc("check");
+    quadid::report::Chart c;
+    c.title = "a chart";
+    c.xlabel = "time (s)";
+    c.ylabel = ylabel;
+    for (int i = 0; i < 200; ++i) c.x.push_back(0.01 * i);
+    quadid::report::Series s;
+    s.label = "y";
+    for (double x : c.x) s.y.push_back(offset + 1e-9 * std::sin(20 * x));
+    c.series.push_back(s);
+    doc.chart(c);
+    return doc.str();
+  };
+  const std::string flags = std::string("--headless --no-sandbox --disable-gpu --disable-quic --no-first-run "
+                                        "--disable-background-networking --disable-component-update --disable-sync "
+                                        "--user-data-dir=") + path("profile") + " --window-size=1000,800 ";
+  const auto check = [&](const std::string& html) {
+    write("p.html", html);
+    std::system((std::string(chrome) + " " + flags + "--dump-dom 'file://" + path("p.html") + "#layout-check' > " +
+                 path("dom.html") + " 2>/dev/null").c_str());
+    return layout_findings(quadid::read_file(path("dom.html")));
+  };
+  EXPECT_NE(check(page("force", 0.0)).find("chart 0 y axis: label 'force' has no unit"), std::string::npos);
+  std::string narrow = page("force (N)", 0.0);  // the y axis squeezed to 30 px: labels like "-5.0e-10" no longer fit
+  ASSERT_NE(narrow.find("size:80"), std::string::npos);
+  narrow.replace(narrow.find("size:80"), 7, "size:30");
+  const std::string crowded = check(narrow);
+  EXPECT_NE(crowded.find("wider than its axis"), std::string::npos) << crowded;
+  EXPECT_EQ(check(page("force (N)", 0.0)), "<pre id=\"layout-check\">ok");
 }
 
 // follow --report: the segments' table and the tracking estimate's four charts, no console error.
@@ -153,6 +198,10 @@ TEST_F(ReportBrowser, FollowReportRendersTheTrackingCharts) {
   const auto j = nlohmann::ordered_json::parse(r.out);
   ASSERT_EQ(j["changes"].size(), 1u);
   EXPECT_NE(dom.find(fmt::format("At {:.2f} s", j["changes"][0]["t"].get<double>())), std::string::npos);
+  std::system((std::string(chrome) + " " + flags + "--dump-dom 'file://" + path("rep/report.html") + "#layout-check' > " +
+               path("layout.html") + " 2>/dev/null").c_str());
+  const std::string laid = quadid::read_file(path("layout.html"));
+  EXPECT_NE(laid.find("<pre id=\"layout-check\">ok</pre>"), std::string::npos) << layout_findings(laid);
 }
 
 // batch --report: the fleet page (a figure per parameter, the logs with links)

@@ -2,6 +2,7 @@
 // self-contained HTML page with SVG figures (no scripts, no external files).
 #pragma once
 
+#include <limits>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -40,6 +41,9 @@ struct Plot {
   bool equal_aspect = false;      // same scale on x and y (paths in a plane)
   int max_points = 1500;          // per series; longer series are decimated (min/max kept)
   bool integer_x = false;         // x counts things (flights, runs): ticks at whole numbers only
+  /// The y axis's limits when both are finite (curves beyond are clipped at
+  /// the frame); otherwise from the data, padded 5 %.
+  double y_min = std::numeric_limits<double>::quiet_NaN(), y_max = std::numeric_limits<double>::quiet_NaN();
 };
 
 /// Tick labels for evenly spaced ticks `step` apart, as matplotlib's

@@ -267,7 +267,7 @@ std::vector<report::Plot> montecarlo_histograms(const MonteCarloResult& r, int b
     const bool mass = j == 0;
     p.title = fmt::format("{} over {} runs (truth: black)", kThetaNames[static_cast<size_t>(j)], r.runs.size());
     p.xlabel = fmt::format("{} ({})", kThetaNames[static_cast<size_t>(j)], mass ? "kg" : "kg m^2");
-    p.ylabel = "runs per bin";
+    p.ylabel = "runs per bin (count)";
     p.width = 520;
     p.height = 260;
     int ymax = 0;

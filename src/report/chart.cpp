@@ -118,8 +118,8 @@ void HtmlDocument::chart(const Chart& c, const std::string& caption) {
       "<figure class=\"chart\"><div id=\"chart{0}\" class=\"chart-box\" data-title={1}></div>\n"
       "<script>(function(){{var el=document.getElementById(\"chart{0}\");"
       "var w=Math.max(480,Math.min(1400,el.parentNode.clientWidth||1200));"
-      "new uPlot({{title:{1},width:w,height:{2},scales:{{x:{{time:false{3}}},y:{{{4}}}}},"
-      "axes:[{{label:{5}{9}}},{{label:{6},size:80{10}}}],series:{7},cursor:{{drag:{{x:true,y:false}}}}}},{8},el);}})();</script>\n",
+      "(window.quadidCharts=window.quadidCharts||[]).push(new uPlot({{title:{1},width:w,height:{2},scales:{{x:{{time:false{3}}},y:{{{4}}}}},"
+      "axes:[{{label:{5}{9}}},{{label:{6},size:80{10}}}],series:{7},cursor:{{drag:{{x:true,y:false}}}}}},{8},el));}})();</script>\n",
       id, js_string(c.title), c.height, c.log_x ? ",distr:3" : "", c.log_y ? "distr:3" : "", js_string(c.xlabel),
       js_string(c.ylabel), series, data, c.log_x ? "" : kTickValues, c.log_y ? "" : kTickValues);
   if (!caption.empty())

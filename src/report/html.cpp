@@ -35,6 +35,11 @@ if (location.hash === "#layout-check") window.addEventListener("load", function 
   var out = [];
   document.querySelectorAll("svg").forEach(function (svg, si) {
     var r = svg.getBoundingClientRect();
+    var axes = svg.querySelectorAll("text.axis-label");
+    if (axes.length > 0 && axes.length !== 2) out.push("figure " + si + ": " + axes.length + " axis labels, expected 2");
+    axes.forEach(function (t) {
+      if (!/\(.+\)/.test(t.textContent)) out.push("figure " + si + ": axis label '" + t.textContent + "' has no unit");
+    });
     var ts = Array.prototype.slice.call(svg.querySelectorAll("text"));
     var b = ts.map(function (t) { return t.getBoundingClientRect(); });
     b.forEach(function (a, i) {
@@ -46,6 +51,32 @@ if (location.hash === "#layout-check") window.addEventListener("load", function 
         if (a.left < c.right - 0.5 && c.left < a.right - 0.5 && a.top < c.bottom - 0.5 && c.top < a.bottom - 0.5)
           out.push("figure " + si + ": '" + ts[i].textContent + "' overlaps '" + ts[j].textContent + "'");
       }
+    });
+  });
+  // uPlot draws its ticks on a canvas: each axis's labels (uPlot's own
+  // _values at _splits) are measured with the axis's font, and must not
+  // overlap their neighbours nor (y) be wider than the axis leaves them; every
+  // axis label must carry a unit in brackets.
+  var ctx = document.createElement("canvas").getContext("2d");
+  (window.quadidCharts || []).forEach(function (u, ci) {
+    u.axes.forEach(function (a, ai) {
+      if (!a.show) return;
+      var name = "chart " + ci + " " + (ai === 0 ? "x" : "y") + " axis";
+      if (!/\(.+\)/.test(a.label || "")) out.push(name + ": label '" + (a.label || "") + "' has no unit");
+      var vals = a._values || [], sp = a._splits || [], fs = a.font[2], boxes = [];
+      ctx.font = a.font[0];
+      for (var i = 0; i < vals.length; i++) {
+        if (vals[i] == null || vals[i] === "") continue;
+        var pos = u.valToPos(sp[i], ai === 0 ? "x" : "y"), w = ctx.measureText(String(vals[i])).width / devicePixelRatio;
+        if (ai === 0) boxes.push([pos - w / 2, pos + w / 2, vals[i]]);
+        else {
+          boxes.push([pos - fs / 2, pos + fs / 2, vals[i]]);
+          if (w > a._size - a.ticks.size - a.gap) out.push(name + ": '" + vals[i] + "' wider than its axis");
+        }
+      }
+      boxes.sort(function (x, y) { return x[0] - y[0]; });
+      for (var k = 0; k + 1 < boxes.length; k++)
+        if (boxes[k][1] > boxes[k + 1][0] + 0.5) out.push(name + ": '" + boxes[k][2] + "' overlaps '" + boxes[k + 1][2] + "'");
     });
   });
   var p = document.createElement("pre");

@@ -188,6 +188,8 @@ Layout layout(const Plot& plot, double ml) {
     const double cx = 0.5 * (xr.lo + xr.hi), cy = 0.5 * (yr.lo + yr.hi);
     xr = {cx - 0.5 * sc * L.pw, cx + 0.5 * sc * L.pw};
     yr = {cy - 0.5 * sc * L.ph, cy + 0.5 * sc * L.ph};
+  } else if (std::isfinite(plot.y_min) && std::isfinite(plot.y_max) && plot.y_max > plot.y_min) {
+    yr = {plot.y_min, plot.y_max};
   } else {
     const double pad = 0.05 * (yr.hi - yr.lo);
     yr.lo -= pad;
@@ -243,9 +245,9 @@ std::string render_svg(const Plot& plot) {
   }
   o += grid_and_tick_labels(xt, L.yt, xl, L.yl, X, Y, ml, mt, pw, ph);
   o += fmt::format("<rect x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\" fill=\"none\" stroke=\"#555\"/>\n", ml, mt, pw, ph);
-  o += fmt::format("<text x=\"{:.1f}\" y=\"{:.1f}\" text-anchor=\"middle\">{}</text>\n", ml + pw / 2, mt + ph + 33,
-                   html_escape(plot.xlabel + xl.suffix));
-  o += fmt::format("<text transform=\"translate(16,{:.1f}) rotate(-90)\" text-anchor=\"middle\">{}</text>\n",
+  o += fmt::format("<text class=\"axis-label\" x=\"{:.1f}\" y=\"{:.1f}\" text-anchor=\"middle\">{}</text>\n", ml + pw / 2,
+                   mt + ph + 33, html_escape(plot.xlabel + xl.suffix));
+  o += fmt::format("<text class=\"axis-label\" transform=\"translate(16,{:.1f}) rotate(-90)\" text-anchor=\"middle\">{}</text>\n",
                    mt + ph / 2, html_escape(plot.ylabel + L.yl.suffix));
   // Curves, clipped to the plot area.
   static int clip_counter = 0;

@@ -297,33 +297,47 @@ std::vector<Plot> residual_plots(const Reproduction& r) {
   return {pf, pt, psf, psm};
 }
 
-Plot evolution_plot(const Reproduction& r, int param) {
+// One parameter's estimates over time, for the least-squares sets (LS, FMLS)
+// or the gradient-descent ones (GD, FMGD), with the true value as a grey band
+// beneath. Apart, because gradient descent follows the data sample by sample:
+// its swings, an order of magnitude wider than the least-squares curves'
+// settling, used to hide those curves and the band in one panel. The
+// least-squares panel's y axis fits the curves after their first tenth (the
+// first seconds, far off, are cut at the frame) and the truth.
+Plot evolution_plot(const Reproduction& r, int param, bool least_squares) {
   const auto& ev = r.identification.evolution;
   Plot p;
   const char* name = kThetaNames[static_cast<size_t>(param)];
-  p.title = fmt::format("{} estimate over time", name);
+  p.title = fmt::format("{}: {}", name, least_squares ? "least squares" : "gradient descent");
   p.xlabel = "time (s)";
   p.ylabel = fmt::format("{} ({})", name, param == 0 ? "kg" : "kg m²");
-  p.width = 500;
-  p.height = 260;
+  p.width = 640;
+  p.height = 250;
   std::vector<double> t(static_cast<size_t>(ev.data.rows()));
   for (Eigen::Index k = 0; k < ev.data.rows(); ++k) t[static_cast<size_t>(k)] = ev.data(k, 0);
   const double truth = r.options.plant.theta()(param);
-  // Gradient descent tracks the data sample by sample and is noisy: draw it
-  // first so that the least-squares curves stay visible on top.
-  // The true value is a wide light-grey band beneath every curve, so that the
-  // LS curve converging onto it stays visible (drawn last, on top); gradient
-  // descent is noisy and goes beneath the least-squares curves. Legend in the
-  // paper's order LS, GD, FMLS, FMGD.
-  constexpr std::array<int, 4> kLayer = {3, 0, 2, 1};  // LS, GD, FMLS, FMGD
+  double lo = truth, hi = truth;
+  const size_t settled = t.size() / 10;
   for (size_t s = 0; s < 4; ++s) {
     const std::string set = r.identification.estimates[s].name;
+    if ((set == "LS" || set == "FMLS") != least_squares) continue;
     const int c = static_cast<int>(1 + 7 * s) + param;
     std::vector<double> y(t.size());
     for (Eigen::Index k = 0; k < ev.data.rows(); ++k) y[static_cast<size_t>(k)] = ev.data(k, c);
-    p.series.push_back({set, t, y, report::color_for(set, s), false, 1.6, kLayer[s]});
+    for (size_t k = settled; k < y.size(); ++k)
+      if (std::isfinite(y[k])) lo = std::min(lo, y[k]), hi = std::max(hi, y[k]);
+    p.series.push_back({set, t, y, report::color_for(set, s), false, 1.6, set == "LS" || set == "GD" ? 1 : 0});
   }
   if (!t.empty()) p.series.push_back({"true", {t.front(), t.back()}, {truth, truth}, "#c8c8c8", false, 7.0, -1});
+  if (least_squares) {
+    // At least 2 % of the parameter's scale (the mass, or the mean moment of
+    // inertia for every tensor entry): a 0.02 % bias is not zoomed into a gap.
+    const Theta th = r.options.plant.theta();
+    const double scale = param == 0 ? std::abs(th(0)) : (std::abs(th(1)) + std::abs(th(4)) + std::abs(th(6))) / 3.0;
+    const double span = std::max(hi - lo, 2e-2 * std::max(scale, 1e-12));
+    p.y_min = lo - 0.15 * span;
+    p.y_max = hi + 0.15 * span;
+  }
   return p;
 }
 
@@ -496,11 +510,20 @@ void identification_section(report::HtmlDocument& d, const Reproduction& r) {
   d.heading("2. Identification (section III-D, Table 3, Figs. 4-5)");
   d.table(table3(r));
   d.table(table3_errors(r));
-  d.figure(evolution_plot(r, 0), "Time evolution of the estimated mass (paper Fig. 4); grey band: the true value.");
-  d.figure_row({evolution_plot(r, 1), evolution_plot(r, 4), evolution_plot(r, 6)},
-               "Time evolution of the estimated moments of inertia (paper Fig. 5).");
-  d.figure_row({evolution_plot(r, 2), evolution_plot(r, 3), evolution_plot(r, 5)},
-               "Time evolution of the estimated products of inertia (paper Fig. 5).");
+  const auto both = [&](int param) { return std::vector<Plot>{evolution_plot(r, param, true), evolution_plot(r, param, false)}; };
+  d.figure_row(both(0), "Time evolution of the estimated mass (paper Fig. 4): least squares (left; the axis fits the "
+                        "curves after their first tenth) and gradient descent (right); grey band: the true value.");
+  // One figure each, least squares beside gradient descent for each parameter (the row wraps two to a line).
+  const auto three = [&](int a, int b, int c) {
+    std::vector<Plot> v;
+    for (int param : {a, b, c})
+      for (Plot& p : both(param)) v.push_back(std::move(p));
+    return v;
+  };
+  d.figure_row(three(1, 4, 6), "Time evolution of the estimated moments of inertia (paper Fig. 5): least squares "
+                               "(left) and gradient descent (right).");
+  d.figure_row(three(2, 3, 5), "Time evolution of the estimated products of inertia (paper Fig. 5): least squares "
+                               "(left) and gradient descent (right).");
   for (const auto& w : r.identification.warnings) d.paragraph("Warning: " + w);
 }
 
