@@ -45,12 +45,7 @@ std::string flight_page_name(std::size_t index, const std::string& path) {
 // Writes an identified log's own page under DIR/flights and returns its line of the fleet page.
 FleetPageLog write_flight_page(const std::string& dir, std::size_t index, const BatchRecord& r,
                                const nlohmann::ordered_json& j) {
-  FleetPageLog l;
-  l.path = r.path;
-  l.ok = r.ok;
-  l.error = r.error;
-  if (j.contains("warnings"))
-    for (const auto& w : j["warnings"]) l.warnings.push_back(w.get<std::string>());
+  FleetPageLog l = fleet_page_log(j);
   if (r.ok && !r.report.empty()) {
     const std::filesystem::path sub = std::filesystem::path(dir) / "flights";
     std::filesystem::create_directories(sub);

@@ -152,6 +152,10 @@ struct FleetPageLog {
   std::string page;
 };
 
+/// A record's line of the fleet page (to_json(BatchRecord), or the Python
+/// fleet runner's dict): its path, ok, error and warnings; no page.
+FleetPageLog fleet_page_log(const nlohmann::ordered_json& record);
+
 /// batch --report: one self-contained HTML page (docs/report.md, "A fleet"):
 /// the conclusion (the flights that depart from the others, the notes), the
 /// comparison as tables, each parameter over the flights with each flight's

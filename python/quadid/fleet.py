@@ -11,6 +11,7 @@ log that failed (bad file, bad data, a worker that died); the others go on.
 Records come back in the order of `paths`.
 
     summary = quadid.fleet.summarize(records)   # the flights compared, as `quadid batch --summary`
+    quadid.fleet.report(records, "fleet.html")  # the page to look at, as `quadid batch --report` (docs/report.md)
 """
 
 from __future__ import annotations
@@ -20,7 +21,7 @@ import functools as _functools
 import os as _os
 from typing import Any as _Any, Iterable as _Iterable
 
-__all__ = ["identify_one", "identify_many", "summarize"]
+__all__ = ["identify_one", "identify_many", "summarize", "report"]
 
 
 def identify_one(path, options: dict | None = None, keep_evolution: bool = False) -> dict:
@@ -100,26 +101,60 @@ def summarize(records: _Iterable[dict], set: str = "recommended", level: float =
     "recommended" (each flight's) or LS, GD, FMLS, FMGD, PC, FMPC. A failed
     record is listed under "skipped". A bad set or level raises ValueError.
     """
-    import json
-
     import quadid
 
-    keys = ("path", "ok", "estimates", "uncertainty", "recommended")  # what the comparison reads
-    kept = [{k: r[k] for k in keys if k in r} for r in records]
-    def plain(o):  # numpy arrays (the results' arrays of numbers) -> JSON lists, NaN -> null
-        import numpy as np
-
-        if isinstance(o, np.ndarray):
-            return [plain(x) for x in o.tolist()] if o.ndim else plain(o.item())
-        if isinstance(o, float) and o != o:
-            return None
-        if isinstance(o, dict):
-            return {k: plain(v) for k, v in o.items()}
-        if isinstance(o, list):
-            return [plain(x) for x in o]
-        return o
-
     try:
-        return quadid._quadid.summarize_fleet(json.dumps(plain(kept)), set, float(level))
+        return quadid._quadid.summarize_fleet(_records_json(records), set, float(level))
     except ValueError as e:  # the library names batch's keys; this function's arguments are set= and level=
         raise ValueError(str(e).replace("summary_set=", "set=").replace("outlier_level=", "level=")) from None
+
+
+def _plain(o):
+    """numpy arrays (the results' arrays of numbers) -> JSON lists, NaN -> null."""
+    import numpy as np
+
+    if isinstance(o, np.ndarray):
+        return [_plain(x) for x in o.tolist()] if o.ndim else _plain(o.item())
+    if isinstance(o, float) and o != o:
+        return None
+    if isinstance(o, dict):
+        return {k: _plain(v) for k, v in o.items()}
+    if isinstance(o, list):
+        return [_plain(x) for x in o]
+    return o
+
+
+def _records_json(records) -> str:
+    """What the comparison and the fleet page read of each record, as JSON."""
+    import json
+
+    keys = ("path", "ok", "error", "warnings", "estimates", "uncertainty", "recommended")
+    return json.dumps(_plain([{k: r[k] for k in keys if k in r} for r in records]))
+
+
+def report(records: _Iterable[dict], path, set: str = "recommended", level: float = 0.01) -> str:
+    """Write the fleet page of `records` to `path` (HTML, one self-contained file; atomically).
+
+    The page `quadid batch --report DIR` writes as DIR/index.html (docs/report.md,
+    "A fleet"): the conclusions, the flights compared (the numbers of
+    summarize(records, set, level)), each parameter over the flights with its
+    95 % intervals, and every log with its warnings (here without links to
+    per-log pages: `quadid identify LOG --report DIR` writes one). Returns the path.
+    """
+    import quadid
+
+    try:
+        html = quadid._quadid.fleet_report(_records_json(list(records)), set, float(level))
+    except ValueError as e:
+        raise ValueError(str(e).replace("summary_set=", "set=").replace("outlier_level=", "level=")) from None
+    path = _os.fspath(path)
+    tmp = f"{path}.tmp{_os.getpid()}"
+    try:
+        with open(tmp, "w", encoding="utf-8") as f:
+            f.write(html)
+        _os.replace(tmp, path)
+    except BaseException:
+        if _os.path.exists(tmp):
+            _os.remove(tmp)
+        raise
+    return path

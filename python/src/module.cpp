@@ -486,4 +486,16 @@ PYBIND11_MODULE(_quadid, m) {
         return to_py(quadid::to_json(quadid::summarize_fleet(records.get<std::vector<json>>(), opt)));
       },
       py::arg("records_json"), py::arg("set"), py::arg("level"));
+  m.def(
+      "fleet_report",
+      [](const std::string& records_json, const std::string& set, double level) {
+        quadid::FleetSummaryOptions opt;
+        opt.set = set;
+        opt.level = level;
+        const auto records = json::parse(records_json).get<std::vector<json>>();  // quadid.fleet.report (json.dumps)
+        std::vector<quadid::FleetPageLog> logs;
+        for (const auto& r : records) logs.push_back(quadid::fleet_page_log(r));
+        return quadid::fleet_report(quadid::summarize_fleet(records, opt), logs);
+      },
+      py::arg("records_json"), py::arg("set"), py::arg("level"));
 }

@@ -67,3 +67,25 @@ def test_summarize_equals_the_batch_summary(fleet, tmp_path):
         quadid.fleet.summarize(records, set="XY")
     with pytest.raises(ValueError, match="level=1.5"):
         quadid.fleet.summarize(records, level=1.5)
+
+
+def test_report_writes_the_batch_fleet_page(fleet, tmp_path):
+    """quadid.fleet.report on identify_many's records: the page `quadid batch --report` writes as
+    index.html, but for the links to per-log pages (the Python records have none)."""
+    from conftest import run_cli
+
+    paths, _ = fleet
+    records = quadid.fleet.identify_many(paths, max_workers=2, window=WINDOW)
+    page = quadid.fleet.report(records, tmp_path / "fleet.html", set="LS")
+    assert page == str(tmp_path / "fleet.html")
+    html = (tmp_path / "fleet.html").read_text()
+    run_cli("batch", "-q", "--window", WINDOW, "--summary-set", "LS", "--report", str(tmp_path / "cli"),
+            *[str(p) for p in paths], check=False)  # exit 2: the corrupt log
+    cli = (tmp_path / "cli" / "index.html").read_text()
+    strip = lambda s: __import__("re").sub(r'<a href="[^"]*">([^<]*)</a>', r"\1", s)
+    assert strip(html) == strip(cli)
+    assert "3 of 4 logs identified" in html and "FAILED: " in html
+    assert [p.name for p in tmp_path.iterdir() if ".tmp" in p.name] == []  # written atomically
+    with pytest.raises(ValueError, match="set=XY"):
+        quadid.fleet.report(records, tmp_path / "x.html", set="XY")
+    assert not (tmp_path / "x.html").exists()

@@ -153,6 +153,17 @@ void logs_table(report::HtmlDocument& doc, const FleetSummary& s, const std::vec
 
 }  // namespace
 
+FleetPageLog fleet_page_log(const nlohmann::ordered_json& r) {
+  FleetPageLog l;
+  l.path = r.contains("path") && r["path"].is_string() ? r["path"].get<std::string>() : "(no path)";
+  l.ok = r.value("ok", false);
+  if (r.contains("error") && r["error"].is_string()) l.error = r["error"].get<std::string>();
+  if (r.contains("warnings") && r["warnings"].is_array())
+    for (const auto& w : r["warnings"])
+      if (w.is_string()) l.warnings.push_back(w.get<std::string>());
+  return l;
+}
+
 std::string fleet_report(const FleetSummary& s, const std::vector<FleetPageLog>& logs) {
   report::HtmlDocument doc(fmt::format("quadid batch: {} logs compared", logs.size()));
   doc.raw(conclusions(s, logs));
