@@ -234,3 +234,88 @@ TEST_F(ReportBrowser, FleetReportRendersAndLinksEachLogsPage) {
     }
   }
 }
+
+// The charts zoom with the mouse wheel about the cursor and pan with shift +
+// drag, on a linear and on a log x axis: events dispatched in the page move
+// the x range as they should (zoom in by 0.8 about the cursor; a pan by a
+// quarter of the width shifts the range by a quarter of its span, in decades
+// on the log axis). Tolerance 1e-6 of the span: the events' pixel positions
+// are whole pixels, which the expected values are computed from.
+TEST_F(ReportBrowser, ChartsZoomWithTheWheelAndPanWithShiftDrag) {
+  const char* chrome = chromium();
+  if (!chrome) GTEST_SKIP() << "chromium is not installed (apt-get install chromium)";
+  if (!quadid::report::have_uplot()) GTEST_SKIP() << "this build has no uPlot (no npm at configure time)";
+  quadid::report::HtmlDocument doc("zoom");
+  for (bool log_x : {false, true}) {
+    quadid::report::Chart c;
+    c.title = log_x ? "spectrum" : "series";
+    c.xlabel = log_x ? "frequency (Hz)" : "time (s)";
+    c.ylabel = "y (N)";
+    c.log_x = log_x;
+    for (int i = 1; i <= 1000; ++i) c.x.push_back(log_x ? std::pow(10.0, -1.0 + 3.0 * i / 1000.0) : 0.01 * i);
+    quadid::report::Series s;
+    s.label = "y";
+    for (double x : c.x) s.y.push_back(std::sin(x));
+    c.series.push_back(s);
+    doc.chart(c);
+  }
+  // For each chart: the range, then after a wheel step in at the middle, then after a shift-drag by a quarter width.
+  // uPlot applies a new scale in a microtask (and snapped a log x range to whole decades: none since): each step waits a timer before reading it.
+  doc.raw(R"(<script>window.addEventListener("load", async function () {
+  var out = [], later = function () { return new Promise(function (r) { setTimeout(r, 20); }); };
+  for (const u of window.quadidCharts) {
+    var log = u.scales.x.distr === 3, f = function (v) { return log ? Math.log10(v) : v; };
+    var r = u.over.getBoundingClientRect(), cx = Math.round(r.left + r.width / 2), cy = Math.round(r.top + r.height / 2);
+    var a0 = f(u.scales.x.min), b0 = f(u.scales.x.max), c = a0 + (cx - r.left) / r.width * (b0 - a0);
+    u.over.dispatchEvent(new WheelEvent("wheel", {deltaY: -100, clientX: cx, clientY: cy, bubbles: true, cancelable: true}));
+    await later();
+    var a1 = f(u.scales.x.min), b1 = f(u.scales.x.max);
+    var zoom_ok = Math.abs(a1 - (c - (c - a0) * 0.8)) < 1e-6 * (b0 - a0) && Math.abs(b1 - (c + (b0 - c) * 0.8)) < 1e-6 * (b0 - a0);
+    var dx = Math.round(r.width / 4), opts = {clientX: cx, clientY: cy, shiftKey: true, bubbles: true, cancelable: true};
+    u.over.dispatchEvent(new MouseEvent("mousedown", opts));
+    opts.clientX = cx + dx;
+    document.dispatchEvent(new MouseEvent("mousemove", opts));
+    document.dispatchEvent(new MouseEvent("mouseup", opts));
+    await later();
+    var d = dx / r.width * (b1 - a1), a2 = f(u.scales.x.min), b2 = f(u.scales.x.max);
+    var pan_ok = Math.abs(a2 - (a1 - d)) < 1e-6 * (b0 - a0) && Math.abs(b2 - (b1 - d)) < 1e-6 * (b0 - a0);
+    out.push((log ? "log" : "linear") + " zoom " + (zoom_ok ? "ok" : "bad " + [a0, b0, a1, b1]) + " pan " +
+             (pan_ok ? "ok" : "bad " + [a1, b1, a2, b2]));
+  }
+  var p = document.createElement("pre"); p.id = "zoom-check"; p.textContent = out.join("\n"); document.body.appendChild(p);
+});</script>)");
+  write("zoom.html", doc.str());
+  const std::string flags = std::string("--headless --no-sandbox --disable-gpu --disable-quic --no-first-run "
+                                        "--disable-background-networking --disable-component-update --disable-sync "
+                                        "--virtual-time-budget=5000 --user-data-dir=") + path("profile") + " --window-size=1200,900 ";
+  std::system((std::string(chrome) + " " + flags + "--dump-dom file://" + path("zoom.html") + " > " + path("dom.html") +
+               " 2>/dev/null").c_str());
+  const std::string dom = quadid::read_file(path("dom.html"));
+  const auto a = dom.find("<pre id=\"zoom-check\">");
+  ASSERT_NE(a, std::string::npos) << dom.substr(0, 500);
+  EXPECT_EQ(dom.substr(a, dom.find("</pre>", a) - a), "<pre id=\"zoom-check\">linear zoom ok pan ok\nlog zoom ok pan ok");
+}
+
+// A 30 g vehicle's torque spectra lie near 1e-20 (N m)^2/Hz, where uPlot's log
+// axis threw "Invalid array length" and drew nothing: its page renders all
+// eight charts, with no console error, every tick label reading as its value.
+TEST_F(ReportBrowser, ASmallVehiclesSpectraRender) {
+  const char* chrome = chromium();
+  if (!chrome) GTEST_SKIP() << "chromium is not installed (apt-get install chromium)";
+  ASSERT_EQ(run("simulate --vehicle crazyflie21 --trajectory circle1 --duration 20 -o " + path("cf.csv")).rc, 0);
+  const CliRun r = run("identify " + path("cf.csv") + " --vehicle crazyflie21 -q --report " + path("rep"));
+  ASSERT_EQ(r.rc, 0) << r.err;
+  const std::string flags = std::string("--headless --no-sandbox --disable-gpu --disable-quic --no-first-run "
+                                        "--disable-background-networking --disable-component-update --disable-sync "
+                                        "--enable-logging=stderr --v=0 --user-data-dir=") + path("profile") +
+                            " --window-size=1400,6000 ";
+  std::system((std::string(chrome) + " " + flags + "--dump-dom 'file://" + path("rep/report.html") + "#layout-check' > " +
+               path("dom.html") + " 2> " + path("console.txt")).c_str());
+  const std::string dom = quadid::read_file(path("dom.html")), console = quadid::read_file(path("console.txt"));
+  EXPECT_EQ(console.find("Uncaught"), std::string::npos) << console;
+  EXPECT_NE(dom.find("<pre id=\"layout-check\">ok</pre>"), std::string::npos) << layout_findings(dom);
+  if (quadid::report::have_uplot()) {
+    EXPECT_EQ(count(dom, "<canvas"), 8u);
+  }
+  EXPECT_NE(dom.find("(N m)^2/Hz) x1e-"), std::string::npos);  // the torque spectra in units of a power of ten
+}

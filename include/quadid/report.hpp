@@ -78,8 +78,9 @@ std::string_view uplot_license();
 std::string_view uplot_js();
 std::string_view uplot_css();
 
-/// An interactive time series or spectrum: uPlot in the page (drag to zoom,
-/// double-click to reset, values on hover), one shared x for every series.
+/// An interactive time series or spectrum: uPlot in the page (drag or the
+/// mouse wheel to zoom, shift + drag to pan, double-click to reset, values on
+/// hover), one shared x for every series.
 /// Axis labels carry units. Log axes need positive values (others are dropped).
 struct Chart {
   std::string title;

@@ -110,8 +110,8 @@ void fit_section(report::HtmlDocument& doc, const AxisSeries& a, const std::stri
   doc.raw("<a id=\"fit\"></a>\n");
   doc.heading("Measured and predicted, per axis");
   doc.paragraph(fmt::format("Each row of the regression (eq. 34, standard model, pre-filtered): the measured force or "
-                            "torque, the {} set's prediction Gamma theta{}, and their difference. Drag to zoom, "
-                            "double-click to reset.", set, terms ? " (its rigid body: the real-flight terms left out)" : ""));
+                            "torque, the {} set's prediction Gamma theta{}, and their difference. Drag or the "
+                            "mouse wheel to zoom, shift + drag to pan, double-click to reset.", set, terms ? " (its rigid body: the real-flight terms left out)" : ""));
   for (size_t i = 0; i < 4; ++i) {
     report::Chart c;
     c.title = fmt::format("{} ({})", kAxis[i], kAxisUnit[i]);

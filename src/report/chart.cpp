@@ -58,16 +58,24 @@ std::string js_array(const std::vector<double>& v, size_t step, bool positive, d
 }
 
 // uPlot's tick labels on a linear axis, as tick_labels does for the SVG figures:
-// the fewest decimals that tell the ticks apart (from the tick increment), and
+// the fewest decimals that write the tick increment exactly (2.5 s steps: one;
+// 0 decimals printed 2.5, 7.5 as "3", "8"), and
 // a power of ten for long numbers (0.0120, 0.0122, ... not 0.012, 0.012, ...).
 constexpr const char* kTickValues =
     ",values:function(u,s){var inc=s.length>1?Math.abs(s[1]-s[0]):1;var big=0;"
     "s.forEach(function(v){if(v!=null)big=Math.max(big,Math.abs(v));});"
-    "var d=Math.max(0,-Math.floor(Math.log10(inc)+1e-9));"
+    "var d=0;while(d<12&&Math.abs(inc*Math.pow(10,d)-Math.round(inc*Math.pow(10,d)))>1e-6*inc*Math.pow(10,d))d++;"
     "var sci=big>=1e4||(big>0&&big<1e-2);"
     "var sd=Math.max(0,Math.min(8,Math.floor(Math.log10(big||1))-Math.floor(Math.log10(inc)+1e-9)));"
     "return s.map(function(v){if(v==null)return '';if(Math.abs(v)<inc*1e-9)v=0;"
     "return sci?(v===0?'0':v.toExponential(sd)):v.toFixed(Math.min(d,12));});}";
+
+// ... and on a log axis, the values themselves: plain from 0.001 to 1e4, else
+// as "2.5e-11" (uPlot's default wrote every tick below 0.001 as "0").
+constexpr const char* kLogTickValues =
+    ",values:function(u,s){return s.map(function(v){if(v==null)return '';var a=Math.abs(v);"
+    "if(a>=1e-3&&a<1e4)return String(+v.toPrecision(3));"
+    "return v.toExponential(2).replace(/\\.?0+e/,'e').replace('e+','e');});}";
 
 Plot as_plot(const Chart& c) {
   Plot p;
@@ -90,6 +98,24 @@ void HtmlDocument::chart(const Chart& c, const std::string& caption) {
   if (!have_uplot()) {
     figure(as_plot(c), caption);
     return;
+  }
+  // uPlot's log axis breaks on values far from 1 (below ~1e-16 it throws
+  // "Invalid array length": a 30 g vehicle's torque spectra). Beyond 1e+-6
+  // the chart shows the values in units of 10^k, which its y label then says.
+  if (c.log_y) {
+    double top = 0.0;
+    for (const auto& s : c.series)
+      for (double y : s.y)
+        if (std::isfinite(y)) top = std::max(top, y);
+    if (top > 0.0 && std::abs(std::floor(std::log10(top))) > 6) {
+      const double k = std::floor(std::log10(top)), f = std::pow(10.0, -k);
+      Chart shown = c;
+      for (auto& s : shown.series)
+        for (double& y : s.y) y *= f;
+      shown.ylabel += fmt::format(" x1e{:g}", k);
+      chart(shown, caption);
+      return;
+    }
   }
   ++figure_count_;
   const int id = ++chart_count_;
@@ -114,14 +140,17 @@ void HtmlDocument::chart(const Chart& c, const std::string& caption) {
   }
   data += "]";
   series += "]";
+  // A log x scale keeps the range it is given (uPlot would snap a zoom or a
+  // pan to whole decades); every chart is kept in window.quadidCharts for the
+  // page's layout check.
   body_ += fmt::format(
       "<figure class=\"chart\"><div id=\"chart{0}\" class=\"chart-box\" data-title={1}></div>\n"
       "<script>(function(){{var el=document.getElementById(\"chart{0}\");"
       "var w=Math.max(480,Math.min(1400,el.parentNode.clientWidth||1200));"
       "(window.quadidCharts=window.quadidCharts||[]).push(new uPlot({{title:{1},width:w,height:{2},scales:{{x:{{time:false{3}}},y:{{{4}}}}},"
-      "axes:[{{label:{5}{9}}},{{label:{6},size:80{10}}}],series:{7},cursor:{{drag:{{x:true,y:false}}}}}},{8},el));}})();</script>\n",
-      id, js_string(c.title), c.height, c.log_x ? ",distr:3" : "", c.log_y ? "distr:3" : "", js_string(c.xlabel),
-      js_string(c.ylabel), series, data, c.log_x ? "" : kTickValues, c.log_y ? "" : kTickValues);
+      "axes:[{{label:{5}{9}}},{{label:{6},size:80{10}}}],series:{7},plugins:[quadidZoomPan()],cursor:{{drag:{{x:true,y:false}}}}}},{8},el));}})();</script>\n",
+      id, js_string(c.title), c.height, c.log_x ? ",distr:3,range:function(u,a,b){return [a,b];}" : "", c.log_y ? "distr:3" : "", js_string(c.xlabel),
+      js_string(c.ylabel), series, data, c.log_x ? kLogTickValues : kTickValues, c.log_y ? kLogTickValues : kTickValues);
   if (!caption.empty())
     body_ += fmt::format("<figcaption>Figure {}. {}</figcaption>\n", figure_count_, html_escape(caption));
   body_ += "</figure>\n";

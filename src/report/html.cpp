@@ -67,6 +67,10 @@ if (location.hash === "#layout-check") window.addEventListener("load", function 
       ctx.font = a.font[0];
       for (var i = 0; i < vals.length; i++) {
         if (vals[i] == null || vals[i] === "") continue;
+        // A label reads as its tick's value (to a thousandth of the tick spacing; of the value on a log axis).
+        var num = parseFloat(String(vals[i]).replace(/,/g, "")), inc = sp.length > 1 ? Math.abs(sp[1] - sp[0]) : 1;
+        var logax = u.scales[ai === 0 ? "x" : "y"].distr === 3, tol = 1e-3 * (logax ? Math.abs(sp[i]) : inc);
+        if (!(Math.abs(num - sp[i]) <= tol)) out.push(name + ": '" + vals[i] + "' labels the tick at " + sp[i]);
         var pos = u.valToPos(sp[i], ai === 0 ? "x" : "y"), w = ctx.measureText(String(vals[i])).width / devicePixelRatio;
         if (ai === 0) boxes.push([pos - w / 2, pos + w / 2, vals[i]]);
         else {
@@ -87,11 +91,39 @@ if (location.hash === "#layout-check") window.addEventListener("load", function 
 </script>
 )";
 
+// uPlot zooms by a drag and resets on a double-click; this plugin (every
+// chart's) adds the mouse wheel (zoom about the cursor, x) and shift + drag
+// (pan, x), on log axes in decades. Each chart keeps its x range apart.
+constexpr const char* kZoomPan = R"(function quadidZoomPan() {
+  return { hooks: { ready: [function (u) {
+    var log = u.scales.x.distr === 3;
+    var fw = function (v) { return log ? Math.log10(v) : v; }, bw = function (v) { return log ? Math.pow(10, v) : v; };
+    var over = u.over;
+    over.addEventListener("wheel", function (e) {
+      e.preventDefault();
+      var r = over.getBoundingClientRect(), x = (e.clientX - r.left) / r.width;
+      var a = fw(u.scales.x.min), b = fw(u.scales.x.max), c = a + x * (b - a), f = e.deltaY < 0 ? 0.8 : 1.25;
+      u.setScale("x", { min: bw(c - (c - a) * f), max: bw(c + (b - c) * f) });
+    }, { passive: false });
+    u.root.addEventListener("mousedown", function (e) {
+      if (!e.shiftKey) return;
+      e.stopPropagation();  // no selection box: this drag pans
+      e.preventDefault();
+      var r = over.getBoundingClientRect(), x0 = e.clientX, a = fw(u.scales.x.min), b = fw(u.scales.x.max);
+      var move = function (ev) { var d = (ev.clientX - x0) / r.width * (b - a); u.setScale("x", { min: bw(a - d), max: bw(b - d) }); };
+      var up = function () { document.removeEventListener("mousemove", move); document.removeEventListener("mouseup", up); };
+      document.addEventListener("mousemove", move);
+      document.addEventListener("mouseup", up);
+    }, true);
+  }] } };
+})";
+
 // uPlot's styles and script, once in the page's head when it has charts.
 std::string chart_head(bool charts) {
   if (!charts || !have_uplot()) return {};
-  return fmt::format("<!-- uPlot {} (MIT licence, https://github.com/leeoniya/uPlot):\n{}\n-->\n<style>{}</style>\n<script>{}</script>\n",
-                     uplot_version(), uplot_license(), uplot_css(), uplot_js());
+  return fmt::format("<!-- uPlot {} (MIT licence, https://github.com/leeoniya/uPlot):\n{}\n-->\n<style>{}</style>\n<script>{}</script>\n"
+                     "<script>{}</script>\n",
+                     uplot_version(), uplot_license(), uplot_css(), uplot_js(), kZoomPan);
 }
 }  // namespace
 
