@@ -27,6 +27,15 @@ size_t count(const std::string& s, const std::string& what) {
   return n;
 }
 
+// Headless Chromium as every test here starts it: no network (this machine's
+// closed network refuses Chromium's background connections), a fresh profile,
+// a window of `size` ("W,H"), then `extra` flags; ends with a space.
+std::string chrome_flags(const std::string& profile, const std::string& size, const std::string& extra = "") {
+  return "--headless --no-sandbox --disable-gpu --disable-quic --no-first-run --disable-background-networking "
+         "--disable-component-update --disable-sync " + (extra.empty() ? "" : extra + " ") + "--user-data-dir=" +
+         profile + " --window-size=" + size + " ";
+}
+
 // What the page's #layout-check found (HtmlDocument's self-check), for a failure message.
 std::string layout_findings(const std::string& dom) {
   const auto a = dom.find("<pre id=\"layout-check\">");
@@ -45,9 +54,7 @@ TEST_F(ReportBrowser, MonteCarloHistogramsHaveNoOverlappingLabels) {
   if (!chrome) GTEST_SKIP() << "chromium is not installed (apt-get install chromium)";
   const CliRun r = run("montecarlo --runs 12 --duration 20 --out " + path("mc") + " -q");
   ASSERT_EQ(r.rc, 0) << r.err;
-  const std::string flags = std::string("--headless --no-sandbox --disable-gpu --disable-quic --no-first-run "
-                                        "--disable-background-networking --disable-component-update --disable-sync "
-                                        "--user-data-dir=") + path("profile") + " --window-size=1600,4000 ";
+  const std::string flags = chrome_flags(path("profile"), "1600,4000");
   std::system((std::string(chrome) + " " + flags + "--dump-dom file://" + path("mc/index.html") + "#layout-check > " +
                path("layout.html") + " 2>/dev/null").c_str());
   const std::string dom = quadid::read_file(path("layout.html"));
@@ -61,9 +68,7 @@ TEST_F(ReportBrowser, ChromiumRendersEveryFigureAndTable) {
   const CliRun r = run("reproduce --trajectory table2 --duration 20 --out " + path("rep"));
   ASSERT_EQ(r.rc, 0) << r.err;
   // The flags keep Chromium off the network (this machine has none) and out of the user's profile.
-  const std::string flags = std::string("--headless --no-sandbox --disable-gpu --disable-quic --no-first-run "
-                                        "--disable-background-networking --disable-component-update --disable-sync "
-                                        "--user-data-dir=") + path("profile") + " --window-size=1600,4000 ";
+  const std::string flags = chrome_flags(path("profile"), "1600,4000");
   const std::string url = "file://" + path("rep/report.html");
   const std::string dom_file = path("dom.html"), png = path("report.png");
   std::system((std::string(chrome) + " " + flags + "--dump-dom " + url + " > " + dom_file + " 2>/dev/null").c_str());
@@ -99,10 +104,7 @@ TEST_F(ReportBrowser, IdentifyReportRendersItsChartsAndShowsTheResultsNumbers) {
   ASSERT_EQ(r.rc, 0) << r.err;
   const std::string page = quadid::read_file(path("rep/report.html"));
   EXPECT_EQ(page.find("src=\"http"), std::string::npos);  // one file: nothing fetched
-  const std::string flags = std::string("--headless --no-sandbox --disable-gpu --disable-quic --no-first-run "
-                                        "--disable-background-networking --disable-component-update --disable-sync "
-                                        "--enable-logging=stderr --v=0 --user-data-dir=") + path("profile") +
-                            " --window-size=1400,6000 ";
+  const std::string flags = chrome_flags(path("profile"), "1400,6000", "--enable-logging=stderr --v=0");
   const std::string url = "file://" + path("rep/report.html");
   std::system((std::string(chrome) + " " + flags + "--dump-dom " + url + " > " + path("dom.html") + " 2> " +
                path("console.txt")).c_str());
@@ -161,9 +163,7 @@ TEST_F(ReportBrowser, LayoutCheckNamesAUnitlessAxisAndCrowdedCanvasTicks) {
     doc.chart(c);
     return doc.str();
   };
-  const std::string flags = std::string("--headless --no-sandbox --disable-gpu --disable-quic --no-first-run "
-                                        "--disable-background-networking --disable-component-update --disable-sync "
-                                        "--user-data-dir=") + path("profile") + " --window-size=1000,800 ";
+  const std::string flags = chrome_flags(path("profile"), "1000,800");
   const auto check = [&](const std::string& html) {
     write("p.html", html);
     std::system((std::string(chrome) + " " + flags + "--dump-dom 'file://" + path("p.html") + "#layout-check' > " +
@@ -186,10 +186,7 @@ TEST_F(ReportBrowser, FollowReportRendersTheTrackingCharts) {
   ASSERT_EQ(run("simulate --trajectory table2 --duration 20 --payload-change 10:0.2 -o " + path("f.csv")).rc, 0);
   const CliRun r = run("follow " + path("f.csv") + " -q --json --report " + path("rep"));
   ASSERT_EQ(r.rc, 0) << r.err;
-  const std::string flags = std::string("--headless --no-sandbox --disable-gpu --disable-quic --no-first-run "
-                                        "--disable-background-networking --disable-component-update --disable-sync "
-                                        "--enable-logging=stderr --v=0 --user-data-dir=") + path("profile") +
-                            " --window-size=1300,2000 ";
+  const std::string flags = chrome_flags(path("profile"), "1300,2000", "--enable-logging=stderr --v=0");
   std::system((std::string(chrome) + " " + flags + "--dump-dom file://" + path("rep/report.html") + " > " +
                path("dom.html") + " 2> " + path("console.txt")).c_str());
   const std::string dom = quadid::read_file(path("dom.html")), console = quadid::read_file(path("console.txt"));
@@ -218,10 +215,7 @@ TEST_F(ReportBrowser, FleetReportRendersAndLinksEachLogsPage) {
   }
   const CliRun r = run("batch -q --window 2:10 --report " + path("fleet") + logs + " -o " + path("out.jsonl"));
   ASSERT_EQ(r.rc, 0) << r.err;
-  const std::string flags = std::string("--headless --no-sandbox --disable-gpu --disable-quic --no-first-run "
-                                        "--disable-background-networking --disable-component-update --disable-sync "
-                                        "--enable-logging=stderr --v=0 --user-data-dir=") + path("profile") +
-                            " --window-size=1400,2400 ";
+  const std::string flags = chrome_flags(path("profile"), "1400,2400", "--enable-logging=stderr --v=0");
   for (const std::string page : {"fleet/index.html", "fleet/flights/002-f2.html"}) {
     std::system((std::string(chrome) + " " + flags + "--dump-dom 'file://" + path(page) + "#layout-check' > " +
                  path("dom.html") + " 2> " + path("console.txt")).c_str());
@@ -285,9 +279,7 @@ TEST_F(ReportBrowser, ChartsZoomWithTheWheelAndPanWithShiftDrag) {
   var p = document.createElement("pre"); p.id = "zoom-check"; p.textContent = out.join("\n"); document.body.appendChild(p);
 });</script>)");
   write("zoom.html", doc.str());
-  const std::string flags = std::string("--headless --no-sandbox --disable-gpu --disable-quic --no-first-run "
-                                        "--disable-background-networking --disable-component-update --disable-sync "
-                                        "--virtual-time-budget=5000 --user-data-dir=") + path("profile") + " --window-size=1200,900 ";
+  const std::string flags = chrome_flags(path("profile"), "1200,900", "--virtual-time-budget=5000");
   std::system((std::string(chrome) + " " + flags + "--dump-dom file://" + path("zoom.html") + " > " + path("dom.html") +
                " 2>/dev/null").c_str());
   const std::string dom = quadid::read_file(path("dom.html"));
@@ -305,10 +297,7 @@ TEST_F(ReportBrowser, ASmallVehiclesSpectraRender) {
   ASSERT_EQ(run("simulate --vehicle crazyflie21 --trajectory circle1 --duration 20 -o " + path("cf.csv")).rc, 0);
   const CliRun r = run("identify " + path("cf.csv") + " --vehicle crazyflie21 -q --report " + path("rep"));
   ASSERT_EQ(r.rc, 0) << r.err;
-  const std::string flags = std::string("--headless --no-sandbox --disable-gpu --disable-quic --no-first-run "
-                                        "--disable-background-networking --disable-component-update --disable-sync "
-                                        "--enable-logging=stderr --v=0 --user-data-dir=") + path("profile") +
-                            " --window-size=1400,6000 ";
+  const std::string flags = chrome_flags(path("profile"), "1400,6000", "--enable-logging=stderr --v=0");
   std::system((std::string(chrome) + " " + flags + "--dump-dom 'file://" + path("rep/report.html") + "#layout-check' > " +
                path("dom.html") + " 2> " + path("console.txt")).c_str());
   const std::string dom = quadid::read_file(path("dom.html")), console = quadid::read_file(path("console.txt"));

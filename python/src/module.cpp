@@ -479,23 +479,17 @@ PYBIND11_MODULE(_quadid, m) {
   m.def(
       "summarize_fleet",
       [](const std::string& records_json, const std::string& set, double level) {
-        quadid::FleetSummaryOptions opt;
-        opt.set = set;
-        opt.level = level;
-        const json records = json::parse(records_json);  // written by quadid.fleet.summarize (json.dumps)
-        return to_py(quadid::to_json(quadid::summarize_fleet(records.get<std::vector<json>>(), opt)));
+        const auto records = json::parse(records_json).get<std::vector<json>>();  // quadid.fleet (json.dumps)
+        return to_py(quadid::to_json(quadid::summarize_fleet(records, {set, level})));
       },
       py::arg("records_json"), py::arg("set"), py::arg("level"));
   m.def(
       "fleet_report",
       [](const std::string& records_json, const std::string& set, double level) {
-        quadid::FleetSummaryOptions opt;
-        opt.set = set;
-        opt.level = level;
-        const auto records = json::parse(records_json).get<std::vector<json>>();  // quadid.fleet.report (json.dumps)
+        const auto records = json::parse(records_json).get<std::vector<json>>();  // quadid.fleet (json.dumps)
         std::vector<quadid::FleetPageLog> logs;
         for (const auto& r : records) logs.push_back(quadid::fleet_page_log(r));
-        return quadid::fleet_report(quadid::summarize_fleet(records, opt), logs);
+        return quadid::fleet_report(quadid::summarize_fleet(records, {set, level}), logs);
       },
       py::arg("records_json"), py::arg("set"), py::arg("level"));
 }
