@@ -96,8 +96,8 @@ void run(const OptionValues& v) {
                "them; --keep-held-samples to use it as logged)\n\n",
                fmt::join(res.processing.held_columns, " "), res.processing.held_rate_hz);
   if (!a.verbose) {
-    fmt::print("Wrench (Fz, torques): from {}; window {} ({} samples)\n{}\n{}", in.wrench_source,
-               res.window.to_string(), res.window_samples, format_wrench_timing(res),
+    fmt::print("Wrench (Fz, torques): from {}; window {} ({} samples{})\n{}\n{}", in.wrench_source,
+               res.window.to_string(), res.window_samples, in.window_basis.empty() ? "" : "; " + in.window_basis, format_wrench_timing(res),
                format_summary(res, a.quiet ? 0 : res.warnings.size()));
     return;
   }

@@ -100,12 +100,15 @@ TimeWindow fit_paper_window(const TimeWindow& paper, double duration, double per
 TimeWindow fit_paper_window(const TimeWindow& paper, const FlightLog& log, std::string* note = nullptr);
 
 /// The windows of identify on a log that holds its wrench (no rotor model):
-/// a default estimation window is the paper's fitted to the log
-/// (fit_paper_window), and kept to the part in the air when the vehicle sits
-/// on the ground at an end (airborne_part; Tables 5-6 too); a given one that
-/// reaches the ground, or a landing inside, is warned about in `warnings`.
-void fit_windows(const FlightLog& log, const IdentifyRequest& req, IdentificationOptions& opt,
-                 std::vector<std::string>& warnings);
+/// a default estimation window is the whole log, or the paper's 10-50 s
+/// fitted to the log (fit_paper_window) for a quadid simulation of the
+/// paper's setup (is_paper_simulation_log) only; then kept to the part in the
+/// air when the vehicle sits on the ground at an end (airborne_part; Tables
+/// 5-6 too) and ended before a crash; a given one that reaches the ground, or
+/// a landing inside, is warned about in `warnings`. Returns how the window
+/// was chosen (IdentificationInput::window_basis).
+std::string fit_windows(const FlightLog& log, const IdentifyRequest& req, IdentificationOptions& opt,
+                        std::vector<std::string>& warnings);
 
 /// Reads the log of an identification: any format (load_any_log); with a
 /// vehicle, the rotor columns instead of the wrench, which the rotor model
@@ -126,6 +129,10 @@ struct IdentificationInput {
   /// "the CA_ROTOR* parameters of FILE".
   std::string wrench_source = "the log's Fz and torque columns";
   std::optional<TimingEstimate> timing;
+  /// How the estimation window was chosen: "as given", "the whole log, by
+  /// default", "the log's time in the air, by default", "the paper's, by
+  /// default for a quadid simulation of its setup".
+  std::string window_basis;
   /// What the preparation found worth saying (e.g. a PX4 log's CA_ROTOR*_CT at
   /// PX4's default); identify_prepared adds them to the result's warnings.
   std::vector<std::string> warnings;

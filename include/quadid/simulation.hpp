@@ -318,6 +318,11 @@ std::unique_ptr<Trajectory> trajectory_from_log(const FlightLog& log);
 /// The options a simulated log was flown with (plant, controller, sensors, seed,
 /// dt, duration, ...). Throws InputError if the metadata is missing or malformed.
 SimulationOptions simulation_options_from_log(const FlightLog& log);
+/// Whether `log` was written by `quadid simulate` in the paper's setup (no
+/// rotor model: the virtual QBall 2 or a parameters-JSON plant flown with the
+/// wrench logged directly), whose take-off transient the paper's 10-50 s
+/// window leaves out. False for every other log, real or simulated elsewhere.
+bool is_paper_simulation_log(const FlightLog& log);
 
 nlohmann::ordered_json to_json(const SimulationOptions& opt);
 /// Fields absent from `j` keep their defaults. Throws InputError naming the bad field.

@@ -12,7 +12,7 @@ The functions mirror the command line (docs/python.md):
 
 A flight log is the argument `log` everywhere: a path, or (identify) a mapping
 {column: array}. Options are the command line's long names with '-' written
-'_' (cutoff=4.0, window="10:50" or window=(10, 50), gd_init="nominal",
+'_' (cutoff=4.0, window="10:50" or window=(10, 50); default the whole log, gd_init="nominal",
 keep_edges=True, map=["tau_phi=tau_x"]); --lambda is lambda_=30 (or lam=30).
 They, their defaults and checks come from the library's one option table
 (option_names lists them); an old spelling (nominal=, tilt_max=, ...) still

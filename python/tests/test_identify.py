@@ -44,17 +44,30 @@ def test_identify_on_arrays_equals_the_command_line(logs):
 
 
 def test_short_log_without_window_fits_it_as_the_command_line(logs):
-    # These logs are shorter than the paper's 50 s: without a window, arrays,
-    # path and command line all take 10 s to the end, with the same warning.
+    # These simulated logs of the paper's setup are shorter than its 50 s:
+    # without a window, path and command line both take 10 s to the end,
+    # with the same warning.
     cli = cli_json("identify", str(logs[0]))
-    arrays = {k: np.array(v) for k, v in quadid.read_log(logs[0]).items()}
-    with pytest.warns(UserWarning, match="^window: "):
-        res = quadid.identify(arrays)
-    assert any(w.startswith("window: ") for w in res["warnings"]), res["warnings"]
-    assert_same(without(res, "evolution", "log"), without(cli, "log"), REL)
     with pytest.warns(UserWarning, match="^window: "):
         from_path = quadid.identify(logs[0])
+    assert any(w.startswith("window: ") for w in from_path["warnings"]), from_path["warnings"]
+    assert from_path["window"]["t0"] == 10
     assert_same(without(from_path, "evolution"), cli, REL)
+
+
+def test_arrays_without_window_take_the_whole_log_as_a_csv_without_metadata(logs, tmp_path):
+    # Arrays carry no '# quadid-simulate' header, so they are any log: the
+    # whole log by default, as the command line gives a CSV without one.
+    arrays = {k: np.array(v) for k, v in quadid.read_log(logs[0]).items()}
+    res = quadid.identify(arrays)
+    path = tmp_path / "plain.csv"
+    with open(path, "w") as f:
+        f.write(",".join(arrays) + "\n")
+        for row in zip(*arrays.values()):
+            f.write(",".join(repr(float(v)) for v in row) + "\n")
+    cli = cli_json("identify", str(path))
+    assert res["window"]["t0"] < 1.0, res["window"]
+    assert_same(without(res, "evolution", "log"), without(cli, "log"), REL)
 
 
 def test_ground_at_the_start_is_left_out_of_arrays_as_of_the_file(logs, tmp_path):

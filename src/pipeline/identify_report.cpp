@@ -244,7 +244,8 @@ void log_section(report::HtmlDocument& doc, const IdentificationInput& in, const
                                            p["sample_rate_hz"].get<double>(), p["duration_s"].get<double>())});
   t.rows.push_back({"wrench (Fz, torques)", in.wrench_source});
   if (in.vehicle) t.rows.push_back({"vehicle", in.vehicle->name});
-  t.rows.push_back({"estimation window", res.window.to_string() + fmt::format(" ({} samples)", res.window_samples)});
+  t.rows.push_back({"estimation window", res.window.to_string() + fmt::format(" ({} samples{})", res.window_samples,
+                                                                             in.window_basis.empty() ? "" : "; " + in.window_basis)});
   t.rows.push_back({"pre-filter", p["prefilter"].get<std::string>() + fmt::format(", zero-phase (-3 dB at {:.3g} Hz)",
                                                                                   p["prefilter_f3db_hz"].get<double>())});
   if (!res.processing.held_columns.empty())

@@ -249,9 +249,6 @@ IdentifyRequest identify_options_from_json(const nlohmann::ordered_json& j) {
   return identify_request(OptionValues(j, "identify"));
 }
 
-namespace {
-}  // namespace
-
 void apply_real_flight(IdentifyRequest& req, const RealFlightArgs& a) {
   IdentificationOptions& opt = req.options;
   req.real = a;
@@ -573,16 +570,39 @@ void choose_force_source(const FlightLog& log, const IdentifyRequest& req, Ident
                       : fmt::format("; left out the terms that need the body velocity: {}", fmt::join(dropped, ", "))));
 }
 
-void fit_windows(const FlightLog& log, const IdentifyRequest& req, IdentificationOptions& opt,
-                 std::vector<std::string>& warnings) {
-  choose_force_source(log, req, opt, warnings);
-  if (!req.real.window_given) {  // an error would only ask for the obvious: the paper's window fitted
-    std::string note;
-    opt.window = fit_paper_window(opt.window, log, &note);
-    if (!note.empty()) warnings.push_back(note);
-  }
-  keep_to_the_air(airborne_part(log), req.real.window_given, opt, warnings);
+namespace {
+
+// The default window kept to the air and ended before a crash (keep_to_the_air,
+// end_before_impact), and what decided it.
+std::string place_window(const std::optional<AirbornePart>& air, const FlightLog& log, const IdentifyRequest& req,
+                         std::string basis, IdentificationOptions& opt, std::vector<std::string>& warnings) {
+  const TimeWindow chosen = opt.window;
+  keep_to_the_air(air, req.real.window_given, opt, warnings);
   end_before_impact(log, req.real.window_given, opt, warnings);
+  if (req.real.window_given) return "as given";
+  if (opt.window.t0 != chosen.t0 || opt.window.t1 != chosen.t1) return "the log's time in the air, by default";
+  return basis;
+}
+
+}  // namespace
+
+std::string fit_windows(const FlightLog& log, const IdentifyRequest& req, IdentificationOptions& opt,
+                        std::vector<std::string>& warnings) {
+  choose_force_source(log, req, opt, warnings);
+  std::string basis = "the whole log, by default";
+  if (!req.real.window_given) {
+    if (is_paper_simulation_log(log)) {
+      // The paper's simulation takes off at 0 s: 10-50 s leaves the transient
+      // out (Table 4). Every other log gets all of its time in the air.
+      std::string note;  // an error would only ask for the obvious: the paper's window fitted
+      opt.window = fit_paper_window(opt.window, log, &note);
+      if (!note.empty()) warnings.push_back(note);
+      basis = "the paper's, by default for a quadid simulation of its setup";
+    } else {
+      opt.window = TimeWindow{};
+    }
+  }
+  return place_window(airborne_part(log), log, req, basis, opt, warnings);
 }
 
 std::vector<std::string> identification_columns(const IdentifyRequest& req) {
@@ -740,8 +760,7 @@ IdentificationInput with_rotor_model(const FlightLog& raw, const logs::ImportRep
                                    "checks (--ignore-input-errors)",
                                    none->check, none->saw, none->action));
   choose_force_source(wrench ? *wrench : raw, req, in.options, in.warnings);
-  keep_to_the_air(air, req.real.window_given, in.options, in.warnings);
-  end_before_impact(raw, req.real.window_given, in.options, in.warnings);
+  in.window_basis = place_window(air, raw, req, "the whole log, by default", in.options, in.warnings);
   // An autopilot log's topics at their own rates: one too slow for the
   // rows' cutoffs is an input error (the checks' rule: --ignore-input-errors
   // makes it a warning).
@@ -856,7 +875,7 @@ IdentificationInput prepare_identification(const std::string& path, const Identi
   if (!req.vehicle) {
     in.log = load_identification_log(path, req);
     in.options = req.options;
-    fit_windows(in.log, req, in.options, in.warnings);
+    in.window_basis = fit_windows(in.log, req, in.options, in.warnings);
     return in;
   }
   logs::LoadOptions load;
@@ -887,7 +906,7 @@ IdentificationInput prepare_identification(const FlightLog& log, const IdentifyR
   if (!req.vehicle) {
     in.log = log;
     in.options = req.options;
-    fit_windows(in.log, req, in.options, in.warnings);
+    in.window_basis = fit_windows(in.log, req, in.options, in.warnings);
     return in;
   }
   return with_rotor_model(log, logs::ImportReport{}, req, false, std::move(in));
@@ -905,6 +924,7 @@ IdentificationResult identify_prepared(const IdentificationInput& in) {
 }
 
 void add_input_json(nlohmann::ordered_json& j, const IdentificationInput& in) {
+  if (!in.window_basis.empty()) j["window_basis"] = in.window_basis;
   if (in.vehicle) {  // a log with its own wrench adds nothing (the result of identify() on it)
     j["wrench_source"] = in.wrench_source;
     j["vehicle"] = {{"name", in.vehicle->name}, {"source", in.vehicle->source}};

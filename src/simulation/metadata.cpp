@@ -4,6 +4,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <filesystem>
@@ -305,6 +306,15 @@ json comment_json(const FlightLog& log, const char* key) {
 }
 
 }  // namespace
+
+bool is_paper_simulation_log(const FlightLog& log) {
+  if (std::find(log.comments.begin(), log.comments.end(), kMagic) == log.comments.end()) return false;
+  try {
+    return !comment_json(log, "simulation").contains("rotors");  // simulate --vehicle writes its rotor model
+  } catch (const InputError&) {
+    return false;  // no readable metadata: not known to be the paper's setup
+  }
+}
 
 std::vector<std::string> simulation_log_comments(const Trajectory& traj, const SimulationOptions& o) {
   std::vector<std::string> c = {kMagic,
