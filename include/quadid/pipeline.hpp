@@ -133,6 +133,10 @@ struct IdentificationInput {
   /// default", "the log's time in the air, by default", "the paper's, by
   /// default for a quadid simulation of its setup".
   std::string window_basis;
+  /// identify_prepared: identify the window's two halves too, and warn when
+  /// the recommended set moves between them beyond its interval
+  /// (window_dependence_warning). Off for those halves themselves.
+  bool check_window = true;
   /// What the preparation found worth saying (e.g. a PX4 log's CA_ROTOR*_CT at
   /// PX4's default); identify_prepared adds them to the result's warnings.
   std::vector<std::string> warnings;
@@ -153,8 +157,25 @@ IdentificationInput prepare_identification(const FlightLog& log, const IdentifyR
 /// The columns a log must hold for `req`: t x y z phi theta psi p q r and the
 /// vehicle's rotor columns with a vehicle, else the CSV reader's required ones.
 std::vector<std::string> identification_columns(const IdentifyRequest& req);
-/// identify() on a prepared log; the estimated timing joins the LS and FMLS extras.
+/// identify() on a prepared log; the estimated timing joins the LS and FMLS
+/// extras; with in.check_window, the window-dependence warning joins the warnings.
 IdentificationResult identify_prepared(const IdentificationInput& in);
+
+/// When the window's two halves disagree (window_dependence_warning).
+struct WindowDependenceOptions {
+  double min_half_s = 8.0;    ///< s: shorter halves are not compared (too little excitation each)
+  double z_threshold = 3.0;   ///< standard errors of the halves' difference: noise alone stays under it (P ~ 1 % of 4)
+  double min_fraction = 0.01; ///< of the parameter's scale: smaller shifts are not worth a warning
+};
+/// The recommended set's m, Ixx, Iyy or Izz (from its least-squares set: PC
+/// from LS, FMPC from FMLS) identified on the first and the second half of
+/// the window: a warning naming the parameter that moves most when they differ
+/// by more than z_threshold standard errors of their difference, by more than
+/// the whole window's 95 % half-width and by more than min_fraction of its
+/// scale; nullopt otherwise, for windows under 2 min_half_s, or when a half
+/// cannot be identified. Costs two identifications (run in parallel).
+std::optional<std::string> window_dependence_warning(const IdentificationInput& in, const IdentificationResult& res,
+                                                     const WindowDependenceOptions& opt = {});
 /// With a rotor model: adds "wrench_source", "vehicle" ({name, source}), "rotors" and
 /// "timing" to a result JSON (nothing for a log with its own wrench).
 void add_input_json(nlohmann::ordered_json& j, const IdentificationInput& in);

@@ -178,6 +178,7 @@ void correlation_section(report::HtmlDocument& doc, const IdentificationResult& 
 std::string sensitivity_row(const IdentificationInput& in, IdentificationOptions opt, const std::string& set,
                             const Theta& base, const Theta& se, std::vector<std::string>& cells) {
   IdentificationInput alt = in;
+  alt.check_window = false;
   opt.record_evolution = false;
   alt.options = opt;
   try {

@@ -920,6 +920,8 @@ IdentificationResult identify_prepared(const IdentificationInput& in) {
     for (auto& pc : res.physical_sets)
       if (!pc.extra.empty()) add_timing_extras(pc.extra, *in.timing);
   }
+  if (in.check_window)
+    if (auto w = window_dependence_warning(in, res)) res.warnings.push_back(std::move(*w));
   return res;
 }
 
