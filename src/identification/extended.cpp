@@ -489,6 +489,15 @@ class ExtendedEstimator {
     return e;
   }
 
+  // The standard model's fit alone: its residual RMS per row (standard_residual_rms).
+  Vec4 standard_residual_rms() const {
+    const auto [k0, k1] = samples(RegressionModel::Standard);
+    RegressionRows rows = build_rows(raw_, RegressionModel::Standard, opt_, u_);
+    if (hp_ > 0.0) highpass_rows(rows, hp_, 1.0 / raw_.T, opt_.highpass_order);
+    double jr = u_.known_jr;
+    return fit_with_rotor_inertia(rows, k0, k1, jr).res_rms;
+  }
+
  private:
   // The window's samples clear of the filters' edges and of the high-pass's.
   std::pair<Eigen::Index, Eigen::Index> samples(RegressionModel model) const {
@@ -692,6 +701,68 @@ ExtendedResult identify_extended(const FlightLog& log, const ExtendedOptions& op
   const ExtendedEstimator estimator(raw, opt, hp, gyro_sd);
   for (int mi = 0; mi < 2; ++mi) res.estimates[static_cast<size_t>(mi)] = estimator.estimate(mi, res);
   return res;
+}
+
+struct WrenchResidual::Impl {
+  ExtendedOptions opt;
+  RawSignals raw;
+  bool reuse = false;  // the wrench comes back bit for bit: refilter it alone
+
+  // The raw signals of `log`, its wrench refiltered into a copy of the first log's.
+  RawSignals rewrenched(const FlightLog& log) const {
+    if (log.rows() != raw.sig->x.rows())
+      throw std::invalid_argument(fmt::format("WrenchResidual: a log of {} rows, expected {}", log.rows(),
+                                              raw.sig->x.rows()));
+    auto sig = std::make_shared<RegressionSignals>(*raw.sig);
+    const double fs = 1.0 / sig->T;
+    signal::LowpassOptions lf = opt.processing.lowpass, lm = opt.processing.lowpass;
+    lf.cutoff_hz = opt.force_cutoff_hz;
+    lm.cutoff_hz = opt.moment_cutoff_hz;
+    // As process_with_terms: Fz from the force processing, the torques and
+    // Omega_r from the moment processing.
+    sig->x.col(11) = signal::zero_phase_lowpass(log.column("Fz"), fs, lf);
+    Eigen::MatrixXd tau(log.rows(), 3);
+    tau << log.column("tau_phi"), log.column("tau_theta"), log.column("tau_psi");
+    sig->x.middleCols<3>(12) = signal::zero_phase_lowpass(tau, fs, lm);
+    if (opt.terms.rotor_inertia) {
+      const Eigen::VectorXd w = signal::zero_phase_lowpass(log.column(kRotorMomentumColumn), fs, lm);
+      auto& Z = sig->terms;
+      Z.col(kTsOmegaR) = w;
+      Z.col(kTsQOmega) = sig->x.col(2).cwiseProduct(w);
+      Z.col(kTsPOmega) = sig->x.col(1).cwiseProduct(w);
+    }
+    RawSignals r = raw;
+    r.sig = std::move(sig);
+    return r;
+  }
+
+  Vec4 fit(const RawSignals& r) const {
+    return ExtendedEstimator(r, opt, 0.0, Eigen::Vector3d::Zero()).standard_residual_rms();
+  }
+};
+
+WrenchResidual::WrenchResidual(const FlightLog& log, const ExtendedOptions& opt) : impl_(std::make_unique<Impl>()) {
+  opt.validate();
+  if (opt.auto_cutoffs || !opt.moment_highpass_hz || *opt.moment_highpass_hz != 0.0)
+    throw std::invalid_argument("WrenchResidual: needs fixed cutoffs (auto_cutoffs = false) and no moment high-pass "
+                                "(moment_highpass_hz = 0)");
+  impl_->opt = opt;
+  ExtendedResult res;
+  impl_->raw = signals_at_cutoffs(log, opt, res);
+  try {
+    const RawSignals again = impl_->rewrenched(log);
+    impl_->reuse = again.sig->x == impl_->raw.sig->x && again.sig->terms == impl_->raw.sig->terms;
+  } catch (const std::exception&) {
+    impl_->reuse = false;  // a column it needs is not there: process in full
+  }
+}
+
+WrenchResidual::~WrenchResidual() = default;
+
+Vec4 WrenchResidual::operator()(const FlightLog& log) const {
+  if (impl_->reuse) return impl_->fit(impl_->rewrenched(log));
+  ExtendedResult res;
+  return impl_->fit(signals_at_cutoffs(log, impl_->opt, res));
 }
 
 Estimate rigid_body_estimate(const ExtendedEstimate& x, bool known_mass) {

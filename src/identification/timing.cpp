@@ -11,51 +11,99 @@
 #include <array>
 #include <cmath>
 #include <functional>
+#include <future>
+#include <map>
+#include <mutex>
 #include <limits>
 #include <stdexcept>
 
 namespace quadid {
 namespace {
 
-// Minimum of f on [a, b]: a grid of `grid` points, then golden-section search
-// in the bracket around the grid's best point down to `tol`.
+// Brent's minimization (1973) in the bracket [lo, hi] holding the best point
+// x: parabolic steps through the three best points (x, w, v) where they fall
+// well inside the bracket and shrink, golden-section steps otherwise, until
+// the bracket is about `tol` wide. `step` is the size of the step before x
+// (0: start with a golden-section step).
+double brent_1d(const std::function<double(double)>& f, double lo, double hi, std::pair<double, double> best,
+                std::pair<double, double> second, std::pair<double, double> third, double step, double tol) {
+  constexpr double kGolden = 0.3819660112501051;  // (3 - sqrt(5)) / 2
+  auto [x, fx] = best;
+  auto [w, fw] = second;
+  auto [v, fvv] = third;
+  double e = step, d = 0.0;
+  const double tol1 = 0.25 * tol;
+  for (int iter = 0; iter < 100; ++iter) {
+    const double m = 0.5 * (lo + hi);
+    if (std::abs(x - m) <= 2.0 * tol1 - 0.5 * (hi - lo)) break;
+    bool golden = true;
+    if (std::abs(e) > tol1) {
+      const double r = (x - w) * (fx - fvv);
+      double q = (x - v) * (fx - fw);
+      double p = (x - v) * q - (x - w) * r;
+      q = 2.0 * (q - r);
+      if (q > 0.0) p = -p;
+      q = std::abs(q);
+      const double last = e;
+      e = d;
+      if (std::abs(p) < std::abs(0.5 * q * last) && p > q * (lo - x) && p < q * (hi - x)) {
+        d = p / q;  // the parabola's vertex
+        const double u = x + d;
+        if (u - lo < 2.0 * tol1 || hi - u < 2.0 * tol1) d = m > x ? tol1 : -tol1;
+        golden = false;
+      }
+    }
+    if (golden) {
+      e = x >= m ? lo - x : hi - x;
+      d = kGolden * e;
+    }
+    const double u = std::abs(d) >= tol1 ? x + d : x + (d > 0.0 ? tol1 : -tol1);
+    double fu = f(u);
+    if (std::isnan(fu)) fu = std::numeric_limits<double>::infinity();
+    if (fu <= fx) {
+      (u >= x ? lo : hi) = x;
+      v = w, fvv = fw;
+      w = x, fw = fx;
+      x = u, fx = fu;
+    } else {
+      (u < x ? lo : hi) = u;
+      if (fu <= fw || w == x) {
+        v = w, fvv = fw;
+        w = u, fw = fu;
+      } else if (fu <= fvv || v == x || v == w) {
+        v = u, fvv = fu;
+      }
+    }
+  }
+  return x;
+}
+
+// Minimum of f on [a, b]: a grid of `grid` points (evaluated on two threads:
+// f must be safe to call concurrently), then Brent's search in the bracket
+// around the grid's best point down to `tol`.
 double minimize_1d(const std::function<double(double)>& f, double a, double b, int grid, double tol) {
   if (!(b > a)) return a;
   grid = std::max(grid, 3);
-  double best_x = a, best_f = std::numeric_limits<double>::infinity();
-  int best_i = 0;
   const double h = (b - a) / (grid - 1);
-  for (int i = 0; i < grid; ++i) {
-    const double x = a + h * i;
-    const double v = f(x);
-    if (v < best_f) {
-      best_f = v;
-      best_x = x;
-      best_i = i;
+  std::vector<double> fv(static_cast<size_t>(grid));
+  const int split = grid / 2;
+  auto eval = [&](int i0, int i1) {
+    for (int i = i0; i < i1; ++i) {
+      const double v = f(a + h * i);
+      fv[static_cast<size_t>(i)] = std::isnan(v) ? std::numeric_limits<double>::infinity() : v;
     }
-  }
-  double lo = best_i > 0 ? best_x - h : best_x, hi = best_i + 1 < grid ? best_x + h : best_x;
-  constexpr double kInvPhi = 0.6180339887498949;  // (sqrt(5) - 1) / 2
-  double c = hi - kInvPhi * (hi - lo), d = lo + kInvPhi * (hi - lo);
-  double fc = f(c), fd = f(d);
-  while (hi - lo > tol) {
-    if (fc < fd) {
-      hi = d;
-      d = c;
-      fd = fc;
-      c = hi - kInvPhi * (hi - lo);
-      fc = f(c);
-    } else {
-      lo = c;
-      c = d;
-      fc = fd;
-      d = lo + kInvPhi * (hi - lo);
-      fd = f(d);
-    }
-  }
-  const double x = fc < fd ? c : d;
-  const double fx = std::min(fc, fd);
-  return fx <= best_f ? x : best_x;
+  };
+  auto upper = std::async(std::launch::async, eval, split, grid);
+  eval(0, split);
+  upper.get();
+  // The first of equal minima, as a sequential scan finds it.
+  const int best_i = static_cast<int>(std::min_element(fv.begin(), fv.end()) - fv.begin());
+  const double best_x = a + h * best_i, best_f = fv[static_cast<size_t>(best_i)];
+  const double lo = best_i > 0 ? best_x - h : best_x, hi = best_i + 1 < grid ? best_x + h : best_x;
+  if (best_i == 0 || best_i + 1 == grid) return brent_1d(f, lo, hi, {best_x, best_f}, {best_x, best_f}, {best_x, best_f}, 0.0, tol);
+  // Interior: the grid's neighbours seed the first step, the parabola's vertex through the three points.
+  return brent_1d(f, lo, hi, {best_x, best_f}, {best_x - h, fv[static_cast<size_t>(best_i - 1)]},
+                  {best_x + h, fv[static_cast<size_t>(best_i + 1)]}, h, tol);
 }
 
 // Nelder-Mead (standard coefficients 1, 2, 1/2, 1/2) on two variables from x0
@@ -231,14 +279,26 @@ TimingEstimate estimate_timing(const FlightLog& log, const RotorModel& rotors, c
   if (!want_tau && !want_d) return est;
 
   // Moment rows' residual RMS for a candidate (tau, d).
+  // Called from two threads (minimize_1d's grid); each (tau, d) is fitted once,
+  // on the base log's processing with the new wrench (WrenchResidual).
+  const auto residual = std::make_unique<const WrenchResidual>(with_rotor_wrench(base, rotors), xo);
   Vec3 ref = Vec3::Ones();
+  std::mutex mutex;
+  std::map<std::pair<double, double>, Vec3> fitted;
   auto moment_rms = [&](double tau, double d) {
+    tau = std::max(tau, 0.0);
+    {
+      const std::lock_guard<std::mutex> lock(mutex);
+      if (const auto it = fitted.find({tau, d}); it != fitted.end()) return it->second;
+    }
     RotorModel m = rotors;
-    m.time_constant = std::max(tau, 0.0);
+    m.time_constant = tau;
     const FlightLog shifted = shift_columns(base, rotors.columns, d);
-    const ExtendedResult r = identify_extended(with_rotor_wrench(shifted, m), xo);
+    const Vec3 rms = (*residual)(with_rotor_wrench(shifted, m)).tail<3>();
+    const std::lock_guard<std::mutex> lock(mutex);
     ++est.evaluations;
-    return Vec3(r.estimates[0].residual_rms.tail<3>());
+    fitted.emplace(std::pair{tau, d}, rms);
+    return rms;
   };
   auto cost = [&](double tau, double d) { return moment_rms(tau, d).cwiseQuotient(ref).squaredNorm(); };
   ref = moment_rms(rotors.time_constant, 0.0).cwiseMax(1e-300);

@@ -1,6 +1,6 @@
 // Whether the recommended set moves with the part of the flight it is
 // identified on beyond its interval (issue 41: "warn when the estimate depends
-// on the window beyond its interval"). See docs/identify.md, "Window".
+// on the window beyond its interval"). See docs/identify.md, "The window".
 #include "quadid/pipeline.hpp"
 
 #include <fmt/format.h>
@@ -31,6 +31,17 @@ HalfFit identify_half(const IdentificationInput& in, const IdentificationResult&
   alt.options.window = w;
   alt.options.record_evolution = false;
   alt.options.input_checks = false;  // the whole log passed them
+  // The choices made on the whole window, kept (they cost most of a run, and
+  // each half should differ from the whole by its data alone).
+  if (res.extended) {
+    if (res.extended->cutoff_selection) {
+      alt.options.force_cutoff_hz = res.extended->cutoff_selection->force_cutoff_hz;
+      alt.options.moment_cutoff_hz = res.extended->cutoff_selection->moment_cutoff_hz;
+    }
+    alt.options.auto_cutoffs = false;
+    alt.options.moment_highpass_hz = res.extended->moment_highpass_hz;
+  }
+  if (res.wrench_timing.estimated) alt.options.wrench_offset = res.wrench_timing.applied;
   const IdentificationResult r = identify_prepared(alt);
   HalfFit h;
   h.theta = r.estimate(src).theta;

@@ -20,6 +20,7 @@
 
 #include "quadid/identification.hpp"
 
+#include <memory>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -174,6 +175,31 @@ struct ExtendedResult {
 };
 
 ExtendedResult identify_extended(const FlightLog& log, const ExtendedOptions& opt);
+/// Per row (N, N m), the residual RMS of the standard model's LS fit, exactly
+/// identify_extended(log, opt).estimates[0].residual_rms, without the filtered
+/// model, the intervals or the jackknife, for logs that differ from one
+/// another in their wrench only: the timing search's cost (timing.hpp). The
+/// log is processed once; each call filters only the new wrench (Fz, the
+/// torques and Omega_r), which is all a rotor offset or lag changes, and gives
+/// the same bits as processing the whole log again (checked on the first log:
+/// where its wrench does not come back bit for bit, e.g. from the
+/// accelerometer's force row, every call processes the whole log).
+/// Needs fixed cutoffs (auto_cutoffs false) and no moment high-pass
+/// (moment_highpass_hz 0); throws std::invalid_argument otherwise.
+class WrenchResidual {
+ public:
+  WrenchResidual(const FlightLog& log, const ExtendedOptions& opt);
+  ~WrenchResidual();
+  WrenchResidual(const WrenchResidual&) = delete;
+  WrenchResidual& operator=(const WrenchResidual&) = delete;
+  /// `log`: the first log's rows and columns with another wrench. Safe to call
+  /// from several threads at once.
+  Vec4 operator()(const FlightLog& log) const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
 
 /// The real-flight regression's options of an identification (identify() uses
 /// them for LS and FMLS when opt.extended()): its processing, the two cutoffs
