@@ -658,3 +658,84 @@ TEST_F(CliVehicle, RealCrazyflieFlightsFromPwmArePhysicalAndCarryTheirWarning) {
   EXPECT_GT(0.5 * (ixx[1] + ixx[2]), 17.0e-6 / 1.6);
   EXPECT_LT(0.5 * (ixx[1] + ixx[2]), 17.0e-6 * 1.6);
 }
+
+// Issue 41: the rotor model's coefficients carry an uncertainty (rotors.*_uncertainty)
+// that the intervals include: sigma times the derivative of each parameter with
+// respect to the coefficient's relative change, added in quadrature to the
+// intervals' other parts, which do not change (the square of the std error grows
+// by exactly the share's square). The derivatives are checked against finite
+// differences of the whole identification: the vehicle file's kf, positions or
+// torque ratio 1 % larger (2 %: a 1 % step's curvature and rounding; the kf's is
+// also the closed form e m, e Ixx, since it scales the whole wrench). The timing
+// search is off so that every run reads the same signals. The advice printed
+// (weigh it) works: with --known-mass the thrust coefficient's share leaves the inertia.
+TEST_F(CliVehicle, RotorCoefficientUncertaintyIsInTheIntervalsAndWeighingRemovesIt) {
+  const CliRun sim = run("simulate --vehicle x500 --trajectory table2 --duration 30 -o " + path("log.csv"));
+  ASSERT_EQ(sim.rc, 0) << sim.err;
+  const std::string base(quadid::builtin_vehicle_text("x500"));
+  const auto set = [](std::string t, const std::string& from, const std::string& to) {
+    EXPECT_NE(t.find(from), std::string::npos) << from;
+    if (t.find(from) != std::string::npos) t.replace(t.find(from), from.size(), to);
+    return t;
+  };
+  const auto with = [&](double thrust, double ratio, double pos) {
+    std::string t = set(base, "thrust_coefficient_uncertainty = 0.10", fmt::format("thrust_coefficient_uncertainty = {}", thrust));
+    t = set(t, "torque_ratio_uncertainty = 0.20", fmt::format("torque_ratio_uncertainty = {}", ratio));
+    return set(t, "position_uncertainty = 0.02", fmt::format("position_uncertainty = {}", pos));
+  };
+  struct Fit {
+    nlohmann::json j;
+    std::string err;
+  };
+  const auto identify = [&](const std::string& text, const std::string& extra) {
+    write("v.toml", text);
+    const CliRun r = run("identify " + path("log.csv") + " --vehicle " + path("v.toml") + " --time-offsets none --json " + extra);
+    EXPECT_EQ(r.rc, 0) << r.err;
+    return Fit{nlohmann::json::parse(r.out), r.err};
+  };
+  const auto se = [](const Fit& f, const char* p) { return f.j["uncertainty"]["LS"][p]["std_error"].get<double>(); };
+  const auto value = [](const Fit& f, const char* p) { return f.j["estimates"]["LS"][p].get<double>(); };
+  const auto share = [&](const Fit& f, const Fit& exact, const char* p) {
+    return std::sqrt(std::max(0.0, se(f, p) * se(f, p) - se(exact, p) * se(exact, p)));
+  };
+  const Fit exact = identify(with(0, 0, 0), "");
+  // Finite differences: the coefficient 1 % larger.
+  const Fit kf1 = identify(set(with(0, 0, 0), "kf = 8.54858e-06", "kf = 8.6340658e-06"), "");
+  const Fit ratio1 = identify(set(with(0, 0, 0), "torque_ratio = 0.016\n", "torque_ratio = 0.01616\n"), "");
+  const std::string wide = set(with(0, 0, 0),
+                               "positions = [[0.174, -0.174, 0.0], [-0.174, 0.174, 0.0], [0.174, 0.174, 0.0], [-0.174, -0.174, 0.0]]",
+                               "positions = [[0.17574, -0.17574, 0.0], [-0.17574, 0.17574, 0.0], [0.17574, 0.17574, 0.0], "
+                               "[-0.17574, -0.17574, 0.0]]");  // every arm 1 % longer
+  const Fit arm1 = identify(wide, "");
+  const auto fd = [&](const Fit& f, const char* p) { return std::abs(value(f, p) - value(exact, p)) / 0.01; };
+
+  const Fit kf = identify(with(0.05, 0, 0), "");
+  for (const char* p : {"m", "Ixx", "Izz"}) {
+    EXPECT_NEAR(share(kf, exact, p) / (0.05 * fd(kf1, p)), 1.0, 0.02) << p;
+    EXPECT_NEAR(share(kf, exact, p) / (0.05 * value(exact, p)), 1.0, 1e-3) << p;
+  }
+  const Fit arm = identify(with(0, 0, 0.02), "");
+  for (const char* p : {"Ixx", "Iyy"}) EXPECT_NEAR(share(arm, exact, p) / (0.02 * fd(arm1, p)), 1.0, 0.02) << p;
+  EXPECT_LT(share(arm, exact, "m"), 1e-3 * 0.02 * value(exact, "m"));
+  const Fit ratio = identify(with(0, 0.1, 0), "");
+  EXPECT_NEAR(share(ratio, exact, "Izz") / (0.1 * fd(ratio1, "Izz")), 1.0, 0.02);
+  EXPECT_LT(share(ratio, exact, "m"), 1e-3 * 0.1 * value(exact, "m"));
+
+  // Not "poorly determined by these data": the data determine m as well as before.
+  EXPECT_EQ(kf.err.find("poorly determined"), std::string::npos) << kf.err;
+  // The advice, and the advice applied.
+  const std::string advice = "weigh the vehicle and give --known-mass KG";
+  EXPECT_NE(kf.err.find(advice), std::string::npos) << kf.err;
+  const Fit weighed = identify(with(0.05, 0, 0), "--known-mass 2.064");
+  const Fit weighed_exact = identify(with(0, 0, 0), "--known-mass 2.064");
+  EXPECT_EQ(weighed.err.find(advice), std::string::npos) << weighed.err;
+  EXPECT_LT(share(weighed, weighed_exact, "Ixx"), 1e-3 * 0.05 * value(exact, "Ixx"));
+  // A percentage where a fraction belongs is refused with the fraction.
+  write("pct.toml", with(5, 0, 0));
+  const CliRun pct = run("identify " + path("log.csv") + " --vehicle " + path("pct.toml"));
+  EXPECT_NE(pct.rc, 0);
+  EXPECT_NE(pct.err.find("rotors.thrust_coefficient_uncertainty = 5 must be a relative standard uncertainty"),
+            std::string::npos)
+      << pct.err;
+  EXPECT_NE(pct.err.find("5 % is 0.05"), std::string::npos) << pct.err;
+}

@@ -33,6 +33,11 @@ inline constexpr double kInf = std::numeric_limits<double>::infinity();
 inline constexpr double kZ95 = 1.959963984540054;
 
 /// A time interval in seconds from the log's first sample (not its t value).
+/// The largest relative uncertainty a rotor coefficient may carry (vehicle
+/// files, UncertaintyOptions): beyond half its value it is no coefficient,
+/// and likely a percentage written as a number.
+inline constexpr double kMaxCoefficientUncertainty = 0.5;
+
 struct TimeWindow {
   double t0 = 0.0;
   double t1 = std::numeric_limits<double>::infinity();  // infinity: to the end of the log

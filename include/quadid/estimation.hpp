@@ -103,6 +103,11 @@ struct Estimate {
   /// std_error is then the larger of the two estimates and the interval the
   /// wider of the two, per parameter; hac_std_error is the HAC one alone.
   Eigen::VectorXd jackknife_std_error, hac_std_error;
+  /// Real-flight regression only: the rotor model's coefficients' share
+  /// (UncertaintyOptions::thrust_coefficient, ...), already added in
+  /// quadrature to std_error and to the intervals' half-width (times the
+  /// normal quantile); empty when they are taken as exact.
+  Eigen::VectorXd coefficient_std_error;
   int jackknife_blocks = 0;
   double jackknife_quantile = std::numeric_limits<double>::quiet_NaN();
   /// Determinedness: parameters in directions the data do not determine
@@ -111,9 +116,13 @@ struct Estimate {
   std::vector<std::string> unidentifiable, poorly_determined, near_null;
   /// The model disagreement added in quadrature to std_error, the intervals
   /// and the covariance's diagonal (UncertaintyOptions::model_disagreement);
-  /// empty when none was added. noise_std_error() is std_error without it.
+  /// empty when none was added. noise_std_error() is std_error without it
+  /// and without coefficient_std_error.
   Eigen::VectorXd model_disagreement;
   Eigen::VectorXd noise_std_error() const;
+  /// std_error without the rotor coefficients' share (coefficient_std_error):
+  /// what this flight's data determine, for "poorly determined by these data".
+  Eigen::VectorXd data_std_error() const;
 
   /// An estimate of `n` parameters named `names` (n = names.size()), every
   /// number NaN (quantile kZ95, dof infinite) until filled.
@@ -222,6 +231,18 @@ struct UncertaintyOptions {
   /// intervals of simulated flights covered the truth in as few as 32 % of 200
   /// runs (docs/uncertainty.md, "Model disagreement").
   bool model_disagreement = true;
+  /// Relative standard uncertainties (1 sigma, fractions) of the rotor
+  /// model's coefficients, the vehicle file's rotors.*_uncertainty: the
+  /// thrust coefficient (kf or thrust_max; it scales the whole wrench), the
+  /// torque ratio (the yaw torque) and the rotor positions (a common scale
+  /// of the arms: the roll and pitch torques). The real-flight regression
+  /// adds their effect on each parameter, exact for a linear regression (the
+  /// fit of the part of the output each one scales), in quadrature to the
+  /// standard errors and intervals (docs/uncertainty.md, "The rotor model's
+  /// coefficients"). 0: taken as exact.
+  double thrust_coefficient = 0.0;
+  double torque_ratio = 0.0;
+  double positions = 0.0;
   /// Throws std::invalid_argument naming the bad option.
   void validate() const;
 };

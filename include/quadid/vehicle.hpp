@@ -68,6 +68,13 @@ struct RotorModel {
   double torque_ratio = 0.0;   // m, Q_i = torque_ratio * T_i
   double time_constant = 0.0;  // s, first-order lag of the rotor speed behind the command (0 = none)
   double rotor_inertia = 0.0;  // kg m^2 per rotor about its axis (not used by the rotor model itself)
+  /// Relative standard uncertainties (1 sigma, fractions: 0.05 = 5 %) of the
+  /// thrust coefficient (kf or thrust_max), the torque ratio and the
+  /// positions (a common scale of the arms): identify's intervals include
+  /// them (UncertaintyOptions). 0 = exact (the default of a vehicle file).
+  double thrust_coefficient_uncertainty = 0.0;
+  double torque_ratio_uncertainty = 0.0;
+  double position_uncertainty = 0.0;
   /// input = "command" only: the logged values that mean command 0 and command 1, e.g.
   /// {1000, 2000} for PWM in microseconds or {48, 2047} for DShot. A logged value from 0 up to
   /// the low end is a stopped motor (command 0: a PWM output's disarmed value).

@@ -207,6 +207,11 @@ void UncertaintyOptions::validate() const {
     throw std::invalid_argument(
         fmt::format("--jackknife-blocks {} (UncertaintyOptions::jackknife_blocks): must be 0 (off) or in 3..100",
                     jackknife_blocks));
+  for (const auto& [name, v] : {std::pair{"thrust_coefficient", thrust_coefficient},
+                                std::pair{"torque_ratio", torque_ratio}, std::pair{"positions", positions}})
+    if (!(v >= 0.0 && v <= kMaxCoefficientUncertainty))
+      throw std::invalid_argument(fmt::format(
+          "UncertaintyOptions: {}={} must be a fraction in [0, {:g}] (0.05 = 5 %)", name, v, kMaxCoefficientUncertainty));
 }
 
 Eigen::MatrixXd jackknife_covariance(const std::vector<Eigen::VectorXd>& leave_one_out) {
@@ -426,9 +431,15 @@ Estimate Estimate::unfilled(std::vector<std::string> names) {
   return e;
 }
 
+Eigen::VectorXd Estimate::data_std_error() const {
+  if (coefficient_std_error.size() != std_error.size()) return std_error;
+  return (std_error.array().square() - coefficient_std_error.array().square()).max(0.0).sqrt().matrix();
+}
+
 Eigen::VectorXd Estimate::noise_std_error() const {
-  if (model_disagreement.size() != std_error.size()) return std_error;
-  return (std_error.array().square() - model_disagreement.array().square()).max(0.0).sqrt().matrix();
+  const Eigen::VectorXd d = data_std_error();
+  if (model_disagreement.size() != d.size()) return d;
+  return (d.array().square() - model_disagreement.array().square()).max(0.0).sqrt().matrix();
 }
 
 Eigen::Index Estimate::index_of(std::string_view name) const {
@@ -456,7 +467,7 @@ Estimate Estimate::head(Eigen::Index n) const {
   u.names.resize(static_cast<size_t>(n));
   // An empty vector (not filled by this estimator) stays empty.
   for (Eigen::VectorXd* v : {&u.value, &u.std_error, &u.white_std_error, &u.ci_low, &u.ci_high, &u.jackknife_std_error,
-                             &u.hac_std_error, &u.model_disagreement})
+                             &u.hac_std_error, &u.model_disagreement, &u.coefficient_std_error})
     if (v->size() >= n) v->conservativeResize(n);
   if (u.covariance.rows() >= n && u.covariance.cols() >= n) u.covariance = covariance.topLeftCorner(n, n);
   return u;

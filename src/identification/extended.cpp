@@ -483,6 +483,8 @@ class ExtendedEstimator {
     e.ci_high = x + e.quantile * e.hac_std_error;
     e.jackknife_std_error = Eigen::VectorXd::Constant(u_.P, std::numeric_limits<double>::quiet_NaN());
     jackknife(rows, k0, k1, jr, f, x, e, res);
+    coefficient_uncertainty(rows, k0, k1, f, x, e);
+    if (mi == 0) advise_weighing(x, e, res);
     widen_for_gyro_noise(x, res.gyro_noise_share, e);
     reported_covariance(white, e);
     describe(x, f, e);
@@ -576,16 +578,84 @@ class ExtendedEstimator {
                                    "one: the thrust scale cannot be found (check the rotor model and the log's units)",
                                    x0));
     const Eigen::VectorXd x = *weigh_it(f.sol.x);
+    const Eigen::MatrixXd J = known_mass_jacobian(f);
+    e.covariance = J * e.covariance * J.transpose();
+    white = J * white * J.transpose();
+    e.white_std_error *= m0 / x0;  // the leading term of the same map
+    return x;
+  }
+
+  // d(weigh_it(x)) / dx at the fit (x0 > 0).
+  Eigen::MatrixXd known_mass_jacobian(const WeightedFit& f) const {
+    const Eigen::Index P = u_.P;
+    const double m0 = *terms_.known_mass, x0 = f.sol.x(0);
     Eigen::MatrixXd J = Eigen::MatrixXd::Zero(P, P);
     J(0, 0) = -m0 / (x0 * x0);
     for (Eigen::Index j = 1; j < P; ++j) {
       J(j, j) = m0 / x0;
       J(j, 0) = -m0 * f.sol.x(j) / (x0 * x0);
     }
-    e.covariance = J * e.covariance * J.transpose();
-    white = J * white * J.transpose();
-    e.white_std_error *= m0 / x0;  // the leading term of the same map
-    return x;
+    return J;
+  }
+
+  // The rotor model's coefficients (UncertaintyOptions::thrust_coefficient,
+  // torque_ratio, positions). The fit is linear in the output, so a relative
+  // error eps in a coefficient that scales one part of the output (the whole
+  // wrench; the yaw torque; the roll and pitch torques) moves it by eps times
+  // the fit of that part alone: the same rows and weights, the known J_r's
+  // torque left out (it is the rotors' inertia, not the rotor model's).
+  // Through the known mass's map a thrust-coefficient error moves only the
+  // thrust scale: weighing the vehicle removes it from the inertia.
+  void coefficient_uncertainty(const RegressionRows& rows, Eigen::Index k0, Eigen::Index k1, const WeightedFit& f,
+                               const Eigen::VectorXd& x, ExtendedEstimate& e) const {
+    const UncertaintyOptions& u = opt_.uncertainty;
+    const std::array<std::pair<double, Vec4>, 3> parts{{{u.thrust_coefficient, Vec4(1.0, 1.0, 1.0, 1.0)},
+                                                        {u.torque_ratio, Vec4(0.0, 0.0, 0.0, 1.0)},
+                                                        {u.positions, Vec4(0.0, 1.0, 1.0, 0.0)}}};
+    const Eigen::Index P = u_.P;
+    Eigen::VectorXd var = Eigen::VectorXd::Zero(P);
+    bool any = false;
+    Eigen::Matrix<double, 4, Eigen::Dynamic> G(4, P);
+    Vec4 Y;
+    for (const auto& [sigma, mask] : parts) {
+      if (!(sigma > 0.0)) continue;
+      any = true;
+      StreamingQR qr(P);
+      for (Eigen::Index k = k0; k < k1; ++k) {
+        rows.get(k, 0.0, G, Y);
+        for (int r = 0; r < 4; ++r) qr.add_row(f.w(r) * G.row(r).transpose(), f.w(r) * mask(r) * Y(r));
+      }
+      Eigen::VectorXd d = solve_qr(qr.factor(), qr.rows(), Eigen::VectorXd::Zero(P), opt_.ls.rank_tolerance).x;
+      if (terms_.known_mass) d = known_mass_jacobian(f) * d;
+      var += (sigma * d).cwiseAbs2();
+    }
+    if (!any) return;
+    e.coefficient_std_error = var.cwiseSqrt();
+    const double z = student_t_quantile(0.5 + 0.5 * u.confidence, std::numeric_limits<double>::infinity());
+    for (Eigen::Index j = 0; j < P; ++j) {
+      const double c = e.coefficient_std_error(j);
+      const double half = std::hypot(0.5 * (e.ci_high(j) - e.ci_low(j)), z * c);
+      e.std_error(j) = std::hypot(e.std_error(j), c);
+      e.ci_low(j) = x(j) - half;
+      e.ci_high(j) = x(j) + half;
+    }
+  }
+
+  // Without a weighed mass the thrust coefficient's uncertainty is the
+  // mass's, and every moment's: when it makes most of the mass's interval,
+  // weighing the vehicle is the way to a better one (its error then goes
+  // to the thrust scale).
+  void advise_weighing(const Eigen::VectorXd& x, const ExtendedEstimate& e, ExtendedResult& res) const {
+    const double sigma = opt_.uncertainty.thrust_coefficient;
+    if (terms_.known_mass || !(sigma > 0.0) || e.coefficient_std_error.size() == 0) return;
+    const double c = e.coefficient_std_error(0), all = e.std_error(0);
+    if (!(c * c > 0.5 * all * all)) return;
+    res.warnings.push_back(fmt::format(
+        "m = {:.4g} kg: the rotor model's thrust coefficient, known to {:g} % (rotors.thrust_coefficient_uncertainty), "
+        "makes most of its uncertainty ({:.3g} of {:.3g} kg, 1 sigma), and the inertia carries the same {:g} %: "
+        "weigh the vehicle and give --known-mass KG; the thrust scale then takes the coefficient's error, and the "
+        "inertia's intervals lose it",
+        x(0), 100.0 * sigma, c, all, 100.0 * sigma));
   }
 
   // Delete-a-block jackknife: the fit without each of K contiguous time
@@ -676,8 +746,9 @@ class ExtendedEstimator {
     // mass, or the mean principal moment), the thrust scale against 1.
     Theta scale = determinedness_scale(e.theta);
     scale(0) = std::abs(e.value(0));
+    const Eigen::VectorXd data = e.data_std_error();  // the rotor coefficients' share is not the data's
     for (Eigen::Index j = 0; j < 7; ++j) {
-      if (poorly_determined(e.std_error(j), scale(j), opt_.ls.poor_fraction)) e.poorly_determined.push_back(names[static_cast<size_t>(j)]);
+      if (poorly_determined(data(j), scale(j), opt_.ls.poor_fraction)) e.poorly_determined.push_back(names[static_cast<size_t>(j)]);
     }
   }
 

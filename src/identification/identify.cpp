@@ -575,10 +575,11 @@ class IdentifyRun {
       }
       // The determinedness rule of the estimators, on the wider errors.
       const Theta scale = determinedness_scale(sol->theta);
+      const Eigen::VectorXd data = u.data_std_error();  // the rotor coefficients' share is not the data's
       for (int j = 0; j < 7; ++j) {
         const std::string name(kThetaNames[static_cast<size_t>(j)]);
         auto& poor = sol->poorly_determined;
-        if (poorly_determined(u.std_error(j), scale(j), opt_.ls.poor_fraction) &&
+        if (poorly_determined(data(j), scale(j), opt_.ls.poor_fraction) &&
             std::find(poor.begin(), poor.end(), name) == poor.end())
           poor.push_back(name);
       }

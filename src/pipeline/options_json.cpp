@@ -255,6 +255,10 @@ void apply_real_flight(IdentifyRequest& req, const RealFlightArgs& a) {
   if (!a.vehicle.empty()) req.vehicle = load_vehicle(a.vehicle);
   if (req.vehicle) {  // --vehicle, or a rotor model found in the log (prepare_identification)
     if (!a.nominal_given) opt.reference = NamedParams{"nom", req.vehicle->nominal};
+    const RotorModel& rm = req.vehicle->rotors;  // the coefficients' uncertainty joins the intervals
+    opt.uncertainty.thrust_coefficient = rm.thrust_coefficient_uncertainty;
+    opt.uncertainty.torque_ratio = rm.torque_ratio_uncertainty;
+    opt.uncertainty.positions = rm.position_uncertainty;
     if (!a.window_given) opt.window = TimeWindow{};  // the whole log, clear of the filters' edges
   }
   if (a.motor_time_constant == "auto") {

@@ -36,6 +36,12 @@ input = "command"
 columns = ["u_front", "u_left", "u_back", "u_right"]
 thrust_max = 12.0
 torque_ratio = 0.03333333333333333
+# Uncertainty (1 sigma, relative): Quanser states K and Ky as model values with
+# no tolerance; 10 % on the thrust and 20 % on the reaction torque are the usual
+# spread of hobby rotors about a nominal figure, 1 % on the stated 0.2 m arm.
+thrust_coefficient_uncertainty = 0.10
+torque_ratio_uncertainty = 0.20
+position_uncertainty = 0.01
 time_constant = 0.0
 positions = [[0.2, 0.0, 0.0], [0.0, 0.2, 0.0], [-0.2, 0.0, 0.0], [0.0, -0.2, 0.0]]
 spin = ["ccw", "cw", "ccw", "cw"]
@@ -78,6 +84,13 @@ columns = ["rpm.m1", "rpm.m2", "rpm.m3", "rpm.m4"]
 kf = 2.2164e-10
 thrust_max = 0.1385
 torque_ratio = 0.005964552
+# Uncertainty (1 sigma, relative): kf is a thrust-stand fit of one vehicle
+# ("a few percent only"; other vehicles' motors and propellers differ): 5 %;
+# THRUST2TORQUE is a firmware constant from Bitcraze's own identification: 10 %;
+# the positions are the frame's drawing: 1 %.
+thrust_coefficient_uncertainty = 0.05
+torque_ratio_uncertainty = 0.10
+position_uncertainty = 0.01
 time_constant = 0.06
 positions = [[0.0325, -0.0325, 0.0], [-0.0325, -0.0325, 0.0],
              [-0.0325, 0.0325, 0.0], [0.0325, 0.0325, 0.0]]
@@ -113,6 +126,12 @@ columns = ["actuator_motors.control[0]", "actuator_motors.control[1]",
            "actuator_motors.control[2]", "actuator_motors.control[3]"]
 thrust_max = 4.0
 torque_ratio = 0.0125
+# Uncertainty (1 sigma, relative): jMAVSim's constants are exact for its own
+# flights; for a real airframe they are no measurement: 10 % on the thrust, 20 %
+# on the torque ratio, 2 % on the arms.
+thrust_coefficient_uncertainty = 0.10
+torque_ratio_uncertainty = 0.20
+position_uncertainty = 0.02
 time_constant = 0.005
 positions = [[0.11667261889578034, -0.11667261889578034, 0.0], [-0.11667261889578034, 0.11667261889578034, 0.0],
              [0.11667261889578034, 0.11667261889578034, 0.0], [-0.11667261889578034, -0.11667261889578034, 0.0]]
@@ -146,6 +165,12 @@ columns = ["w1", "w2", "w3", "w4"]
 kf = 8.54858e-06
 thrust_max = 8.54858
 torque_ratio = 0.016
+# Uncertainty (1 sigma, relative): the plugin's constants are exact for Gazebo's
+# flights; for a real X500 they are no measurement: 10 % on the thrust, 20 % on
+# the torque ratio, 2 % on the arms.
+thrust_coefficient_uncertainty = 0.10
+torque_ratio_uncertainty = 0.20
+position_uncertainty = 0.02
 time_constant = 0.0125
 positions = [[0.174, -0.174, 0.0], [-0.174, 0.174, 0.0], [0.174, 0.174, 0.0], [-0.174, -0.174, 0.0]]
 spin = ["ccw", "ccw", "cw", "cw"]

@@ -18,6 +18,10 @@ nlohmann::ordered_json to_json(const RotorModel& m) {
           {"torque_ratio", m.torque_ratio}, {"time_constant", m.time_constant},
           {"rotor_inertia", m.rotor_inertia}, {"positions", pos},
           {"spin", spin},                  {"command_range", m.command_range}};
+  for (const auto& [key, v] : {std::pair{"thrust_coefficient_uncertainty", m.thrust_coefficient_uncertainty},
+                               std::pair{"torque_ratio_uncertainty", m.torque_ratio_uncertainty},
+                               std::pair{"position_uncertainty", m.position_uncertainty}})
+    if (v > 0.0) j[key] = v;
   if (m.input == RotorInput::kDuty) {
     j["voltage_column"] = m.voltage_column;
     j["voltage_scale"] = m.voltage_scale;
@@ -37,7 +41,9 @@ RotorModel rotor_model_from_json(const nlohmann::ordered_json& j, const std::str
       static const char* kKeys[] = {"input",          "columns",         "kf",           "thrust_max",
                                     "torque_ratio",   "time_constant",   "rotor_inertia", "positions",
                                     "spin",           "command_range",   "voltage_column", "voltage_scale",
-                                    "speed_of_voltage", "battery_voltage", "battery_sag", "battery_drain"};
+                                    "speed_of_voltage", "battery_voltage", "battery_sag", "battery_drain",
+                                    "thrust_coefficient_uncertainty", "torque_ratio_uncertainty",
+                                    "position_uncertainty"};
       if (std::find(std::begin(kKeys), std::end(kKeys), k) == std::end(kKeys))
         throw std::invalid_argument(fmt::format("rotors.{}: unknown key", k));
     }
@@ -49,6 +55,9 @@ RotorModel rotor_model_from_json(const nlohmann::ordered_json& j, const std::str
     m.torque_ratio = j.at("torque_ratio").get<double>();
     m.time_constant = j.value("time_constant", 0.0);
     m.rotor_inertia = j.value("rotor_inertia", 0.0);
+    m.thrust_coefficient_uncertainty = j.value("thrust_coefficient_uncertainty", 0.0);
+    m.torque_ratio_uncertainty = j.value("torque_ratio_uncertainty", 0.0);
+    m.position_uncertainty = j.value("position_uncertainty", 0.0);
     if (j.contains("command_range")) m.command_range = j.at("command_range").get<std::array<double, 2>>();
     m.voltage_column = j.value("voltage_column", std::string());
     m.voltage_scale = j.value("voltage_scale", 1.0);

@@ -64,6 +64,13 @@ void RotorModel::validate() const {
   nonneg("torque_ratio", torque_ratio);
   nonneg("time_constant", time_constant);
   nonneg("rotor_inertia", rotor_inertia);
+  for (const auto& [key, v] : {std::pair{"thrust_coefficient_uncertainty", thrust_coefficient_uncertainty},
+                               std::pair{"torque_ratio_uncertainty", torque_ratio_uncertainty},
+                               std::pair{"position_uncertainty", position_uncertainty}})
+    if (!(v >= 0.0 && v <= kMaxCoefficientUncertainty))
+      throw std::invalid_argument(fmt::format(
+          "rotors.{} = {} must be a relative standard uncertainty, a fraction in [0, {:g}] (0.05 for 5 %){}", key, v,
+          kMaxCoefficientUncertainty, v > 1.0 && v <= 50.0 ? fmt::format(": {:g} % is {:g}", v, v / 100.0) : ""));
   if (input == RotorInput::kCommand && !(thrust_max > 0.0) && !thrust_coefficient_unknown)
     throw std::invalid_argument("rotors.thrust_max must be > 0 when rotors.input = \"command\"");
   const auto [lo, hi] = command_range;

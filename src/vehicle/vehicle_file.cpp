@@ -175,7 +175,8 @@ RotorModel read_rotors(const Reader& r, const toml::table& t) {
   r.only(t, "rotors.",
          {"input", "columns", "kf", "thrust_max", "torque_ratio", "time_constant", "rotor_inertia", "positions",
           "spin", "command_range", "voltage_column", "voltage_scale", "speed_of_voltage", "battery_voltage",
-          "battery_sag", "battery_drain"});
+          "battery_sag", "battery_drain", "thrust_coefficient_uncertainty", "torque_ratio_uncertainty",
+          "position_uncertainty"});
   RotorModel m;
   const std::string input = *r.string(t, "rotors.", "input", true);
   try {
@@ -201,6 +202,9 @@ RotorModel read_rotors(const Reader& r, const toml::table& t) {
   m.torque_ratio = *r.number(t, "rotors.", "torque_ratio", true, true);
   m.time_constant = r.number(t, "rotors.", "time_constant", false, true).value_or(0.0);
   m.rotor_inertia = r.number(t, "rotors.", "rotor_inertia", false, true).value_or(0.0);
+  m.thrust_coefficient_uncertainty = r.number(t, "rotors.", "thrust_coefficient_uncertainty", false, true).value_or(0.0);
+  m.torque_ratio_uncertainty = r.number(t, "rotors.", "torque_ratio_uncertainty", false, true).value_or(0.0);
+  m.position_uncertainty = r.number(t, "rotors.", "position_uncertainty", false, true).value_or(0.0);
   if (const auto range = r.numbers<2>(t, "rotors.", "command_range", false,
                                       "must be [low, high]: the logged values that mean command 0 and command 1 (e.g. "
                                       "[1000, 2000] for PWM in microseconds)")) {
