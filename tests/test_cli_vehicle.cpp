@@ -713,6 +713,7 @@ TEST_F(CliVehicle, RotorCoefficientUncertaintyIsInTheIntervalsAndWeighingRemoves
   for (const char* p : {"m", "Ixx", "Izz"}) {
     EXPECT_NEAR(share(kf, exact, p) / (0.05 * fd(kf1, p)), 1.0, 0.02) << p;
     EXPECT_NEAR(share(kf, exact, p) / (0.05 * value(exact, p)), 1.0, 1e-3) << p;
+    EXPECT_NEAR(kf.j["uncertainty"]["LS"][p]["coefficient_std_error"].get<double>() / share(kf, exact, p), 1.0, 1e-3) << p;
   }
   const Fit arm = identify(with(0, 0, 0.02), "");
   for (const char* p : {"Ixx", "Iyy"}) EXPECT_NEAR(share(arm, exact, p) / (0.02 * fd(arm1, p)), 1.0, 0.02) << p;

@@ -102,6 +102,8 @@ json uncertainty_json(const LeastSquaresSolution& s) {
          {"ci95", json::array({finite_or_null(u.ci_low(i)), finite_or_null(u.ci_high(i))})}};
     // The part of std_error from |LS - FMLS| (docs/uncertainty.md, "Model disagreement").
     if (u.model_disagreement.size() == 7) p["model_disagreement"] = finite_or_null(u.model_disagreement(i));
+    // The part from the rotor model's coefficients (docs/uncertainty.md, "The rotor model's coefficients").
+    if (u.coefficient_std_error.size() == 7) p["coefficient_std_error"] = finite_or_null(u.coefficient_std_error(i));
   }
   return j;
 }
@@ -529,6 +531,8 @@ json to_json(const ExtendedResult& x) {
                             {"hac_std_error", e.hac_std_error(jj)},
                             {"jackknife_std_error", finite_or_null(e.jackknife_std_error(jj))},
                             {"ci95", json::array({e.ci_low(jj), e.ci_high(jj)})}};
+      if (e.coefficient_std_error.size() == e.value.size())
+        params[e.names[j]]["coefficient_std_error"] = finite_or_null(e.coefficient_std_error(jj));
     }
     sets[e.name] = {{"model", to_string(e.model)},
                     {"parameters", params},
