@@ -2,6 +2,7 @@
 #include "quadid/estimation/row_least_squares.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 namespace quadid {
@@ -13,29 +14,42 @@ WeightedFit fit_weighted(const RegressionRows& c, Eigen::Index k0, Eigen::Index 
   Vec4 Y;
   WeightedFit f;
   Vec4 out_ss = Vec4::Zero();
+  // One pass: each row's own QR factor (R_r, Q_r^T y_r, rss_r). A weight w_r
+  // scales all of row r's samples alike, so the weighted problem's factor is
+  // the QR of the stacked w_r [R_r | Q_r^T y_r] (plus w_r sqrt(rss_r) in the
+  // output column), and each row's residual |A_r x - y_r|^2 is
+  // |R_r x - Q_r^T y_r|^2 + rss_r: every weighting pass below works on 4 P
+  // rows instead of 4 (k1 - k0), with the same solution to rounding.
+  std::array<StreamingQR, 4> per_row{StreamingQR(P), StreamingQR(P), StreamingQR(P), StreamingQR(P)};
   for (Eigen::Index k = k0; k < k1; ++k) {
     c.get(k, known_jr, G, Y);
     out_ss += Y.cwiseAbs2();
+    for (int r = 0; r < 4; ++r) per_row[static_cast<size_t>(r)].add_row(G.row(r).transpose(), Y(r));
   }
-  const Vec4 out_rms = (out_ss / static_cast<double>(k1 - k0)).cwiseSqrt();
+  std::array<StreamingQR::Factor, 4> F;
+  for (size_t r = 0; r < 4; ++r) F[r] = per_row[r].factor();
+  const auto n = static_cast<double>(k1 - k0);
+  const Vec4 out_rms = (out_ss / n).cwiseSqrt();
   // Pass 0 weights: the inverse RMS of each row's output (N, N m), so that the
   // rows count alike whatever the vehicle's size.
   if (weight_rows)
     for (int r = 0; r < 4; ++r) f.w(r) = out_rms(r) > 0.0 ? 1.0 / out_rms(r) : 1.0;
   const int passes = weight_rows ? 3 : 1;
+  const long rows = 4 * static_cast<long>(k1 - k0);
+  Eigen::VectorXd e0 = Eigen::VectorXd::Zero(P);
   for (int pass = 0; pass < passes; ++pass) {
-    StreamingQR qr(P);
-    for (Eigen::Index k = k0; k < k1; ++k) {
-      c.get(k, known_jr, G, Y);
-      for (int r = 0; r < 4; ++r) qr.add_row(f.w(r) * G.row(r).transpose(), f.w(r) * Y(r));
+    StreamingQR qr(P, 4 * (P + 1));
+    for (size_t r = 0; r < 4; ++r) {
+      const double w = f.w(static_cast<Eigen::Index>(r));
+      for (Eigen::Index i = 0; i < P; ++i) qr.add_row(w * F[r].R.row(i).transpose(), w * F[r].qty(i));
+      qr.add_row(e0, w * std::sqrt(F[r].rss));
     }
-    f.sol = solve_qr(qr.factor(), qr.rows(), prior, rank_tolerance);
-    Vec4 ss = Vec4::Zero();
-    for (Eigen::Index k = k0; k < k1; ++k) {
-      c.get(k, known_jr, G, Y);
-      ss += (G * f.sol.x - Y).cwiseAbs2();
+    StreamingQR::Factor all = qr.factor();
+    f.sol = solve_qr(all, rows, prior, rank_tolerance);
+    for (size_t r = 0; r < 4; ++r) {
+      const double ss = (F[r].R * f.sol.x - F[r].qty).squaredNorm() + F[r].rss;
+      f.res_rms(static_cast<Eigen::Index>(r)) = std::sqrt(ss / n);
     }
-    f.res_rms = (ss / static_cast<double>(k1 - k0)).cwiseSqrt();
     if (pass + 1 < passes)
       for (int r = 0; r < 4; ++r) f.w(r) = 1.0 / std::max(f.res_rms(r), 1e-9 * out_rms(r) + 1e-300);
   }
