@@ -55,16 +55,21 @@ def test_short_log_without_window_fits_it_as_the_command_line(logs):
     assert_same(without(from_path, "evolution"), cli, REL)
 
 
+def write_columns(path, columns):
+    """A flight-log CSV of {name: array}, header first, no comments."""
+    with open(path, "w") as f:
+        f.write(",".join(columns) + "\n")
+        for row in zip(*columns.values()):
+            f.write(",".join(repr(float(v)) for v in row) + "\n")
+    return path
+
+
 def test_arrays_without_window_take_the_whole_log_as_a_csv_without_metadata(logs, tmp_path):
     # Arrays carry no '# quadid-simulate' header, so they are any log: the
     # whole log by default, as the command line gives a CSV without one.
     arrays = {k: np.array(v) for k, v in quadid.read_log(logs[0]).items()}
     res = quadid.identify(arrays)
-    path = tmp_path / "plain.csv"
-    with open(path, "w") as f:
-        f.write(",".join(arrays) + "\n")
-        for row in zip(*arrays.values()):
-            f.write(",".join(repr(float(v)) for v in row) + "\n")
+    path = write_columns(tmp_path / "plain.csv", arrays)
     cli = cli_json("identify", str(path))
     assert res["window"]["t0"] < 1.0, res["window"]
     assert_same(without(res, "evolution", "log"), without(cli, "log"), REL)
@@ -72,8 +77,8 @@ def test_arrays_without_window_take_the_whole_log_as_a_csv_without_metadata(logs
 
 def test_ground_at_the_start_is_left_out_of_arrays_as_of_the_file(logs, tmp_path):
     # 12 s on the ground (motors idle at 15 % of the hover thrust, z still)
-    # before a 20 s flight: the paper's default window (10 s to the end on this
-    # log) is cut to 1 s after take-off for arrays, path and command line alike.
+    # before a 20 s flight: the default window (the whole log) is cut to 1 s
+    # after take-off for arrays, path and command line alike.
     log = {k: np.array(v) for k, v in quadid.read_log(logs[0]).items()}
     T = log["t"][1] - log["t"][0]
     n = int(round(12.0 / T))
@@ -83,11 +88,7 @@ def test_ground_at_the_start_is_left_out_of_arrays_as_of_the_file(logs, tmp_path
     ground["Fz"][:] = 0.15 * log["Fz"].mean()
     armed = {k: np.concatenate([ground[k], log[k]]) for k in log}
     armed["t"] = np.arange(len(armed["t"])) * T
-    path = tmp_path / "armed.csv"
-    with open(path, "w") as f:
-        f.write(",".join(armed) + "\n")
-        for row in zip(*armed.values()):
-            f.write(",".join(repr(float(v)) for v in row) + "\n")
+    path = write_columns(tmp_path / "armed.csv", armed)
     cli = cli_json("identify", str(path))
     assert abs(cli["window"]["t0"] - 13.0) < 0.3, cli["window"]
     assert any("on the ground" in w for w in cli["warnings"]), cli["warnings"]
