@@ -212,11 +212,12 @@ Defs identify_options() {
                "tau_psi), PX4 ULog or Crazyflie uSD file")
                  .positional().required().cli(),
              B("window", K::Window,
-               "estimation window T0:T1, seconds from the log's start ('T0:' = to the end); on a log shorter than "
-               "50 s: 10 s to its end (the whole log under 20 s); a default kept to the part in the air, 1 s clear "
-               "of take-off and touchdown, when the log has the vehicle on the ground at an end "
-               "(docs/real-flights.md)")
-                 .def("10:50").text("10:50; with --vehicle the whole log"),
+               "estimation window T0:T1, seconds from the log's start ('T0:' = to the end). The default is kept "
+               "to the part in the air, 1 s clear of take-off and touchdown, when the log has the vehicle on the "
+               "ground at an end (docs/real-flights.md), and ends before a crash; the paper's 10-50 s on a log "
+               "shorter than 50 s: 10 s to its end (the whole log under 20 s)")
+                 .def("10:50")
+                 .text("the whole log; 10:50, the paper's, for a log `quadid simulate` wrote of the paper's setup"),
              B("error-window", K::Window, "window of the prediction-error tables")
                  .text("the whole log, as the paper's 0-50 s, or its part in the air"),
              B("sigma", K::Number, "gradient-descent gain of eq. (41), with --gd-gain paper").def(30.0),
