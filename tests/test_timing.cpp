@@ -416,3 +416,26 @@ TEST(Timing, ATinyNegativeOffsetPrintsAsZero) {
   EXPECT_EQ(s.find("-0.0"), std::string::npos) << s;
   EXPECT_EQ(printable(-0.049, 1), 0.0);
 }
+
+// The timing search's cost (WrenchResidual) processes the log once and
+// refilters only the new wrench: it must give the very bits of the full
+// identification of each candidate log (identify_extended's standard-model
+// residual RMS), for a rotor offset and a motor lag alike, and with the rotor
+// inertia's Omega_r among the refiltered signals.
+TEST(Timing, WrenchResidualGivesTheBitsOfTheFullIdentification) {
+  const FlightLog log = small_vehicle_flight();
+  RotorModel rotors = small_vehicle().rotors;
+  ExtendedOptions xo = real_flight_options();
+  xo.terms.weight_rows = false;
+  xo.moment_highpass_hz = 0.0;
+  const WrenchResidual residual(with_rotor_wrench(log, rotors), xo);
+  for (const auto& [d, tau] : {std::pair{0.0, 0.02}, std::pair{0.006, 0.02}, std::pair{-0.011, 0.035}}) {
+    rotors.time_constant = tau;
+    const FlightLog candidate = with_rotor_wrench(shift_columns(log, rotors.columns, d), rotors);
+    const Vec4 full = identify_extended(candidate, xo).estimates[0].residual_rms;
+    EXPECT_EQ(residual(candidate), full) << "d = " << d << ", tau = " << tau;
+  }
+  // Auto cutoffs or a high-pass would make each candidate's processing its own: refused, named.
+  xo.auto_cutoffs = true;
+  EXPECT_THROW(WrenchResidual(log, xo), std::invalid_argument);
+}
