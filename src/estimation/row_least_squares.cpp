@@ -26,7 +26,8 @@ WeightedFit fit_weighted(const RegressionRows& c, Eigen::Index k0, Eigen::Index 
     out_ss += Y.cwiseAbs2();
     for (int r = 0; r < 4; ++r) per_row[static_cast<size_t>(r)].add_row(G.row(r).transpose(), Y(r));
   }
-  std::array<StreamingQR::Factor, 4> F;
+  std::array<StreamingQR::Factor, 4>& F = f.row_factors;
+  f.known_jr = known_jr;
   for (size_t r = 0; r < 4; ++r) F[r] = per_row[r].factor();
   const auto n = static_cast<double>(k1 - k0);
   const Vec4 out_rms = (out_ss / n).cwiseSqrt();

@@ -571,7 +571,6 @@ class ExtendedEstimator {
   // Jacobian of that map (exact: it is linear in x given x0, and x0's own
   // variance enters through J.col(0)).
   Eigen::VectorXd known_mass_map(const WeightedFit& f, ExtendedEstimate& e, Eigen::MatrixXd& white) const {
-    const Eigen::Index P = u_.P;
     const double m0 = *terms_.known_mass, x0 = f.sol.x(0);
     if (!(x0 > 0.0))
       throw InputError(fmt::format("the flight gives a mass {:.4g} kg from the rotor model's thrust, not a positive "
@@ -620,10 +619,19 @@ class ExtendedEstimator {
     for (const auto& [sigma, mask] : parts) {
       if (!(sigma > 0.0)) continue;
       any = true;
-      StreamingQR qr(P);
-      for (Eigen::Index k = k0; k < k1; ++k) {
-        rows.get(k, 0.0, G, Y);
-        for (int r = 0; r < 4; ++r) qr.add_row(f.w(r) * G.row(r).transpose(), f.w(r) * mask(r) * Y(r));
+      StreamingQR qr(P, 4 * P);
+      if (f.known_jr == 0.0) {
+        // The fit's own row factors hold these outputs (Q_r^T Y_r): 4 P rows, no pass over the samples.
+        for (size_t r = 0; r < 4; ++r) {
+          const double w = f.w(static_cast<Eigen::Index>(r)), m = mask(static_cast<Eigen::Index>(r));
+          for (Eigen::Index i = 0; i < P; ++i)
+            qr.add_row(w * f.row_factors[r].R.row(i).transpose(), w * m * f.row_factors[r].qty(i));
+        }
+      } else {
+        for (Eigen::Index k = k0; k < k1; ++k) {  // the factors hold Y - J_r J, not the rotor model's Y
+          rows.get(k, 0.0, G, Y);
+          for (int r = 0; r < 4; ++r) qr.add_row(f.w(r) * G.row(r).transpose(), f.w(r) * mask(r) * Y(r));
+        }
       }
       Eigen::VectorXd d = solve_qr(qr.factor(), qr.rows(), Eigen::VectorXd::Zero(P), opt_.ls.rank_tolerance).x;
       if (terms_.known_mass) d = known_mass_jacobian(f) * d;

@@ -12,6 +12,7 @@
 
 #include <Eigen/Dense>
 
+#include <array>
 #include <vector>
 
 namespace quadid {
@@ -41,6 +42,10 @@ struct WeightedFit {
   QRSolution sol;
   Vec4 w = Vec4::Ones();
   Vec4 res_rms = Vec4::Zero();
+  /// Each row's own QR factor of its unweighted samples (G_r and Y_r - known_jr J_r),
+  /// from which any weighting or any 0/1 mask of the rows' outputs is a fit of 4 P rows.
+  std::array<StreamingQR::Factor, 4> row_factors{};
+  double known_jr = 0.0;  // the known_jr the factors were made with
 };
 
 /// Least squares over samples [k0, k1). weight_rows: three passes, the first
