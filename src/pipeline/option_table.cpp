@@ -212,10 +212,9 @@ Defs identify_options() {
                "tau_psi), PX4 ULog or Crazyflie uSD file")
                  .positional().required().cli(),
              B("window", K::Window,
-               "estimation window T0:T1, seconds from the log's start ('T0:' = to the end). The default is kept "
-               "to the part in the air, 1 s clear of take-off and touchdown, when the log has the vehicle on the "
-               "ground at an end (docs/real-flights.md), and ends before a crash; the paper's 10-50 s on a log "
-               "shorter than 50 s: 10 s to its end (the whole log under 20 s)")
+               "estimation window T0:T1, seconds from the log's start ('T0:' = to the end). The default keeps to "
+               "the air, 1 s clear of take-off and touchdown, and ends before a crash (docs/real-flights.md); the "
+               "paper's 10-50 s on a log under 50 s: 10 s to its end (the whole log under 20 s)")
                  .def("10:50")
                  .text("the whole log; 10:50, the paper's, for a log `quadid simulate` wrote of the paper's setup"),
              B("error-window", K::Window, "window of the prediction-error tables")
