@@ -173,6 +173,10 @@ struct IdentificationResult {
 /// names the figures behind the choice and what the data determine poorly.
 Recommendation recommend_set(const IdentificationResult& r);
 
+/// The set whose intervals `set` shows: PC those of LS and FMPC those of FMLS,
+/// the sets they were projected from; every other set its own.
+std::string interval_source(std::string_view set);
+
 /// Standard errors beyond which an inconsistent least-squares set says the
 /// data are not a rigid body's (noise puts a set a few outside at most).
 inline constexpr double kContradicts = 5.0;

@@ -7,6 +7,8 @@
 
 #include <cmath>
 #include <limits>
+#include <string>
+#include <string_view>
 #include <vector>
 
 namespace quadid {
@@ -36,6 +38,12 @@ double relative_precision(const LeastSquaresSolution& sol, const Theta& theta, b
 double rigid_body_contradiction(const LeastSquaresSolution& sol, const Theta& theta) {
   if (!sol.uncertainty.computed) return std::numeric_limits<double>::quiet_NaN();
   return consistency_margin_sigmas(theta, sol.uncertainty.rigid_body_covariance());
+}
+
+std::string interval_source(std::string_view set) {
+  if (set == "PC") return "LS";
+  if (set == "FMPC") return "FMLS";
+  return std::string(set);
 }
 
 Recommendation recommend_set(const IdentificationResult& r) {

@@ -280,7 +280,7 @@ std::string format_summary(const IdentificationResult& r, std::size_t warnings) 
   if (!name.empty()) {
     // The intervals: the set's own, or (PC, FMPC) those of the least-squares set it was projected from.
     const SetEstimate& e = r.estimate(name);
-    const std::string source = name == "PC" ? "LS" : name == "FMPC" ? "FMLS" : name;
+    const std::string source = interval_source(name);
     const LeastSquaresSolution* s = r.least_squares_of(source);
     const bool intervals = s && s->uncertainty.computed;
     const std::string head = intervals ? (source == name ? "95% interval" : fmt::format("95% interval ({})", source)) : "";

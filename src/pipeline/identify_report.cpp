@@ -19,12 +19,10 @@ using report::Table;
 constexpr std::array<const char*, 4> kAxis = {"Fz", "tau_phi", "tau_theta", "tau_psi"};
 constexpr std::array<const char*, 4> kAxisUnit = {"N", "N m", "N m", "N m"};
 
-// The set whose intervals a set reports: its own, or the LS set it was projected from.
+// The set whose intervals a set reports (interval_source), when the JSON has them.
 std::string interval_source(const json& j, const std::string& set) {
-  if (j.contains("uncertainty") && j["uncertainty"].contains(set)) return set;
-  if (set == "PC" && j["uncertainty"].contains("LS")) return "LS";
-  if (set == "FMPC" && j["uncertainty"].contains("FMLS")) return "FMLS";
-  return {};
+  const std::string src = quadid::interval_source(set);
+  return j.contains("uncertainty") && j["uncertainty"].contains(src) ? src : std::string();
 }
 
 const char* more_of(size_t i) {

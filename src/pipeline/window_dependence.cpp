@@ -7,16 +7,10 @@
 
 #include <cmath>
 #include <future>
+#include <limits>
 
 namespace quadid {
 namespace {
-
-// The least-squares set whose intervals a set shows (PC: LS's, FMPC: FMLS's).
-std::string interval_set(const std::string& set) {
-  if (set == "PC" || set == "GD") return "LS";
-  if (set == "FMPC" || set == "FMGD") return "FMLS";
-  return set;
-}
 
 struct HalfFit {
   Theta theta = Theta::Zero();
@@ -56,7 +50,7 @@ std::optional<std::string> window_dependence_warning(const IdentificationInput& 
                                                      const WindowDependenceOptions& o) {
   const std::string& set = res.recommended.set;
   if (set.empty()) return std::nullopt;
-  const std::string src = interval_set(set);
+  const std::string src = interval_source(set);
   const LeastSquaresSolution* whole = res.least_squares_of(src);
   if (!whole || !whole->uncertainty.computed) return std::nullopt;
   const double t0 = res.window.t0, t1 = std::isfinite(res.window.t1) ? res.window.t1 : res.processing.duration;
